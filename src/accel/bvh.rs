@@ -1,0 +1,546 @@
+//! trilux's own BVH: a binary tree built by binned SAH (in parallel near the root), flattened
+//! into one array with the two children of a node side by side, and traversed iteratively,
+//! nearer child first. Leaves hold copies of their primitives in leaf order, so a leaf's
+//! primitives are read from consecutive memory.
+
+use super::{Accel, AccelError, PackedPrim};
+use crate::geometry::{faces_ray, intersect_quad, intersect_triangle_edges, Bounds3, Ray, RingShape, SphereShape, Vec3};
+use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
+
+/// Number of SAH bins per axis.
+const BINS: usize = 16;
+/// Largest leaf the SAH may choose.
+const MAX_LEAF: usize = 8;
+/// Deeper than this the build makes a leaf whatever its size, so traversal's fixed stack
+/// (one entry per level) cannot overflow.
+const MAX_DEPTH: usize = 60;
+/// Subtrees with more primitives than this are built on two threads.
+const PARALLEL_THRESHOLD: usize = 8192;
+/// Relative cost of visiting a node against intersecting one primitive.
+const TRAVERSAL_COST: f32 = 1.0;
+
+/// One flattened node: its box, and either the index of its first child (the second follows
+/// it) when `count == 0`, or the range `first .. first + count` of its primitives.
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    min: Vec3,
+    first: u32,
+    max: Vec3,
+    count: u32,
+}
+
+/// A primitive copied into leaf order: a triangle's first vertex and its two edges, a quad's
+/// four vertices and its front normal, or for spheres and rings just the reference into
+/// `spheres`/`rings`.
+#[derive(Clone, Copy, Debug)]
+struct LeafPrim {
+    v: [Vec3; 4],
+    normal: Vec3,
+    prim: PackedPrim,
+}
+
+pub struct Bvh {
+    nodes: Vec<Node>,
+    prims: Vec<LeafPrim>,
+    spheres: Vec<SphereShape>,
+    rings: Vec<RingShape>,
+    one_sided_quads: bool,
+}
+
+/// A primitive during the build.
+#[derive(Clone, Copy)]
+struct BuildPrim {
+    bounds: Bounds3,
+    centroid: Vec3,
+    prim: PrimRef,
+}
+
+enum BuildNode {
+    Leaf {
+        bounds: Bounds3,
+        first: usize,
+        count: usize,
+    },
+    Interior {
+        bounds: Bounds3,
+        children: Box<[BuildNode; 2]>,
+    },
+}
+
+impl BuildNode {
+    fn bounds(&self) -> Bounds3 {
+        match self {
+            BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => *bounds,
+        }
+    }
+}
+
+impl Bvh {
+    pub fn build(scene: &Scene) -> Result<Bvh, AccelError> {
+        let total = scene.primitive_count();
+        if total > PackedPrim::MAX_INDEX as usize {
+            return Err(AccelError::TooLarge(total));
+        }
+        let mut build: Vec<BuildPrim> = Vec::with_capacity(total);
+        let mut push = |bounds: Bounds3, kind: PrimKind, index: usize| {
+            build.push(BuildPrim {
+                bounds,
+                centroid: bounds.centre(),
+                prim: PrimRef {
+                    kind,
+                    index: index as u32,
+                },
+            })
+        };
+        for (i, q) in scene.quads.iter().enumerate() {
+            push(Bounds3::from_points(&q.vertices), PrimKind::Quad, i);
+        }
+        for i in 0..scene.triangles.len() {
+            push(Bounds3::from_points(&scene.triangles.vertices(i)), PrimKind::Triangle, i);
+        }
+        for (i, s) in scene.spheres.iter().enumerate() {
+            push(s.shape.bounds(), PrimKind::Sphere, i);
+        }
+        for (i, r) in scene.rings.iter().enumerate() {
+            push(r.shape.bounds(), PrimKind::Ring, i);
+        }
+        // Primitives with non-finite bounds can never be hit; leaving them out keeps every
+        // box finite.
+        build.retain(|p| p.bounds.min.is_finite() && p.bounds.max.is_finite());
+
+        let root = build_node(&mut build, 0, 0);
+        let mut nodes = Vec::with_capacity(2 * build.len() / 2 + 1);
+        nodes.push(Node {
+            min: Vec3::ZERO,
+            first: 0,
+            max: Vec3::ZERO,
+            count: 0,
+        });
+        flatten(&root, 0, &mut nodes);
+        if build.is_empty() {
+            // An empty tree: a root leaf with no primitives and an empty box.
+            nodes[0] = Node {
+                min: Vec3::splat(f32::INFINITY),
+                first: 0,
+                max: Vec3::splat(f32::NEG_INFINITY),
+                count: 0,
+            };
+        }
+
+        let prims = build
+            .iter()
+            .map(|b| leaf_prim(scene, b.prim))
+            .collect();
+        Ok(Bvh {
+            nodes,
+            prims,
+            spheres: scene.spheres.iter().map(|s| s.shape).collect(),
+            rings: scene.rings.iter().map(|r| r.shape).collect(),
+            one_sided_quads: !scene.two_sided_quads,
+        })
+    }
+
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Checks the tree's invariants: every child box inside its parent's, every primitive's
+    /// box inside its leaf's, every primitive in exactly one leaf. Returns what is wrong.
+    pub fn validate(&self, scene: &Scene) -> Result<(), String> {
+        let mut seen = vec![0u32; self.prims.len()];
+        let mut stack = vec![(0usize, 0usize)];
+        while let Some((i, depth)) = stack.pop() {
+            let n = &self.nodes[i];
+            if depth > MAX_DEPTH + 1 {
+                return Err(format!("node {i} is deeper than {MAX_DEPTH}"));
+            }
+            let b = Bounds3 {
+                min: n.min,
+                max: n.max,
+            };
+            if n.count > 0 || (i == 0 && self.prims.is_empty()) {
+                for k in n.first as usize..(n.first + n.count) as usize {
+                    let pb = prim_bounds(scene, self.prims[k].prim.unpack());
+                    if !contains(&b, &pb) {
+                        return Err(format!("primitive {k} sticks out of leaf {i}"));
+                    }
+                    seen[k] += 1;
+                }
+            } else {
+                for c in [n.first as usize, n.first as usize + 1] {
+                    let cn = self.nodes.get(c).ok_or(format!("node {i}: child {c} missing"))?;
+                    let cb = Bounds3 {
+                        min: cn.min,
+                        max: cn.max,
+                    };
+                    if !contains(&b, &cb) {
+                        return Err(format!("node {c} sticks out of its parent {i}"));
+                    }
+                    stack.push((c, depth + 1));
+                }
+            }
+        }
+        match seen.iter().position(|&s| s != 1) {
+            Some(k) => Err(format!("primitive {k} is in {} leaves", seen[k])),
+            None => Ok(()),
+        }
+    }
+
+    /// Tests the primitives of one leaf; returns the index of the closest hit and shrinks
+    /// `t_max` to it.
+    #[inline(always)]
+    fn leaf_closest(&self, node: &Node, ray: &Ray, t_max: &mut f32, best: &mut Option<(usize, f32, f32)>) {
+        for k in node.first as usize..(node.first + node.count) as usize {
+            if let Some((t, u, v)) = self.hit_prim(&self.prims[k], ray, *t_max) {
+                *t_max = t;
+                *best = Some((k, u, v));
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn hit_prim(&self, p: &LeafPrim, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+        match p.prim.kind() {
+            PrimKind::Triangle => intersect_triangle_edges(ray, t_max, p.v[0], p.v[1], p.v[2], true),
+            PrimKind::Quad => {
+                if self.one_sided_quads && !faces_ray(p.normal, ray.direction) {
+                    return None;
+                }
+                intersect_quad(ray, t_max, &p.v)
+            }
+            PrimKind::Sphere => self.spheres[p.prim.index() as usize]
+                .intersect(ray, t_max)
+                .map(|t| (t, 0.0, 0.0)),
+            PrimKind::Ring => self.rings[p.prim.index() as usize]
+                .intersect(ray, t_max)
+                .map(|(t, _)| (t, 0.0, 0.0)),
+        }
+    }
+
+    /// Walks the tree nearer child first. `visit` tests a leaf and returns true to stop.
+    #[inline(always)]
+    fn traverse(&self, ray: &Ray, t_max: &mut f32, mut visit: impl FnMut(&Node, &mut f32) -> bool) {
+        // A zero direction component becomes a tiny one of the same sign: the slab test
+        // then never computes 0·∞ = NaN, and can use plain comparisons.
+        let safe = |d: f32| {
+            if d.abs() < 1e-30 {
+                1e-30f32.copysign(d)
+            } else {
+                d
+            }
+        };
+        let inv = Vec3 {
+            x: 1.0 / safe(ray.direction.x),
+            y: 1.0 / safe(ray.direction.y),
+            z: 1.0 / safe(ray.direction.z),
+        };
+        let org = ray.origin;
+        let root = &self.nodes[0];
+        if slab(root, org, inv, ray.t_min, *t_max).is_none() {
+            return;
+        }
+        // Far children wait with their entry distance: a closer hit found meanwhile lets
+        // them be skipped without testing their box again.
+        let mut stack = [(0u32, 0f32); MAX_DEPTH + 4];
+        let mut top = 0usize;
+        let mut current = 0u32;
+        loop {
+            let node = &self.nodes[current as usize];
+            if node.count > 0 {
+                if visit(node, t_max) {
+                    return;
+                }
+            } else {
+                let (a, b) = (node.first, node.first + 1);
+                let da = slab(&self.nodes[a as usize], org, inv, ray.t_min, *t_max);
+                let db = slab(&self.nodes[b as usize], org, inv, ray.t_min, *t_max);
+                match (da, db) {
+                    (Some(x), Some(y)) => {
+                        let (near, far, far_t) = if x <= y { (a, b, y) } else { (b, a, x) };
+                        stack[top] = (far, far_t);
+                        top += 1;
+                        current = near;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        current = a;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        current = b;
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+            loop {
+                if top == 0 {
+                    return;
+                }
+                top -= 1;
+                let (candidate, entry) = stack[top];
+                if entry <= *t_max {
+                    current = candidate;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// Ray–box slab test. The far distance is enlarged by 2γ₃ (Ize, "Robust BVH ray traversal")
+/// so that rounding never culls a box the ray touches.
+#[inline(always)]
+fn slab(n: &Node, org: Vec3, inv: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
+    const ROBUST: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
+    let tx0 = (n.min.x - org.x) * inv.x;
+    let tx1 = (n.max.x - org.x) * inv.x;
+    let ty0 = (n.min.y - org.y) * inv.y;
+    let ty1 = (n.max.y - org.y) * inv.y;
+    let tz0 = (n.min.z - org.z) * inv.z;
+    let tz1 = (n.max.z - org.z) * inv.z;
+    let near = max(max(min(tx0, tx1), min(ty0, ty1)), max(min(tz0, tz1), t_min));
+    let far = min(min(max(tx0, tx1), max(ty0, ty1)), max(tz0, tz1)) * ROBUST;
+    let far = min(far, t_max);
+    (near <= far).then_some(near)
+}
+
+/// Plain comparisons (minss/maxss); the slab test feeds them no NaN.
+#[inline(always)]
+fn min(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+#[inline(always)]
+fn max(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+impl Accel for Bvh {
+    fn name(&self) -> &'static str {
+        "bvh"
+    }
+
+    fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
+        let mut t_max = ray.t_max;
+        let mut best = None;
+        self.traverse(ray, &mut t_max, |node, t_max| {
+            self.leaf_closest(node, ray, t_max, &mut best);
+            false
+        });
+        best.map(|(k, u, v)| PrimHit {
+            t: t_max,
+            prim: self.prims[k].prim.unpack(),
+            u,
+            v,
+        })
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        let mut t_max = ray.t_max;
+        let mut hit = false;
+        self.traverse(ray, &mut t_max, |node, t_max| {
+            for k in node.first as usize..(node.first + node.count) as usize {
+                if self.hit_prim(&self.prims[k], ray, *t_max).is_some() {
+                    hit = true;
+                    return true;
+                }
+            }
+            false
+        });
+        hit
+    }
+}
+
+fn contains(outer: &Bounds3, inner: &Bounds3) -> bool {
+    inner.is_empty()
+        || (outer.min.x <= inner.min.x
+            && outer.min.y <= inner.min.y
+            && outer.min.z <= inner.min.z
+            && outer.max.x >= inner.max.x
+            && outer.max.y >= inner.max.y
+            && outer.max.z >= inner.max.z)
+}
+
+fn prim_bounds(scene: &Scene, prim: PrimRef) -> Bounds3 {
+    let i = prim.index as usize;
+    match prim.kind {
+        PrimKind::Quad => Bounds3::from_points(&scene.quads[i].vertices),
+        PrimKind::Triangle => Bounds3::from_points(&scene.triangles.vertices(i)),
+        PrimKind::Sphere => scene.spheres[i].shape.bounds(),
+        PrimKind::Ring => scene.rings[i].shape.bounds(),
+    }
+}
+
+fn leaf_prim(scene: &Scene, prim: PrimRef) -> LeafPrim {
+    let i = prim.index as usize;
+    let (v, normal) = match prim.kind {
+        PrimKind::Quad => (scene.quads[i].vertices, scene.quads[i].normal),
+        PrimKind::Triangle => {
+            let [a, b, c] = scene.triangles.vertices(i);
+            ([a, b - a, c - a, Vec3::ZERO], Vec3::ZERO)
+        }
+        PrimKind::Sphere | PrimKind::Ring => ([Vec3::ZERO; 4], Vec3::ZERO),
+    };
+    LeafPrim {
+        v,
+        normal,
+        prim: PackedPrim::new(prim),
+    }
+}
+
+fn union_bounds(prims: &[BuildPrim]) -> (Bounds3, Bounds3) {
+    prims.iter().fold((Bounds3::EMPTY, Bounds3::EMPTY), |(b, c), p| {
+        (b.union(p.bounds), c.union_point(p.centroid))
+    })
+}
+
+/// Builds the subtree over `prims`, which start at `offset` in the final primitive order.
+fn build_node(prims: &mut [BuildPrim], offset: usize, depth: usize) -> BuildNode {
+    let (bounds, centroids) = union_bounds(prims);
+    let n = prims.len();
+    let leaf = BuildNode::Leaf {
+        bounds,
+        first: offset,
+        count: n,
+    };
+    if n <= 1 || depth >= MAX_DEPTH {
+        return leaf;
+    }
+    let split = match best_split(prims, &bounds, &centroids) {
+        Some((axis, bin, cost)) => {
+            if cost >= n as f32 && n <= MAX_LEAF {
+                return leaf;
+            }
+            let scale = BINS as f32 / (centroids.max[axis] - centroids.min[axis]);
+            let lo = centroids.min[axis];
+            partition(prims, |p| bin_of(p.centroid[axis], lo, scale) <= bin)
+        }
+        // All centroids coincide: split by count so that no leaf grows without bound.
+        None if n <= MAX_LEAF => return leaf,
+        None => n / 2,
+    };
+    let split = if split == 0 || split == n { n / 2 } else { split };
+    let (left, right) = prims.split_at_mut(split);
+    let (l, r) = if n > PARALLEL_THRESHOLD {
+        rayon::join(
+            || build_node(left, offset, depth + 1),
+            || build_node(right, offset + split, depth + 1),
+        )
+    } else {
+        (
+            build_node(left, offset, depth + 1),
+            build_node(right, offset + split, depth + 1),
+        )
+    };
+    BuildNode::Interior {
+        bounds,
+        children: Box::new([l, r]),
+    }
+}
+
+#[inline]
+fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
+    (((c - lo) * scale) as usize).min(BINS - 1)
+}
+
+/// The cheapest SAH split: (axis, last bin of the left side, cost relative to one primitive
+/// intersection). None when all centroids coincide.
+fn best_split(prims: &[BuildPrim], bounds: &Bounds3, centroids: &Bounds3) -> Option<(usize, usize, f32)> {
+    let extent = centroids.extent();
+    let parent_area = bounds.area().max(f32::MIN_POSITIVE);
+    let mut best: Option<(usize, usize, f32)> = None;
+    for axis in 0..3 {
+        if !(extent[axis] > 0.0) {
+            continue;
+        }
+        let lo = centroids.min[axis];
+        let scale = BINS as f32 / extent[axis];
+        let mut counts = [0u32; BINS];
+        let mut boxes = [Bounds3::EMPTY; BINS];
+        for p in prims {
+            let b = bin_of(p.centroid[axis], lo, scale);
+            counts[b] += 1;
+            boxes[b] = boxes[b].union(p.bounds);
+        }
+        // Sweep from the right, then from the left.
+        let mut right_area = [0f32; BINS];
+        let mut acc = Bounds3::EMPTY;
+        for b in (1..BINS).rev() {
+            acc = acc.union(boxes[b]);
+            right_area[b] = acc.area();
+        }
+        let (mut left_box, mut left_count) = (Bounds3::EMPTY, 0u32);
+        let total = prims.len() as u32;
+        for b in 0..BINS - 1 {
+            left_box = left_box.union(boxes[b]);
+            left_count += counts[b];
+            let right_count = total - left_count;
+            if left_count == 0 || right_count == 0 {
+                continue;
+            }
+            let cost = TRAVERSAL_COST
+                + (left_box.area() * left_count as f32 + right_area[b + 1] * right_count as f32)
+                    / parent_area;
+            if best.is_none_or(|(_, _, c)| cost < c) {
+                best = Some((axis, b, cost));
+            }
+        }
+    }
+    best
+}
+
+/// Moves the elements for which `left` holds to the front; returns how many there are.
+fn partition(prims: &mut [BuildPrim], left: impl Fn(&BuildPrim) -> bool) -> usize {
+    let mut i = 0;
+    for j in 0..prims.len() {
+        if left(&prims[j]) {
+            prims.swap(i, j);
+            i += 1;
+        }
+    }
+    i
+}
+
+/// Writes `node` at `slot`, allocating its children as an adjacent pair.
+fn flatten(node: &BuildNode, slot: usize, nodes: &mut Vec<Node>) {
+    let b = node.bounds();
+    match node {
+        BuildNode::Leaf { first, count, .. } => {
+            nodes[slot] = Node {
+                min: b.min,
+                first: *first as u32,
+                max: b.max,
+                count: *count as u32,
+            };
+        }
+        BuildNode::Interior { children, .. } => {
+            let first = nodes.len();
+            let empty = Node {
+                min: Vec3::ZERO,
+                first: 0,
+                max: Vec3::ZERO,
+                count: 0,
+            };
+            nodes.push(empty);
+            nodes.push(empty);
+            nodes[slot] = Node {
+                min: b.min,
+                first: first as u32,
+                max: b.max,
+                count: 0,
+            };
+            flatten(&children[0], first, nodes);
+            flatten(&children[1], first + 1, nodes);
+        }
+    }
+}

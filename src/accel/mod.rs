@@ -1,0 +1,158 @@
+//! The one interface every engine asks its visibility questions of, and its two
+//! implementations: Intel Embree (feature `embree`) and trilux's own BVH.
+
+pub mod bvh;
+#[cfg(feature = "embree")]
+pub mod embree;
+
+use std::fmt;
+
+use crate::geometry::Ray;
+use crate::scene::{PrimKind, PrimRef, Scene};
+pub use crate::scene::{PrimHit, SurfaceHit};
+
+/// Visibility queries over one scene's primitives. Implementations are immutable once built
+/// and safe to query from many threads at once.
+pub trait Accel: Send + Sync {
+    /// Which backend this is ("embree" or "bvh").
+    fn name(&self) -> &'static str;
+
+    /// The closest hit of `ray` in `(ray.t_min, ray.t_max)`.
+    fn intersect(&self, ray: &Ray) -> Option<PrimHit>;
+
+    /// Whether anything is hit in `(ray.t_min, ray.t_max)`.
+    fn occluded(&self, ray: &Ray) -> bool;
+
+    /// `intersect` for many rays; `hits` must be as long as `rays`.
+    fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<PrimHit>]) {
+        for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
+            *hit = self.intersect(ray);
+        }
+    }
+
+    /// `occluded` for many rays; `occluded` must be as long as `rays`.
+    fn occluded_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
+        for (ray, o) in rays.iter().zip(occluded.iter_mut()) {
+            *o = self.occluded(ray);
+        }
+    }
+}
+
+/// The closest hit of `ray` with its full surface (point, normals, texture coordinates).
+pub fn closest_surface(accel: &dyn Accel, scene: &Scene, ray: &Ray) -> Option<SurfaceHit> {
+    accel.intersect(ray).map(|h| scene.surface(ray, &h))
+}
+
+/// Which backend to build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum AccelKind {
+    Embree,
+    Bvh,
+}
+
+impl AccelKind {
+    /// Embree when this build has it, else the BVH.
+    pub fn default_available() -> AccelKind {
+        if cfg!(feature = "embree") {
+            AccelKind::Embree
+        } else {
+            AccelKind::Bvh
+        }
+    }
+}
+
+impl fmt::Display for AccelKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            AccelKind::Embree => "embree",
+            AccelKind::Bvh => "bvh",
+        })
+    }
+}
+
+/// Embree's build quality (`--embree-quality`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum EmbreeQuality {
+    Low,
+    #[default]
+    Medium,
+    High,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AccelOptions {
+    /// Embree's build quality (default medium).
+    pub embree_quality: EmbreeQuality,
+    /// Embree's robust (watertight) mode (default on). Off, Embree is a little faster but
+    /// lets rays through the diagonal of a quad and through shared edges: visible as single
+    /// background pixels on the walls of the course's Cornell box, and a light leak.
+    pub embree_robust: bool,
+}
+
+impl Default for AccelOptions {
+    fn default() -> Self {
+        AccelOptions {
+            embree_quality: EmbreeQuality::Medium,
+            embree_robust: true,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum AccelError {
+    #[error("{0}")]
+    Embree(String),
+    #[error("this build of trilux has no Embree backend (built without the `embree` feature); use --accel bvh")]
+    EmbreeUnavailable,
+    #[error("the scene has too many primitives for one acceleration structure ({0})")]
+    TooLarge(usize),
+}
+
+/// Builds the chosen backend over the scene's primitives.
+pub fn build(scene: &Scene, kind: AccelKind, options: &AccelOptions) -> Result<Box<dyn Accel>, AccelError> {
+    match kind {
+        AccelKind::Bvh => Ok(Box::new(bvh::Bvh::build(scene)?)),
+        #[cfg(feature = "embree")]
+        AccelKind::Embree => Ok(Box::new(embree::EmbreeAccel::build(scene, options)?)),
+        #[cfg(not(feature = "embree"))]
+        AccelKind::Embree => Err(AccelError::EmbreeUnavailable),
+    }
+}
+
+/// Primitive references packed in 32 bits: the kind in the top two bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct PackedPrim(u32);
+
+impl PackedPrim {
+    pub const MAX_INDEX: u32 = (1 << 30) - 1;
+
+    pub fn new(prim: PrimRef) -> PackedPrim {
+        let kind = match prim.kind {
+            PrimKind::Quad => 0,
+            PrimKind::Triangle => 1,
+            PrimKind::Sphere => 2,
+            PrimKind::Ring => 3,
+        };
+        PackedPrim(kind << 30 | prim.index)
+    }
+    #[inline]
+    pub fn kind(self) -> PrimKind {
+        match self.0 >> 30 {
+            0 => PrimKind::Quad,
+            1 => PrimKind::Triangle,
+            2 => PrimKind::Sphere,
+            _ => PrimKind::Ring,
+        }
+    }
+    #[inline]
+    pub fn index(self) -> u32 {
+        self.0 & Self::MAX_INDEX
+    }
+    #[inline]
+    pub fn unpack(self) -> PrimRef {
+        PrimRef {
+            kind: self.kind(),
+            index: self.index(),
+        }
+    }
+}

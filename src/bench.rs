@@ -1,0 +1,194 @@
+//! Ray sets and the measurements of `render bench-accel`: Mrays/s of closest-hit and
+//! occlusion queries, single and batched, on one thread and on all, for each backend, beside
+//! the shim's plain C loops over Embree as the baseline.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::accel::{self, Accel, AccelKind, AccelOptions};
+use crate::geometry::{vec3, Ray, Vec3};
+use crate::sampling::Rng;
+use crate::scene::{Camera, Scene};
+
+/// One ray per pixel of a `side`×`side` image through the scene's camera, row by row.
+pub fn camera_rays(scene: &Scene, side: u32) -> Vec<Ray> {
+    let camera = scene.camera();
+    let mut rays = Vec::with_capacity((side * side) as usize);
+    for j in 0..side {
+        for i in 0..side {
+            let (x, y) = Camera::screen_point(i, j, 0.5, 0.5, side, side);
+            rays.push(camera.generate_ray(x, y));
+        }
+    }
+    rays
+}
+
+/// A uniformly random direction.
+pub fn uniform_direction(rng: &mut Rng) -> Vec3 {
+    let z = 1.0 - 2.0 * rng.next_f32();
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * rng.next_f32();
+    vec3(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// `n` incoherent rays: origins uniform in the scene's bounds (slightly enlarged), directions
+/// uniform on the sphere. Deterministic for a seed.
+pub fn incoherent_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
+    let b = scene.bounds();
+    let pad = b.extent().max_elem() * 0.05;
+    let lo = b.min - Vec3::splat(pad);
+    let size = b.extent() + Vec3::splat(2.0 * pad);
+    (0..n)
+        .map(|i| {
+            let mut rng = Rng::new(seed, i as u64, 0);
+            let o = lo + vec3(rng.next_f32() * size.x, rng.next_f32() * size.y, rng.next_f32() * size.z);
+            Ray::new(o, uniform_direction(&mut rng))
+        })
+        .collect()
+}
+
+/// The rays of a query set, their t_max limited for occlusion queries: half reach to a random
+/// fraction of the scene's diagonal, half are unbounded.
+pub fn occlusion_rays(scene: &Scene, rays: &[Ray], seed: u64) -> Vec<Ray> {
+    let diag = scene.bounds().extent().length();
+    rays.iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let mut rng = Rng::new(seed ^ 0x0cc1, i as u64, 1);
+            let t_max = if i % 2 == 0 {
+                f32::INFINITY
+            } else {
+                rng.next_f32() * diag
+            };
+            Ray { t_max, ..*r }
+        })
+        .collect()
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Query {
+    Closest,
+    Occluded,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Single,
+    Batched,
+}
+
+/// Traces `rays` once through the API; returns the number of hits (so nothing is optimised
+/// away).
+pub fn trace(accel: &dyn Accel, rays: &[Ray], query: Query, mode: Mode, parallel: bool) -> usize {
+    let chunk = 4096;
+    let work = |rays: &[Ray]| -> usize {
+        match (query, mode) {
+            (Query::Closest, Mode::Single) => rays.iter().filter(|r| accel.intersect(r).is_some()).count(),
+            (Query::Occluded, Mode::Single) => rays.iter().filter(|r| accel.occluded(r)).count(),
+            (Query::Closest, Mode::Batched) => {
+                let mut hits = vec![None; rays.len()];
+                accel.intersect_batch(rays, &mut hits);
+                hits.iter().filter(|h| h.is_some()).count()
+            }
+            (Query::Occluded, Mode::Batched) => {
+                let mut occ = vec![false; rays.len()];
+                accel.occluded_batch(rays, &mut occ);
+                occ.iter().filter(|&&o| o).count()
+            }
+        }
+    };
+    if parallel {
+        rays.par_chunks(chunk).map(work).sum()
+    } else {
+        rays.chunks(chunk).map(work).sum()
+    }
+}
+
+/// Median of `repeats` timings of `f`, in seconds.
+pub fn median_seconds(repeats: usize, mut f: impl FnMut()) -> f64 {
+    let mut times: Vec<f64> = (0..repeats.max(1))
+        .map(|_| {
+            let start = Instant::now();
+            f();
+            start.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// One line of the benchmark table.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub backend: String,
+    pub rays: &'static str,
+    pub query: &'static str,
+    pub mode: &'static str,
+    pub threads: usize,
+    pub mrays_per_s: f64,
+}
+
+/// The full measurement over one scene. `n_rays` per ray set, `repeats` timings per cell.
+pub fn bench_accel(scene: &Scene, kinds: &[AccelKind], options: &AccelOptions, n_rays: usize, repeats: usize, threads: usize) -> Result<(Vec<Row>, Vec<(String, f64)>), accel::AccelError> {
+    let side = (n_rays as f64).sqrt().ceil() as u32;
+    let camera = camera_rays(scene, side);
+    let incoherent = incoherent_rays(scene, n_rays, 1);
+    let sets = [
+        ("camera", camera.clone(), occlusion_rays(scene, &camera, 2)),
+        ("incoherent", incoherent.clone(), occlusion_rays(scene, &incoherent, 3)),
+    ];
+    let mut rows = Vec::new();
+    let mut builds = Vec::new();
+    for &kind in kinds {
+        let mut built = None;
+        let build_s = median_seconds(repeats, || built = Some(accel::build(scene, kind, options)));
+        let accel = built.expect("built at least once")?;
+        builds.push((kind.to_string(), build_s));
+        for (set_name, closest_rays, occl_rays) in &sets {
+            for (query, qname, rays) in [(Query::Closest, "closest", closest_rays), (Query::Occluded, "occluded", occl_rays)] {
+                for (mode, mname) in [(Mode::Single, "single"), (Mode::Batched, "batched")] {
+                    for (parallel, t) in [(false, 1), (true, threads)] {
+                        let s = median_seconds(repeats, || {
+                            std::hint::black_box(trace(accel.as_ref(), rays, query, mode, parallel));
+                        });
+                        rows.push(Row {
+                            backend: kind.to_string(),
+                            rays: set_name,
+                            query: qname,
+                            mode: mname,
+                            threads: t,
+                            mrays_per_s: rays.len() as f64 / s / 1e6,
+                        });
+                    }
+                }
+            }
+        }
+        #[cfg(feature = "embree")]
+        if kind == AccelKind::Embree {
+            use crate::accel::embree::{Baseline, EmbreeAccel};
+            let e = EmbreeAccel::build(scene, options)?;
+            for (set_name, closest_rays, occl_rays) in &sets {
+                for (b, qname, mname, rays) in [
+                    (Baseline::Intersect1, "closest", "single", closest_rays),
+                    (Baseline::Occluded1, "occluded", "single", occl_rays),
+                    (Baseline::Intersect8, "closest", "batched", closest_rays),
+                    (Baseline::Occluded8, "occluded", "batched", occl_rays),
+                ] {
+                    let s = median_seconds(repeats, || {
+                        std::hint::black_box(e.baseline(rays, b));
+                    });
+                    rows.push(Row {
+                        backend: "embree C loop".into(),
+                        rays: set_name,
+                        query: qname,
+                        mode: mname,
+                        threads: 1,
+                        mrays_per_s: rays.len() as f64 / s / 1e6,
+                    });
+                }
+            }
+        }
+    }
+    Ok((rows, builds))
+}

@@ -1,0 +1,208 @@
+//! The film: a linear RGB image in f32, and its output as PNG (sRGB, 8 bit), EXR or PFM
+//! (linear float). Files are written atomically: to a temporary file beside the target, then
+//! renamed over it, so an interrupted render never leaves a broken image.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use crate::scene::texture::linear_to_srgb;
+use crate::scene::Color;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major, row 0 at the top of the image.
+    pub pixels: Vec<Color>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum FilmError {
+    #[error("{path}: unknown image format (use .png, .exr or .pfm)")]
+    UnknownFormat { path: PathBuf },
+    #[error("{path}: cannot write the image: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: cannot encode the image: {message}")]
+    Encode { path: PathBuf, message: String },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    Png,
+    Exr,
+    Pfm,
+}
+
+impl ImageFormat {
+    pub fn from_path(path: &Path) -> Option<ImageFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "png" => Some(ImageFormat::Png),
+            "exr" => Some(ImageFormat::Exr),
+            "pfm" => Some(ImageFormat::Pfm),
+            _ => None,
+        }
+    }
+}
+
+impl Film {
+    pub fn new(width: u32, height: u32) -> Film {
+        Film {
+            width,
+            height,
+            pixels: vec![Color::ZERO; width as usize * height as usize],
+        }
+    }
+
+    /// The pixel in column `i` and row `row` counted from the top.
+    pub fn get(&self, i: u32, row: u32) -> Color {
+        self.pixels[row as usize * self.width as usize + i as usize]
+    }
+
+    /// 8-bit sRGB, clamped, row 0 at the top.
+    pub fn to_srgb8(&self) -> Vec<u8> {
+        self.pixels
+            .iter()
+            .flat_map(|c| c.to_array())
+            .map(|v| {
+                let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
+                (linear_to_srgb(v) * 255.0 + 0.5) as u8
+            })
+            .collect()
+    }
+
+    /// Writes the film in the format the extension names.
+    pub fn write(&self, path: &Path) -> Result<(), FilmError> {
+        let format = ImageFormat::from_path(path).ok_or_else(|| FilmError::UnknownFormat {
+            path: path.to_path_buf(),
+        })?;
+        write_atomically(path, |w| self.encode(format, w, path))
+    }
+
+    fn encode(&self, format: ImageFormat, w: &mut BufWriter<File>, path: &Path) -> Result<(), FilmError> {
+        let encode_err = |e: image::ImageError| FilmError::Encode {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
+        let io_err = |source| FilmError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        match format {
+            ImageFormat::Png => {
+                let img = image::RgbImage::from_raw(self.width, self.height, self.to_srgb8())
+                    .ok_or_else(|| FilmError::Encode {
+                        path: path.to_path_buf(),
+                        message: "pixel count does not match the size".into(),
+                    })?;
+                img.write_to(w, image::ImageFormat::Png).map_err(encode_err)
+            }
+            ImageFormat::Exr => {
+                let data: Vec<f32> = self.pixels.iter().flat_map(|c| c.to_array()).collect();
+                let img = image::Rgb32FImage::from_raw(self.width, self.height, data).ok_or_else(|| {
+                    FilmError::Encode {
+                        path: path.to_path_buf(),
+                        message: "pixel count does not match the size".into(),
+                    }
+                })?;
+                img.write_to(w, image::ImageFormat::OpenExr).map_err(encode_err)
+            }
+            ImageFormat::Pfm => {
+                // PFM: little-endian (negative scale), rows from the bottom up.
+                write!(w, "PF\n{} {}\n-1.0\n", self.width, self.height).map_err(io_err)?;
+                for row in (0..self.height).rev() {
+                    for i in 0..self.width {
+                        for v in self.get(i, row).to_array() {
+                            w.write_all(&v.to_le_bytes()).map_err(io_err)?;
+                        }
+                    }
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Runs `fill` on a temporary file beside `path`, then renames it to `path`.
+pub fn write_atomically(
+    path: &Path,
+    fill: impl FnOnce(&mut BufWriter<File>) -> Result<(), FilmError>,
+) -> Result<(), FilmError> {
+    let io_err = |source| FilmError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "image".into());
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| {
+        let file = File::create(&tmp).map_err(io_err)?;
+        let mut w = BufWriter::new(file);
+        fill(&mut w)?;
+        let file = w.into_inner().map_err(|e| io_err(e.into_error()))?;
+        file.sync_all().map_err(io_err)?;
+        std::fs::rename(&tmp, path).map_err(io_err)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Reads a PFM file written by `Film::write` (or any little- or big-endian colour PFM).
+pub fn read_pfm(path: &Path) -> Result<Film, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut fields = Vec::new();
+    let mut pos = 0;
+    while fields.len() < 4 {
+        while pos < bytes.len() && bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        let start = pos;
+        while pos < bytes.len() && !bytes[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        if start == pos {
+            return Err(format!("{}: truncated PFM header", path.display()));
+        }
+        fields.push(String::from_utf8_lossy(&bytes[start..pos]).into_owned());
+    }
+    pos += 1;
+    let bad = || format!("{}: bad PFM header", path.display());
+    if fields[0] != "PF" {
+        return Err(bad());
+    }
+    let width: u32 = fields[1].parse().map_err(|_| bad())?;
+    let height: u32 = fields[2].parse().map_err(|_| bad())?;
+    let scale: f32 = fields[3].parse().map_err(|_| bad())?;
+    let n = width as usize * height as usize;
+    let data = bytes.get(pos..pos + 12 * n).ok_or_else(|| format!("{}: truncated PFM data", path.display()))?;
+    let value = |k: usize| {
+        let b = [data[4 * k], data[4 * k + 1], data[4 * k + 2], data[4 * k + 3]];
+        if scale < 0.0 {
+            f32::from_le_bytes(b)
+        } else {
+            f32::from_be_bytes(b)
+        }
+    };
+    let mut film = Film::new(width, height);
+    for row in 0..height as usize {
+        let src_row = height as usize - 1 - row;
+        for i in 0..width as usize {
+            let k = 3 * (src_row * width as usize + i);
+            film.pixels[row * width as usize + i] = Color {
+                x: value(k),
+                y: value(k + 1),
+                z: value(k + 2),
+            };
+        }
+    }
+    Ok(film)
+}

@@ -1,0 +1,83 @@
+//! Rays and the robust spawning of secondary rays from surfaces.
+
+use super::vec::Vec3;
+
+/// A ray `origin + t·direction` for `t` in `(t_min, t_max)`. The layout is the shim's `TxRay`,
+/// so batches of rays go to Embree without copying.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub t_min: f32,
+    pub direction: Vec3,
+    pub t_max: f32,
+}
+
+impl Ray {
+    /// A ray over `(0, ∞)`.
+    pub fn new(origin: Vec3, direction: Vec3) -> Ray {
+        Ray {
+            origin,
+            t_min: 0.0,
+            direction,
+            t_max: f32::INFINITY,
+        }
+    }
+
+    pub fn with_range(origin: Vec3, direction: Vec3, t_min: f32, t_max: f32) -> Ray {
+        Ray {
+            origin,
+            t_min,
+            direction,
+            t_max,
+        }
+    }
+
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.direction * t
+    }
+}
+
+/// Moves a point off a surface so that a ray spawned from it does not hit that surface again:
+/// the offset of Wächter and Binder (Ray Tracing Gems, ch. 6). It adds a fixed number of
+/// floating-point steps (ULPs) along the geometric normal, so it scales with the coordinates,
+/// and a small absolute step near the origin where ULPs are tiny. `n` must point to the side
+/// the new ray leaves into.
+pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
+    const ORIGIN: f32 = 1.0 / 32.0;
+    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
+    const INT_SCALE: f32 = 256.0;
+    let step = |p: f32, n: f32| -> f32 {
+        if p.abs() < ORIGIN {
+            return p + FLOAT_SCALE * n;
+        }
+        let of_i = (INT_SCALE * n) as i32;
+        let bits = p.to_bits() as i32;
+        let moved = if p < 0.0 {
+            bits.wrapping_sub(of_i)
+        } else {
+            bits.wrapping_add(of_i)
+        };
+        f32::from_bits(moved as u32)
+    };
+    Vec3 {
+        x: step(p.x, n.x),
+        y: step(p.y, n.y),
+        z: step(p.z, n.z),
+    }
+}
+
+/// A ray leaving surface point `p` (geometric normal `ng`) in direction `dir`.
+pub fn spawn_ray(p: Vec3, ng: Vec3, dir: Vec3) -> Ray {
+    let n = if ng.dot(dir) < 0.0 { -ng } else { ng };
+    Ray::new(offset_ray_origin(p, n), dir)
+}
+
+/// A ray from surface point `p` towards `target` that stops just short of it (shadow rays).
+pub fn spawn_ray_to(p: Vec3, ng: Vec3, target: Vec3) -> Ray {
+    let d = target - p;
+    let n = if ng.dot(d) < 0.0 { -ng } else { ng };
+    let origin = offset_ray_origin(p, n);
+    Ray::with_range(origin, target - origin, 0.0, 1.0 - 1e-4)
+}

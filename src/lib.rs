@@ -1,0 +1,17 @@
+//! trilux: an offline renderer with three lighting engines (ray tracing, radiosity, photon
+//! mapping) over one accelerated visibility core — Intel Embree or trilux's own BVH.
+//!
+//! The data flow: [`scene::Scene::load`] → [`plan::Plan`] → [`accel::build`] → an engine in
+//! [`engines`] → [`film::Film`].
+
+pub mod accel;
+pub mod bench;
+pub mod engines;
+pub mod film;
+pub mod generate;
+pub mod geometry;
+pub mod parallel;
+pub mod plan;
+pub mod progress;
+pub mod sampling;
+pub mod scene;

@@ -1,0 +1,367 @@
+//! The `render` command: parses the command line (the course's single-dash flags included),
+//! calls the library, reports progress. No rendering logic lives here.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::{Args, Parser, Subcommand};
+
+use trilux::accel::{self, AccelKind, AccelOptions, EmbreeQuality};
+use trilux::engines::{raycast, EngineKind, RenderSettings};
+use trilux::geometry::vec3;
+use trilux::plan::Plan;
+use trilux::scene::Scene;
+
+/// The course program's flags, accepted with one dash and underscores (`-num_bounces 3`) as
+/// well as in their `--kebab-case` form.
+const COURSE_FLAGS: [&str; 15] = [
+    "input",
+    "output",
+    "size",
+    "num_bounces",
+    "num_shadow_samples",
+    "num_antialias_samples",
+    "ambient_light",
+    "num_form_factor_samples",
+    "sphere_rasterization",
+    "cylinder_ring_rasterization",
+    "num_photons_to_shoot",
+    "num_photons_to_collect",
+    "gather_indirect",
+    "interpolate",
+    "two_sided",
+];
+
+/// Rewrites `-num_bounces` and `--num_bounces` to `--num-bounces`; everything else as it is.
+fn normalize_args(args: impl Iterator<Item = String>) -> Vec<String> {
+    args.map(|a| {
+        let name = a.strip_prefix("--").or_else(|| a.strip_prefix('-'));
+        match name {
+            Some(n) if COURSE_FLAGS.contains(&n) => format!("--{}", n.replace('_', "-")),
+            _ => a,
+        }
+    })
+    .collect()
+}
+
+#[derive(Parser, Debug)]
+#[command(name = "render", version, about = "trilux: ray tracing, radiosity and photon mapping on Embree or a built-in BVH")]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    render: RenderArgs,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Measures the Accel backends: Mrays/s of closest-hit and occlusion queries.
+    BenchAccel(BenchArgs),
+    /// Writes a height-field terrain of at least N triangles as standard OBJ.
+    GenTerrain {
+        /// Number of triangles (at least).
+        triangles: usize,
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Writes a procedural texture as PPM (P6).
+    GenTexture {
+        #[arg(value_enum)]
+        kind: trilux::generate::TextureKind,
+        /// Side in pixels.
+        #[arg(long, default_value_t = 256)]
+        size: u32,
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+}
+
+#[derive(Args, Debug)]
+struct BenchArgs {
+    /// A scene file, or `terrain:N` for a generated terrain of N triangles.
+    scene: String,
+    /// Rays per ray set.
+    #[arg(long, default_value_t = 1_000_000)]
+    rays: usize,
+    /// Timings per cell; the median is reported.
+    #[arg(long, default_value_t = 5)]
+    repeats: usize,
+    /// Worker threads for the "all threads" rows (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Embree's robust (watertight) mode, as for rendering.
+    #[arg(long, default_value_t = true, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
+    embree_robust: bool,
+    /// Backends to measure.
+    #[arg(long, value_delimiter = ',', default_values_t = default_bench_accels())]
+    accel: Vec<AccelKind>,
+}
+
+fn default_bench_accels() -> Vec<AccelKind> {
+    if cfg!(feature = "embree") {
+        vec![AccelKind::Embree, AccelKind::Bvh]
+    } else {
+        vec![AccelKind::Bvh]
+    }
+}
+
+#[derive(Args, Debug)]
+struct RenderArgs {
+    /// The scene file (course dialect or standard OBJ).
+    #[arg(long, required = true)]
+    input: Option<PathBuf>,
+    /// Output image: .png (sRGB 8-bit), .exr or .pfm (linear float). Default: <scene stem>.png.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Image size in pixels.
+    #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [256, 256])]
+    size: Vec<u32>,
+    /// Lighting engine.
+    #[arg(long, value_enum, default_value_t = EngineKind::Raycast)]
+    engine: EngineKind,
+    /// Visibility backend (default: embree when this build has it).
+    #[arg(long, value_enum)]
+    accel: Option<AccelKind>,
+    /// Worker threads (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Seed of every random number; the same seed gives the same image at any thread count.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+    /// Print the stages and structures this render would build, and exit.
+    #[arg(long)]
+    plan: bool,
+    /// Print counters (rays cast, build and render time) after rendering.
+    #[arg(long)]
+    stats: bool,
+    /// Make quads opaque from both sides.
+    #[arg(long)]
+    two_sided: bool,
+    /// Embree's build quality.
+    #[arg(long, value_enum, default_value_t = EmbreeQuality::Medium)]
+    embree_quality: EmbreeQuality,
+    /// Embree's robust (watertight) mode: on by default; `--embree-robust false` trades
+    /// cracks along quad diagonals and shared edges for a little speed.
+    #[arg(long, default_value_t = true, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
+    embree_robust: bool,
+    /// Mirror/refraction recursion depth (ray tracing engine).
+    #[arg(long, default_value_t = 0)]
+    num_bounces: u32,
+    /// Shadow rays per light.
+    #[arg(long, default_value_t = 0)]
+    num_shadow_samples: u32,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 1)]
+    num_antialias_samples: u32,
+    /// Ambient radiance R G B.
+    #[arg(long, num_args = 3, value_names = ["R", "G", "B"], allow_negative_numbers = true)]
+    ambient_light: Option<Vec<f32>>,
+    /// Point pairs per form factor (radiosity engine).
+    #[arg(long)]
+    num_form_factor_samples: Option<u32>,
+    /// Sphere tessellation H V (radiosity engine).
+    #[arg(long, num_args = 2, value_names = ["H", "V"])]
+    sphere_rasterization: Option<Vec<u32>>,
+    /// Ring tessellation (radiosity engine).
+    #[arg(long)]
+    cylinder_ring_rasterization: Option<u32>,
+    /// Photons to emit (photon engine).
+    #[arg(long)]
+    num_photons_to_shoot: Option<u64>,
+    /// Photons per density estimate (photon engine).
+    #[arg(long)]
+    num_photons_to_collect: Option<u32>,
+    /// Final gathering for indirect light (photon engine).
+    #[arg(long)]
+    gather_indirect: bool,
+    /// Smooth radiosity display (radiosity engine).
+    #[arg(long)]
+    interpolate: bool,
+}
+
+impl RenderArgs {
+    fn settings(&self) -> RenderSettings {
+        let d = RenderSettings::default();
+        RenderSettings {
+            width: self.size[0],
+            height: self.size[1],
+            num_bounces: self.num_bounces,
+            num_shadow_samples: self.num_shadow_samples,
+            num_antialias_samples: self.num_antialias_samples.max(1),
+            ambient_light: self
+                .ambient_light
+                .as_ref()
+                .map_or(d.ambient_light, |a| vec3(a[0], a[1], a[2])),
+            num_form_factor_samples: self.num_form_factor_samples.unwrap_or(d.num_form_factor_samples),
+            sphere_rasterization: self
+                .sphere_rasterization
+                .as_ref()
+                .map_or(d.sphere_rasterization, |s| (s[0], s[1])),
+            cylinder_ring_rasterization: self.cylinder_ring_rasterization.unwrap_or(d.cylinder_ring_rasterization),
+            num_photons_to_shoot: self.num_photons_to_shoot.unwrap_or(0),
+            num_photons_to_collect: self.num_photons_to_collect.unwrap_or(d.num_photons_to_collect),
+            gather_indirect: self.gather_indirect,
+            seed: self.seed,
+            quiet: self.quiet,
+        }
+    }
+
+    fn accel_options(&self) -> AccelOptions {
+        AccelOptions {
+            embree_quality: self.embree_quality,
+            embree_robust: self.embree_robust,
+        }
+    }
+
+    /// Flags the chosen engine does not read yet, named so the user knows they had no effect.
+    fn unused_flags(&self) -> Vec<&'static str> {
+        let mut unused = Vec::new();
+        if self.engine == EngineKind::Raycast {
+            let checks: [(&str, bool); 11] = [
+                ("-num_bounces", self.num_bounces > 0),
+                ("-num_shadow_samples", self.num_shadow_samples > 0),
+                ("-num_antialias_samples", self.num_antialias_samples > 1),
+                ("-ambient_light", self.ambient_light.is_some()),
+                ("-num_form_factor_samples", self.num_form_factor_samples.is_some()),
+                ("-sphere_rasterization", self.sphere_rasterization.is_some()),
+                ("-cylinder_ring_rasterization", self.cylinder_ring_rasterization.is_some()),
+                ("-num_photons_to_shoot", self.num_photons_to_shoot.is_some()),
+                ("-num_photons_to_collect", self.num_photons_to_collect.is_some()),
+                ("-gather_indirect", self.gather_indirect),
+                ("-interpolate", self.interpolate),
+            ];
+            unused.extend(checks.iter().filter(|c| c.1).map(|c| c.0));
+        }
+        unused
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse_from(normalize_args(std::env::args()));
+    let result = match &cli.command {
+        Some(Command::BenchAccel(args)) => bench_accel(args),
+        Some(Command::GenTerrain { triangles, output }) => {
+            let scene = trilux::generate::terrain(*triangles);
+            trilux::generate::write_obj(&scene, output).map_err(|e| e.to_string())
+        }
+        Some(Command::GenTexture { kind, size, output }) => {
+            let rgb = trilux::generate::texture(*kind, *size);
+            trilux::generate::write_ppm(&rgb, *size, output).map_err(|e| e.to_string())
+        }
+        None => render(&cli.render),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("error: {message}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn render(args: &RenderArgs) -> Result<(), String> {
+    let input = args.input.as_ref().ok_or("missing -input")?;
+    let settings = args.settings();
+    if settings.width == 0 || settings.height == 0 {
+        return Err(format!("-size {} {}: both must be at least 1", settings.width, settings.height));
+    }
+    let pool = trilux::parallel::thread_pool(args.threads).map_err(|e| e.to_string())?;
+    trilux::parallel::worker_start();
+
+    let load_start = Instant::now();
+    let mut scene = Scene::load(input).map_err(|e| e.to_string())?;
+    scene.two_sided_quads = args.two_sided;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let load_s = load_start.elapsed().as_secs_f64();
+    let kind = args.accel.unwrap_or_else(AccelKind::default_available);
+    let options = args.accel_options();
+    let plan = Plan::new(&scene, args.engine, kind, &settings);
+    if args.plan {
+        print!("scene: {}\n{plan}", input.display());
+        return Ok(());
+    }
+    if !args.engine.is_implemented() {
+        return Err(format!(
+            "the {} engine is not implemented yet; available: --engine raycast",
+            args.engine.name()
+        ));
+    }
+    for flag in args.unused_flags() {
+        eprintln!(
+            "note: {flag} is accepted but the {} engine does not use it (its engine is not implemented yet)",
+            args.engine.name()
+        );
+    }
+
+    let build_start = Instant::now();
+    let accel = pool.install(|| accel::build(&scene, kind, &options)).map_err(|e| e.to_string())?;
+    let build_s = build_start.elapsed().as_secs_f64();
+    let render_start = Instant::now();
+    let film = pool.install(|| raycast::render(&scene, accel.as_ref(), &settings));
+    let render_s = render_start.elapsed().as_secs_f64();
+
+    let output = args.output.clone().unwrap_or_else(|| default_output(input));
+    film.write(&output).map_err(|e| e.to_string())?;
+    if args.stats {
+        let rays = settings.width as u64 * settings.height as u64;
+        eprintln!("stats: scene load {load_s:.3} s, accel build ({kind}) {build_s:.3} s, render {render_s:.3} s");
+        eprintln!("stats: rays cast {rays} ({:.2} Mrays/s)", rays as f64 / render_s / 1e6);
+    }
+    if !args.quiet {
+        eprintln!("wrote {}", output.display());
+    }
+    Ok(())
+}
+
+fn default_output(input: &Path) -> PathBuf {
+    let stem = input.file_stem().map_or("render".into(), |s| s.to_string_lossy().into_owned());
+    PathBuf::from(format!("{stem}.png"))
+}
+
+fn bench_accel(args: &BenchArgs) -> Result<(), String> {
+    let scene = match args.scene.strip_prefix("terrain:") {
+        Some(n) => trilux::generate::terrain(n.parse().map_err(|_| format!("terrain:N needs a number, found {n}"))?),
+        None => Scene::load(Path::new(&args.scene)).map_err(|e| e.to_string())?,
+    };
+    let pool = trilux::parallel::thread_pool(args.threads).map_err(|e| e.to_string())?;
+    trilux::parallel::worker_start();
+    let threads = pool.current_num_threads();
+    let options = AccelOptions {
+        embree_robust: args.embree_robust,
+        ..AccelOptions::default()
+    };
+    let (rows, builds) = pool
+        .install(|| trilux::bench::bench_accel(&scene, &args.accel, &options, args.rays, args.repeats, threads))
+        .map_err(|e| e.to_string())?;
+    println!(
+        "scene: {} ({} primitives), {} rays per set, median of {} runs, embree robust: {}",
+        args.scene,
+        scene.primitive_count(),
+        args.rays,
+        args.repeats,
+        args.embree_robust
+    );
+    println!();
+    println!("| backend | build (s) |");
+    println!("|---|---|");
+    for (name, s) in &builds {
+        println!("| {name} | {s:.3} |");
+    }
+    println!();
+    println!("| backend | rays | query | mode | threads | Mrays/s |");
+    println!("|---|---|---|---|---|---|");
+    for r in &rows {
+        println!(
+            "| {} | {} | {} | {} | {} | {:.2} |",
+            r.backend, r.rays, r.query, r.mode, r.threads, r.mrays_per_s
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,97 @@
+//! Cameras of the course dialect: perspective and orthographic, with the course's mapping of
+//! pixels to a square screen.
+
+use crate::geometry::{vec3, Bounds3, Ray, Vec3};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// `angle`: the full field of view in radians across the larger image dimension.
+    Perspective { angle: f32 },
+    /// `size`: the side of the square screen in scene units.
+    Orthographic { size: f32 },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub position: Vec3,
+    pub point_of_interest: Vec3,
+    pub up: Vec3,
+    pub projection: Projection,
+}
+
+impl Camera {
+    /// The camera used when a scene has none: outside the scene's box on +z, looking at its
+    /// centre, 20° field of view (scene-format.md).
+    pub fn default_for(bounds: &Bounds3) -> Camera {
+        let centre = if bounds.is_empty() {
+            Vec3::ZERO
+        } else {
+            bounds.centre()
+        };
+        let extent = bounds.extent().max_elem().max(1e-6);
+        Camera {
+            position: centre + vec3(0.0, 0.0, 4.0 * extent),
+            point_of_interest: centre,
+            up: vec3(0.0, 1.0, 0.0),
+            projection: Projection::Perspective {
+                angle: 20f32.to_radians(),
+            },
+        }
+    }
+
+    /// Orthonormal frame: (forward, horizontal, up).
+    fn frame(&self) -> (Vec3, Vec3, Vec3) {
+        let forward = (self.point_of_interest - self.position).normalized();
+        let horizontal = forward.cross(self.up).normalized();
+        let up = horizontal.cross(forward);
+        (forward, horizontal, up)
+    }
+
+    /// The ray through screen point (x, y) in [0,1]², (0,0) bottom left.
+    pub fn generate_ray(&self, x: f32, y: f32) -> Ray {
+        let (forward, horizontal, up) = self.frame();
+        match self.projection {
+            Projection::Perspective { angle } => {
+                let side = 2.0 * (angle * 0.5).tan();
+                let dir = forward + horizontal * ((x - 0.5) * side) + up * ((y - 0.5) * side);
+                Ray::new(self.position, dir.normalized())
+            }
+            Projection::Orthographic { size } => {
+                let origin =
+                    self.position + horizontal * ((x - 0.5) * size) + up * ((y - 0.5) * size);
+                Ray::new(origin, forward)
+            }
+        }
+    }
+
+    /// Screen coordinates of pixel (i, j) of a W×H image, j counted from the bottom; `(dx, dy)`
+    /// is the position inside the pixel, (0.5, 0.5) at its centre.
+    pub fn screen_point(i: u32, j: u32, dx: f32, dy: f32, width: u32, height: u32) -> (f32, f32) {
+        let m = width.max(height) as f32;
+        let x = (i as f32 + dx - width as f32 / 2.0) / m + 0.5;
+        let y = (j as f32 + dy - height as f32 / 2.0) / m + 0.5;
+        (x, y)
+    }
+
+    /// Projects a world point to screen coordinates in [0,1]² (None when behind the camera).
+    pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
+        let (forward, horizontal, up) = self.frame();
+        let d = p - self.position;
+        match self.projection {
+            Projection::Perspective { angle } => {
+                let z = d.dot(forward);
+                if z <= 0.0 {
+                    return None;
+                }
+                let side = 2.0 * (angle * 0.5).tan();
+                Some((
+                    d.dot(horizontal) / z / side + 0.5,
+                    d.dot(up) / z / side + 0.5,
+                ))
+            }
+            Projection::Orthographic { size } => {
+                Some((d.dot(horizontal) / size + 0.5, d.dot(up) / size + 0.5))
+            }
+        }
+    }
+}

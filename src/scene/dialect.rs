@@ -1,0 +1,451 @@
+//! The course dialect: a token stream extending Wavefront OBJ with materials, spheres, rings,
+//! a background colour and a camera (see docs/scene-format.md).
+
+use std::path::{Path, PathBuf};
+
+use super::camera::{Camera, Projection};
+use super::error::SceneError;
+use super::texture::srgb_to_linear;
+use super::{Material, Quad, Ring, Scene, Sphere};
+use crate::geometry::{quad_normal, vec2, vec3, RingShape, SphereShape, Vec2, Vec3};
+
+/// Whether `text` is in the course dialect: some line starts with one of the dialect's own
+/// tokens. `s` counts only with four numbers after it, since standard OBJ uses `s` for
+/// smoothing groups (`s off`, `s 1`).
+pub fn is_dialect(text: &str) -> bool {
+    text.lines().any(|line| {
+        let line = line.split('#').next().unwrap_or("");
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some(
+                "material" | "m" | "r" | "PerspectiveCamera" | "OrthographicCamera"
+                | "background_color",
+            ) => true,
+            Some("s") => {
+                let rest: Vec<&str> = words.collect();
+                rest.len() == 4 && rest.iter().all(|w| w.parse::<f32>().is_ok())
+            }
+            _ => false,
+        }
+    })
+}
+
+#[derive(Clone, Copy)]
+struct Token<'a> {
+    text: &'a str,
+    line: u32,
+    column: u32,
+}
+
+/// Splits the text into whitespace-separated tokens, dropping `#` comments.
+struct Lexer<'a> {
+    rest: &'a str,
+    line: u32,
+    column: u32,
+}
+
+impl<'a> Lexer<'a> {
+    fn new(text: &'a str) -> Self {
+        Lexer {
+            rest: text,
+            line: 1,
+            column: 1,
+        }
+    }
+
+    fn advance(&mut self, bytes: usize) {
+        for c in self.rest[..bytes].chars() {
+            if c == '\n' {
+                self.line += 1;
+                self.column = 1;
+            } else {
+                self.column += 1;
+            }
+        }
+        self.rest = &self.rest[bytes..];
+    }
+
+    fn next_token(&mut self) -> Option<Token<'a>> {
+        loop {
+            let skip = self
+                .rest
+                .find(|c: char| !c.is_whitespace())
+                .unwrap_or(self.rest.len());
+            self.advance(skip);
+            if self.rest.starts_with('#') {
+                let end = self.rest.find('\n').unwrap_or(self.rest.len());
+                self.advance(end);
+                continue;
+            }
+            break;
+        }
+        if self.rest.is_empty() {
+            return None;
+        }
+        let end = self
+            .rest
+            .find(|c: char| c.is_whitespace() || c == '#')
+            .unwrap_or(self.rest.len());
+        let token = Token {
+            text: &self.rest[..end],
+            line: self.line,
+            column: self.column,
+        };
+        self.advance(end);
+        Some(token)
+    }
+}
+
+struct Parser<'a> {
+    file: PathBuf,
+    lexer: Lexer<'a>,
+    peeked: Option<Option<Token<'a>>>,
+    /// Where the last token ended, for errors at the end of the file.
+    last: (u32, u32),
+}
+
+const MATERIAL_KEYS: [&str; 7] = [
+    "diffuse",
+    "texture_file",
+    "reflective",
+    "emitted",
+    "transmitted",
+    "ior",
+    "roughness",
+];
+
+impl<'a> Parser<'a> {
+    fn next(&mut self) -> Option<Token<'a>> {
+        let t = match self.peeked.take() {
+            Some(t) => t,
+            None => self.lexer.next_token(),
+        };
+        if let Some(t) = t {
+            self.last = (t.line, t.column);
+        }
+        t
+    }
+
+    fn peek(&mut self) -> Option<Token<'a>> {
+        if self.peeked.is_none() {
+            self.peeked = Some(self.lexer.next_token());
+        }
+        self.peeked.flatten()
+    }
+
+    fn syntax(&self, at: Option<Token>, expected: &str) -> SceneError {
+        let (line, column, found) = match at {
+            Some(t) => (t.line, t.column, format!("`{}`", t.text)),
+            None => (self.last.0, self.last.1, "the end of the file".to_string()),
+        };
+        SceneError::Syntax {
+            file: self.file.clone(),
+            line,
+            column,
+            expected: expected.to_string(),
+            found,
+        }
+    }
+
+    fn invalid(&self, at: Token, message: String) -> SceneError {
+        SceneError::Invalid {
+            file: self.file.clone(),
+            line: at.line,
+            column: at.column,
+            message,
+        }
+    }
+
+    fn real(&mut self, what: &str) -> Result<f32, SceneError> {
+        let t = self.next();
+        match t.map(|t| t.text.parse::<f32>()) {
+            Some(Ok(x)) if x.is_finite() => Ok(x),
+            _ => Err(self.syntax(t, what)),
+        }
+    }
+
+    fn vec3(&mut self, what: &str) -> Result<Vec3, SceneError> {
+        Ok(vec3(self.real(what)?, self.real(what)?, self.real(what)?))
+    }
+
+    fn index(&mut self, what: &str) -> Result<(i64, Token<'a>), SceneError> {
+        let t = self.next();
+        match t.map(|t| (t.text.parse::<i64>(), t)) {
+            Some((Ok(k), tok)) => Ok((k, tok)),
+            _ => Err(self.syntax(t, what)),
+        }
+    }
+
+    fn expect(&mut self, text: &str) -> Result<Token<'a>, SceneError> {
+        match self.next() {
+            Some(t) if t.text == text => Ok(t),
+            other => Err(self.syntax(other, &format!("`{text}`"))),
+        }
+    }
+}
+
+/// Per-vertex data as the dialect gives it: `vt` belongs to the most recent `v`.
+struct Vertex {
+    position: Vec3,
+    tex_coord: Option<Vec2>,
+}
+
+pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
+    let mut p = Parser {
+        file: path.to_path_buf(),
+        lexer: Lexer::new(text),
+        peeked: None,
+        last: (1, 1),
+    };
+    let mut scene = Scene {
+        path: path.to_path_buf(),
+        background: Vec3::ONE,
+        ..Scene::default()
+    };
+    let mut vertices: Vec<Vertex> = Vec::new();
+    // The selected material and the token that selected it (checked at the end of the file,
+    // so that a file may define materials after selecting them).
+    let mut current: Option<(u32, Token)> = None;
+    let mut selections: Vec<(u32, Token)> = Vec::new();
+
+    while let Some(tok) = p.next() {
+        match tok.text {
+            "material" => {
+                let mut m = Material {
+                    line: tok.line,
+                    ..Material::default()
+                };
+                let mut has_albedo = false;
+                while let Some(key) = p.peek().filter(|k| MATERIAL_KEYS.contains(&k.text)) {
+                    p.next();
+                    match key.text {
+                        "diffuse" => {
+                            m.diffuse = p.vec3("a real number (diffuse r g b)")?;
+                            has_albedo = true;
+                        }
+                        "texture_file" => {
+                            let name = p.next().ok_or_else(|| p.syntax(None, "a file name"))?;
+                            m.texture_file = Some(PathBuf::from(name.text));
+                            has_albedo = true;
+                        }
+                        "reflective" => m.reflective = p.vec3("a real number (reflective r g b)")?,
+                        "emitted" => {
+                            m.emitted = p.vec3("a real number (emitted r g b)")?;
+                            if m.emitted.x < 0.0 || m.emitted.y < 0.0 || m.emitted.z < 0.0 {
+                                return Err(p.invalid(key, "emitted radiance must be ≥ 0".into()));
+                            }
+                        }
+                        "transmitted" => {
+                            m.transmitted = p.vec3("a real number (transmitted r g b)")?
+                        }
+                        "ior" => {
+                            m.ior = p.real("a real number (ior n)")?;
+                            if m.ior <= 0.0 {
+                                return Err(p.invalid(key, "ior must be > 0".into()));
+                            }
+                        }
+                        _ => m.roughness = p.real("a real number (roughness a)")?.clamp(0.0, 1.0),
+                    }
+                }
+                if !has_albedo {
+                    return Err(p.invalid(
+                        tok,
+                        "material has neither `diffuse` nor `texture_file`".into(),
+                    ));
+                }
+                scene.materials.push(m);
+            }
+            "m" => {
+                let (k, at) = p.index("a material index (m K)")?;
+                if k < 0 || k > u32::MAX as i64 {
+                    return Err(p.invalid(at, format!("no material {k}")));
+                }
+                current = Some((k as u32, at));
+                selections.push((k as u32, at));
+            }
+            "v" => {
+                let position = p.vec3("a real number (v x y z)")?;
+                vertices.push(Vertex {
+                    position,
+                    tex_coord: None,
+                });
+            }
+            "vt" => {
+                let st = vec2(p.real("a real number (vt s t)")?, p.real("a real number (vt s t)")?);
+                match vertices.last_mut() {
+                    Some(v) => v.tex_coord = Some(st),
+                    None => return Err(p.invalid(tok, "`vt` before any `v`".into())),
+                }
+            }
+            "f" => {
+                let material = material_for(&p, tok, current)?;
+                let mut idx = [0usize; 4];
+                for slot in &mut idx {
+                    let (k, at) = p.index("a vertex index (f a b c d)")?;
+                    if k < 1 || k as usize > vertices.len() {
+                        return Err(p.invalid(
+                            at,
+                            format!(
+                                "face index {k} out of range: {} vertices defined so far",
+                                vertices.len()
+                            ),
+                        ));
+                    }
+                    *slot = k as usize - 1;
+                }
+                let vs = idx.map(|k| vertices[k].position);
+                check_quad(&p, tok, &vs)?;
+                let tex_coords = if idx.iter().all(|&k| vertices[k].tex_coord.is_some()) {
+                    Some(idx.map(|k| vertices[k].tex_coord.unwrap_or_default()))
+                } else {
+                    None
+                };
+                scene.quads.push(Quad::new(vs, tex_coords, material));
+            }
+            "s" => {
+                let material = material_for(&p, tok, current)?;
+                let centre = p.vec3("a real number (s x y z r)")?;
+                let radius = p.real("a real number (s x y z r)")?;
+                if radius <= 0.0 {
+                    return Err(p.invalid(tok, format!("sphere radius must be > 0, found {radius}")));
+                }
+                scene.spheres.push(Sphere {
+                    shape: SphereShape { centre, radius },
+                    material,
+                });
+            }
+            "r" => {
+                let material = material_for(&p, tok, current)?;
+                let what = "a real number (r x y z h r_in r_out)";
+                let base = p.vec3(what)?;
+                let (height, r_in, r_out) = (p.real(what)?, p.real(what)?, p.real(what)?);
+                if height <= 0.0 {
+                    return Err(p.invalid(tok, format!("ring height must be > 0, found {height}")));
+                }
+                if !(r_in > 0.0 && r_in < r_out) {
+                    return Err(p.invalid(
+                        tok,
+                        format!("ring radii must satisfy 0 < r_in < r_out, found r_in {r_in}, r_out {r_out}"),
+                    ));
+                }
+                scene.rings.push(Ring {
+                    shape: RingShape {
+                        base,
+                        height,
+                        r_in,
+                        r_out,
+                    },
+                    material,
+                });
+            }
+            "background_color" => {
+                let c = p.vec3("a real number (background_color r g b)")?;
+                scene.background = vec3(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z));
+            }
+            "PerspectiveCamera" | "OrthographicCamera" => {
+                scene.camera = Some(parse_camera(&mut p, tok)?);
+            }
+            _ => {
+                return Err(p.syntax(
+                    Some(tok),
+                    "a scene token (material, m, v, vt, f, s, r, background_color, PerspectiveCamera, OrthographicCamera)",
+                ))
+            }
+        }
+    }
+
+    for (k, at) in selections {
+        if k as usize >= scene.materials.len() {
+            return Err(p.invalid(
+                at,
+                format!("m {k}: no such material ({} defined)", scene.materials.len()),
+            ));
+        }
+    }
+    Ok(scene)
+}
+
+fn material_for(p: &Parser, tok: Token, current: Option<(u32, Token)>) -> Result<u32, SceneError> {
+    current
+        .map(|(k, _)| k)
+        .ok_or_else(|| p.invalid(tok, format!("`{}` before any `m` selects a material", tok.text)))
+}
+
+/// Rejects zero-area and non-planar quads; nearly degenerate ones are kept.
+fn check_quad(p: &Parser, tok: Token, v: &[Vec3; 4]) -> Result<(), SceneError> {
+    let n = quad_normal(v);
+    let size = (v[2] - v[0]).length().max((v[3] - v[1]).length());
+    let area2 = n.length();
+    if !(area2 > 0.0) || area2 <= f32::EPSILON * f32::EPSILON * size * size {
+        return Err(p.invalid(tok, "degenerate quad: its area is zero".into()));
+    }
+    let unit = n / area2;
+    let centre = (v[0] + v[1] + v[2] + v[3]) * 0.25;
+    let off_plane = v
+        .iter()
+        .map(|&x| (x - centre).dot(unit).abs())
+        .fold(0.0f32, f32::max);
+    if off_plane > 1e-3 * size {
+        return Err(p.invalid(
+            tok,
+            format!("non-planar quad: a vertex lies {off_plane} off the quad's plane"),
+        ));
+    }
+    Ok(())
+}
+
+fn parse_camera(p: &mut Parser, tok: Token) -> Result<Camera, SceneError> {
+    p.expect("{")?;
+    let perspective = tok.text == "PerspectiveCamera";
+    let (mut position, mut poi, mut up) = (None, None, None);
+    let mut param = None;
+    loop {
+        let key = p.next();
+        match key.map(|k| k.text) {
+            Some("}") => break,
+            Some("camera_position") => position = Some(p.vec3("a real number")?),
+            Some("point_of_interest") => poi = Some(p.vec3("a real number")?),
+            Some("up") => up = Some(p.vec3("a real number")?),
+            Some("angle") if perspective => param = Some(p.real("a real number (angle)")?),
+            Some("size") if !perspective => param = Some(p.real("a real number (size)")?),
+            _ => {
+                let keys = if perspective {
+                    "camera_position, point_of_interest, up, angle or `}`"
+                } else {
+                    "camera_position, point_of_interest, up, size or `}`"
+                };
+                return Err(p.syntax(key, keys));
+            }
+        }
+    }
+    let missing = |what: &str| p.invalid(tok, format!("{} has no `{what}`", tok.text));
+    let position = position.ok_or_else(|| missing("camera_position"))?;
+    let poi = poi.ok_or_else(|| missing("point_of_interest"))?;
+    let up = up.ok_or_else(|| missing("up"))?;
+    let param = param.ok_or_else(|| missing(if perspective { "angle" } else { "size" }))?;
+    if (poi - position).length_squared() == 0.0
+        || (poi - position).cross(up).length_squared() == 0.0
+    {
+        return Err(p.invalid(
+            tok,
+            "camera looks at its own position or along its up vector".into(),
+        ));
+    }
+    let projection = if perspective {
+        if !(param > 0.0 && param < std::f32::consts::PI) {
+            return Err(p.invalid(tok, format!("angle must be in (0, π), found {param}")));
+        }
+        Projection::Perspective { angle: param }
+    } else {
+        if param <= 0.0 {
+            return Err(p.invalid(tok, format!("size must be > 0, found {param}")));
+        }
+        Projection::Orthographic { size: param }
+    };
+    Ok(Camera {
+        position,
+        point_of_interest: poi,
+        up,
+        projection,
+    })
+}

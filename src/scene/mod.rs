@@ -1,0 +1,300 @@
+//! The scene: plain data (materials, primitives, camera, background) read from a course-dialect
+//! file or a standard OBJ/MTL file. Nothing here knows about any acceleration structure.
+
+mod camera;
+mod dialect;
+mod error;
+mod obj;
+mod surface;
+pub mod texture;
+
+use std::path::{Path, PathBuf};
+
+pub use camera::{Camera, Projection};
+pub use error::SceneError;
+pub use surface::{PrimHit, SurfaceHit};
+pub use texture::Texture;
+
+use crate::geometry::{quad_normal, Bounds3, RingShape, SphereShape, Vec2, Vec3};
+
+/// Linear RGB radiance or reflectance.
+pub type Color = Vec3;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Lambertian albedo (used when there is no texture).
+    pub diffuse: Color,
+    /// Index into `Scene::textures` once decoded; the file it comes from is `texture_file`.
+    pub texture: Option<usize>,
+    pub texture_file: Option<PathBuf>,
+    /// Perfect-mirror reflectance.
+    pub reflective: Color,
+    /// Emitted radiance (W·sr⁻¹·m⁻²).
+    pub emitted: Color,
+    /// Specular transmittance.
+    pub transmitted: Color,
+    /// Index of refraction for `transmitted`; default 1.5.
+    pub ior: f32,
+    /// Glossy lobe width for `reflective`; 0 is a perfect mirror.
+    pub roughness: f32,
+    /// Line of the file where the material starts (0 for materials not from a file).
+    pub line: u32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            diffuse: Vec3::ZERO,
+            texture: None,
+            texture_file: None,
+            reflective: Vec3::ZERO,
+            emitted: Vec3::ZERO,
+            transmitted: Vec3::ZERO,
+            ior: 1.5,
+            roughness: 0.0,
+            line: 0,
+        }
+    }
+}
+
+impl Material {
+    pub fn is_emissive(&self) -> bool {
+        self.emitted.max_elem() > 0.0
+    }
+    pub fn is_specular(&self) -> bool {
+        self.reflective.max_elem() > 0.0 || self.transmitted.max_elem() > 0.0
+    }
+}
+
+/// A planar quad of the course dialect: one-sided, counter-clockwise around `normal`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Quad {
+    pub vertices: [Vec3; 4],
+    /// Texture coordinates of the four vertices, when the file gives them.
+    pub tex_coords: Option<[Vec2; 4]>,
+    pub material: u32,
+    /// Unit front normal.
+    pub normal: Vec3,
+}
+
+impl Quad {
+    pub fn new(vertices: [Vec3; 4], tex_coords: Option<[Vec2; 4]>, material: u32) -> Quad {
+        Quad {
+            vertices,
+            tex_coords,
+            material,
+            normal: quad_normal(&vertices).normalized(),
+        }
+    }
+    pub fn area(&self) -> f32 {
+        0.5 * quad_normal(&self.vertices).length()
+    }
+}
+
+/// Triangles from standard OBJ files, indexed.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriangleMesh {
+    pub positions: Vec<Vec3>,
+    /// Per-vertex texture coordinates: empty, or one per position.
+    pub tex_coords: Vec<Vec2>,
+    /// Per-vertex shading normals: empty, or one per position.
+    pub normals: Vec<Vec3>,
+    pub indices: Vec<[u32; 3]>,
+    /// Material of each triangle.
+    pub materials: Vec<u32>,
+}
+
+impl TriangleMesh {
+    pub fn len(&self) -> usize {
+        self.indices.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+    pub fn vertices(&self, i: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[i];
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    pub shape: SphereShape,
+    pub material: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ring {
+    pub shape: RingShape,
+    pub material: u32,
+}
+
+/// The kinds of primitive a ray can hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PrimKind {
+    Quad,
+    Triangle,
+    Sphere,
+    Ring,
+}
+
+/// One primitive of a scene: its kind and its index in that kind's list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PrimRef {
+    pub kind: PrimKind,
+    pub index: u32,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// The file the scene came from (textures are relative to it).
+    pub path: PathBuf,
+    pub materials: Vec<Material>,
+    /// Decoded textures, only those some primitive's material uses.
+    pub textures: Vec<Texture>,
+    pub quads: Vec<Quad>,
+    pub triangles: TriangleMesh,
+    pub spheres: Vec<Sphere>,
+    pub rings: Vec<Ring>,
+    pub camera: Option<Camera>,
+    /// Linear radiance of rays that leave the scene.
+    pub background: Color,
+    /// Quads are opaque from both sides (`--two-sided`); by default they are one-sided for
+    /// every query, as in the course program.
+    pub two_sided_quads: bool,
+    /// For each quad, the quads that share a vertex position with it (built on first use; it
+    /// settles hits on shared edges the same way whichever backend reported them).
+    pub(crate) quad_neighbours: std::sync::OnceLock<Vec<Vec<u32>>>,
+    /// Problems that did not stop loading (e.g. a material that does not conserve energy).
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// Loads a scene file: the course dialect or standard OBJ/MTL, decided by content.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read(path).map_err(|source| SceneError::Io {
+            file: path.to_path_buf(),
+            source,
+        })?;
+        let text = String::from_utf8_lossy(&text);
+        let mut scene = if dialect::is_dialect(&text) {
+            dialect::parse(path, &text)?
+        } else {
+            obj::load(path)?
+        };
+        scene.check_energy();
+        scene.decode_used_textures()?;
+        Ok(scene)
+    }
+
+    /// Parses course-dialect text as if read from `path` (textures are not decoded).
+    pub fn parse_dialect(path: &Path, text: &str) -> Result<Scene, SceneError> {
+        dialect::parse(path, text)
+    }
+
+    /// The camera of the file, or the default camera for the scene's bounds.
+    pub fn camera(&self) -> Camera {
+        self.camera
+            .unwrap_or_else(|| Camera::default_for(&self.bounds()))
+    }
+
+    pub fn bounds(&self) -> Bounds3 {
+        let mut b = Bounds3::EMPTY;
+        for q in &self.quads {
+            b = b.union(Bounds3::from_points(&q.vertices));
+        }
+        for p in &self.triangles.positions {
+            b = b.union_point(*p);
+        }
+        for s in &self.spheres {
+            b = b.union(s.shape.bounds());
+        }
+        for r in &self.rings {
+            b = b.union(r.shape.bounds());
+        }
+        b
+    }
+
+    pub fn primitive_count(&self) -> usize {
+        self.quads.len() + self.triangles.len() + self.spheres.len() + self.rings.len()
+    }
+
+    pub fn material_of(&self, prim: PrimRef) -> u32 {
+        let i = prim.index as usize;
+        match prim.kind {
+            PrimKind::Quad => self.quads[i].material,
+            PrimKind::Triangle => self.triangles.materials[i],
+            PrimKind::Sphere => self.spheres[i].material,
+            PrimKind::Ring => self.rings[i].material,
+        }
+    }
+
+    /// The albedo at a hit: the material's texture when it has one, else its `diffuse`.
+    pub fn albedo(&self, hit: &SurfaceHit) -> Color {
+        let m = &self.materials[hit.material as usize];
+        match m.texture {
+            Some(t) => self.textures[t].lookup(hit.tex_coords),
+            None => m.diffuse,
+        }
+    }
+
+    /// Indices of the materials some primitive uses.
+    pub fn used_materials(&self) -> Vec<bool> {
+        let mut used = vec![false; self.materials.len()];
+        let mut mark = |m: u32| {
+            if let Some(u) = used.get_mut(m as usize) {
+                *u = true;
+            }
+        };
+        self.quads.iter().for_each(|q| mark(q.material));
+        self.triangles.materials.iter().for_each(|&m| mark(m));
+        self.spheres.iter().for_each(|s| mark(s.material));
+        self.rings.iter().for_each(|r| mark(r.material));
+        used
+    }
+
+    fn check_energy(&mut self) {
+        for (i, m) in self.materials.iter().enumerate() {
+            let sum = m.diffuse + m.reflective + m.transmitted;
+            if sum.max_elem() > 1.0 + 1e-6 {
+                self.warnings.push(format!(
+                    "{}:{}: material {i}: diffuse + reflective + transmitted exceeds 1 ({:.3} {:.3} {:.3}): it does not conserve energy",
+                    self.path.display(),
+                    m.line,
+                    sum.x,
+                    sum.y,
+                    sum.z
+                ));
+            }
+        }
+    }
+
+    /// Decodes the textures of the materials in use ("pay only for what the scene uses").
+    fn decode_used_textures(&mut self) -> Result<(), SceneError> {
+        let used = self.used_materials();
+        let dir = self.path.parent().map(Path::to_path_buf).unwrap_or_default();
+        for (i, m) in self.materials.iter_mut().enumerate() {
+            let Some(file) = &m.texture_file else { continue };
+            if !used[i] {
+                continue;
+            }
+            let full = dir.join(file);
+            let texture = Texture::load(&full).map_err(|why| SceneError::Invalid {
+                file: self.path.clone(),
+                line: m.line,
+                column: 1,
+                message: format!(
+                    "material {i}: cannot read texture {}: {why}",
+                    full.display()
+                ),
+            })?;
+            m.texture = Some(self.textures.len());
+            self.textures.push(texture);
+        }
+        Ok(())
+    }
+}

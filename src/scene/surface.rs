@@ -1,0 +1,270 @@
+//! From "ray r hit primitive p at t" to everything shading needs. Both backends report only the
+//! primitive and t; the surface is then recomputed here with the shared exact routines, so the
+//! two backends give bit-identical surfaces whenever they agree on the primitive.
+
+use super::{PrimKind, PrimRef, Scene};
+use crate::geometry::{faces_ray, intersect_quad, vec2, Ray, RingPart, Vec2, Vec3};
+
+/// What an acceleration structure reports for a closest hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimHit {
+    pub t: f32,
+    pub prim: PrimRef,
+    /// The backend's surface parameters (used only when the exact routine disagrees).
+    pub u: f32,
+    pub v: f32,
+}
+
+/// A ray's closest hit with its surface: point, normals, parameters, material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    pub t: f32,
+    pub point: Vec3,
+    /// Unit geometric normal: the front normal of quads and triangles, outward on closed
+    /// surfaces. It does not depend on the side the ray came from.
+    pub geometric_normal: Vec3,
+    /// Unit shading normal (interpolated where a mesh gives vertex normals).
+    pub shading_normal: Vec3,
+    /// The primitive's own parameters in [0,1]².
+    pub uv: (f32, f32),
+    /// Texture coordinates (the primitive's `vt`, or its parameters when it has none).
+    pub tex_coords: Vec2,
+    pub prim: PrimRef,
+    pub material: u32,
+}
+
+impl Scene {
+    /// The surface at a backend's hit.
+    pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> SurfaceHit {
+        let i = hit.prim.index as usize;
+        let t_max = f32::INFINITY;
+        match hit.prim.kind {
+            PrimKind::Quad => {
+                let (index, (t, u, v)) = self.settle_quad_hit(ray, i, hit);
+                let q = &self.quads[index];
+                let vs = &q.vertices;
+                // The point from the triangle the parameters lie in: exact to the vertices'
+                // precision, not the ray's.
+                let point = if u + v <= 1.0 {
+                    vs[0] + (vs[1] - vs[0]) * u + (vs[3] - vs[0]) * v
+                } else {
+                    vs[2] + (vs[3] - vs[2]) * (1.0 - u) + (vs[1] - vs[2]) * (1.0 - v)
+                };
+                let tex_coords = match &q.tex_coords {
+                    Some(tc) => bilinear(tc, u, v),
+                    None => vec2(u, v),
+                };
+                SurfaceHit {
+                    t,
+                    point,
+                    geometric_normal: q.normal,
+                    shading_normal: q.normal,
+                    uv: (u, v),
+                    tex_coords,
+                    prim: PrimRef {
+                        kind: PrimKind::Quad,
+                        index: index as u32,
+                    },
+                    material: q.material,
+                }
+            }
+            PrimKind::Triangle => {
+                let mesh = &self.triangles;
+                let [a, b, c] = mesh.indices[i].map(|k| k as usize);
+                let [p0, p1, p2] = mesh.vertices(i);
+                let (t, b1, b2) = crate::geometry::intersect_triangle(ray, t_max, p0, p1, p2)
+                    .unwrap_or((hit.t, hit.u, hit.v));
+                let b0 = 1.0 - b1 - b2;
+                let point = p0 + (p1 - p0) * b1 + (p2 - p0) * b2;
+                let ng = (p1 - p0).cross(p2 - p0).normalized();
+                let shading_normal = if mesh.normals.is_empty() {
+                    ng
+                } else {
+                    let n = mesh.normals[a] * b0 + mesh.normals[b] * b1 + mesh.normals[c] * b2;
+                    let n = n.normalized();
+                    if n.length_squared() > 0.0 {
+                        n
+                    } else {
+                        ng
+                    }
+                };
+                let tex_coords = if mesh.tex_coords.is_empty() {
+                    vec2(b1, b2)
+                } else {
+                    let (ta, tb, tc) = (mesh.tex_coords[a], mesh.tex_coords[b], mesh.tex_coords[c]);
+                    vec2(
+                        ta.x * b0 + tb.x * b1 + tc.x * b2,
+                        ta.y * b0 + tb.y * b1 + tc.y * b2,
+                    )
+                };
+                SurfaceHit {
+                    t,
+                    point,
+                    geometric_normal: ng,
+                    shading_normal,
+                    uv: (b1, b2),
+                    tex_coords,
+                    prim: hit.prim,
+                    material: mesh.materials[i],
+                }
+            }
+            PrimKind::Sphere => {
+                let s = &self.spheres[i];
+                let t = s.shape.intersect(ray, t_max).unwrap_or(hit.t);
+                // Reprojected onto the sphere: the point's error is that of the radius.
+                let n = s.shape.normal_at(ray.at(t));
+                let point = s.shape.centre + n * s.shape.radius;
+                let uv = s.shape.uv_at(point);
+                SurfaceHit {
+                    t,
+                    point,
+                    geometric_normal: n,
+                    shading_normal: n,
+                    uv,
+                    tex_coords: vec2(uv.0, uv.1),
+                    prim: hit.prim,
+                    material: s.material,
+                }
+            }
+            PrimKind::Ring => {
+                let r = &self.rings[i];
+                let (t, part) = r
+                    .shape
+                    .intersect(ray, t_max)
+                    .unwrap_or((hit.t, nearest_part(&r.shape, ray.at(hit.t))));
+                let p = ray.at(t);
+                let point = match part {
+                    RingPart::Outer | RingPart::Inner => {
+                        let radius = if part == RingPart::Outer {
+                            r.shape.r_out
+                        } else {
+                            r.shape.r_in
+                        };
+                        let radial = Vec3 {
+                            x: p.x - r.shape.base.x,
+                            y: 0.0,
+                            z: p.z - r.shape.base.z,
+                        }
+                        .normalized();
+                        Vec3 {
+                            x: r.shape.base.x + radial.x * radius,
+                            y: p.y,
+                            z: r.shape.base.z + radial.z * radius,
+                        }
+                    }
+                    RingPart::Bottom => Vec3 { y: r.shape.base.y, ..p },
+                    RingPart::Top => Vec3 {
+                        y: r.shape.base.y + r.shape.height,
+                        ..p
+                    },
+                };
+                let n = r.shape.normal_at(point, part);
+                let uv = r.shape.uv_at(point, part);
+                SurfaceHit {
+                    t,
+                    point,
+                    geometric_normal: n,
+                    shading_normal: n,
+                    uv,
+                    tex_coords: vec2(uv.0, uv.1),
+                    prim: hit.prim,
+                    material: r.material,
+                }
+            }
+        }
+    }
+}
+
+/// Hits this close to a quad's border (in its parameters) may lie on an edge it shares.
+const EDGE_BAND: f32 = 1e-4;
+
+impl Scene {
+    fn quad_neighbours(&self) -> &[Vec<u32>] {
+        self.quad_neighbours
+            .get_or_init(|| quad_adjacency(&self.quads))
+    }
+
+    /// The quad a hit on quad `i` belongs to, with its exact (t, u, v). A ray through an edge
+    /// or corner shared by several quads hits each of them at nearly the same t, and which
+    /// one a backend reports depends on its arithmetic and traversal order. Such hits are
+    /// settled here by the shared exact routine: the smallest t among the quads sharing a
+    /// vertex with quad i, ties to the lowest index, so both backends give the same surface.
+    fn settle_quad_hit(&self, ray: &Ray, i: usize, hit: &PrimHit) -> (usize, (f32, f32, f32)) {
+        let exact = |k: usize, t_max: f32| {
+            let q = &self.quads[k];
+            if !self.two_sided_quads && !faces_ray(q.normal, ray.direction) {
+                return None;
+            }
+            intersect_quad(ray, t_max, &q.vertices)
+        };
+        let own = intersect_quad(ray, f32::INFINITY, &self.quads[i].vertices)
+            .unwrap_or((hit.t, hit.u, hit.v));
+        let (u, v) = (own.1, own.2);
+        let near_border = u < EDGE_BAND || v < EDGE_BAND || u > 1.0 - EDGE_BAND || v > 1.0 - EDGE_BAND;
+        if !near_border {
+            return (i, own);
+        }
+        let mut best = (i, own);
+        for &k in &self.quad_neighbours()[i] {
+            let k = k as usize;
+            if let Some(h) = exact(k, ray.t_max) {
+                if h.0 < best.1 .0 || (h.0 == best.1 .0 && k < best.0) {
+                    best = (k, h);
+                }
+            }
+        }
+        best
+    }
+}
+
+/// For each quad, the other quads with a vertex at exactly the same position.
+fn quad_adjacency(quads: &[super::Quad]) -> Vec<Vec<u32>> {
+    use std::collections::HashMap;
+    // Bit patterns as keys; adding 0.0 folds -0.0 into 0.0.
+    let key = |p: Vec3| [(p.x + 0.0).to_bits(), (p.y + 0.0).to_bits(), (p.z + 0.0).to_bits()];
+    let mut at_vertex: HashMap<[u32; 3], Vec<u32>> = HashMap::new();
+    for (k, q) in quads.iter().enumerate() {
+        for &p in &q.vertices {
+            at_vertex.entry(key(p)).or_default().push(k as u32);
+        }
+    }
+    quads
+        .iter()
+        .enumerate()
+        .map(|(k, q)| {
+            let mut n: Vec<u32> = q
+                .vertices
+                .iter()
+                .flat_map(|&p| at_vertex[&key(p)].iter().copied())
+                .filter(|&j| j as usize != k)
+                .collect();
+            n.sort_unstable();
+            n.dedup();
+            n
+        })
+        .collect()
+}
+
+fn bilinear(tc: &[Vec2; 4], u: f32, v: f32) -> Vec2 {
+    let w = [(1.0 - u) * (1.0 - v), u * (1.0 - v), u * v, (1.0 - u) * v];
+    vec2(
+        tc.iter().zip(w).map(|(t, w)| t.x * w).sum(),
+        tc.iter().zip(w).map(|(t, w)| t.y * w).sum(),
+    )
+}
+
+/// The ring surface nearest to a point (used only when the exact routine misses a hit the
+/// backend reported, at the very edge of a surface).
+fn nearest_part(ring: &crate::geometry::RingShape, p: Vec3) -> RingPart {
+    let rho = ((p.x - ring.base.x).powi(2) + (p.z - ring.base.z).powi(2)).sqrt();
+    let distances = [
+        (rho - ring.r_out).abs(),
+        (rho - ring.r_in).abs(),
+        (p.y - ring.base.y).abs(),
+        (p.y - ring.base.y - ring.height).abs(),
+    ];
+    let k = (0..4)
+        .min_by(|&a, &b| distances[a].total_cmp(&distances[b]))
+        .unwrap_or(0);
+    RingPart::ALL[k]
+}
