@@ -221,6 +221,9 @@ impl Bvh {
     /// Walks the tree nearer child first. `visit` tests a leaf and returns true to stop.
     #[inline(always)]
     fn traverse(&self, ray: &Ray, t_max: &mut f32, mut visit: impl FnMut(&Node, &mut f32) -> bool) {
+        if self.prims.is_empty() {
+            return;
+        }
         // A zero direction component becomes a tiny one of the same sign: the slab test
         // then never computes 0·∞ = NaN, and can use plain comparisons.
         let safe = |d: f32| {

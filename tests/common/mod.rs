@@ -1,0 +1,139 @@
+//! Shared by the integration tests: the course scenes, every available backend, and a
+//! brute-force oracle that tests every primitive for every ray.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+use trilux::accel::{Accel, AccelKind, PrimHit};
+use trilux::geometry::{faces_ray, intersect_quad, intersect_triangle, Ray};
+use trilux::scene::{PrimKind, PrimRef, Scene};
+
+/// The course's scene folder, beside the checkout (present in CI).
+pub fn course_dir() -> Option<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/course-scenes");
+    dir.is_dir().then_some(dir)
+}
+
+/// Every `.obj` of the course folder, sorted.
+pub fn course_scenes() -> Vec<PathBuf> {
+    let Some(dir) = course_dir() else {
+        eprintln!("../shared/course-scenes not found: course-scene checks skipped");
+        return Vec::new();
+    };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("readable course folder")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
+        .collect();
+    files.sort();
+    files
+}
+
+/// The project's own scenes in `scenes/`.
+pub fn own_scenes() -> Vec<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("scenes/ exists")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
+        .collect();
+    files.sort();
+    files
+}
+
+pub fn backends() -> Vec<AccelKind> {
+    let mut kinds = vec![AccelKind::Bvh];
+    if cfg!(feature = "embree") {
+        kinds.push(AccelKind::Embree);
+    }
+    kinds
+}
+
+/// Tests every primitive: the oracle for traversal.
+pub struct BruteForce<'a> {
+    pub scene: &'a Scene,
+}
+
+impl BruteForce<'_> {
+    fn hit(&self, ray: &Ray, prim: PrimRef, t_max: f32) -> Option<f32> {
+        let s = self.scene;
+        let i = prim.index as usize;
+        match prim.kind {
+            PrimKind::Quad => {
+                let q = &s.quads[i];
+                if !s.two_sided_quads && !faces_ray(q.normal, ray.direction) {
+                    return None;
+                }
+                intersect_quad(ray, t_max, &q.vertices).map(|h| h.0)
+            }
+            PrimKind::Triangle => {
+                let [a, b, c] = s.triangles.vertices(i);
+                intersect_triangle(ray, t_max, a, b, c).map(|h| h.0)
+            }
+            PrimKind::Sphere => s.spheres[i].shape.intersect(ray, t_max),
+            PrimKind::Ring => s.rings[i].shape.intersect(ray, t_max).map(|h| h.0),
+        }
+    }
+
+    fn prims(&self) -> impl Iterator<Item = PrimRef> + '_ {
+        let s = self.scene;
+        let of = |kind, n: usize| (0..n as u32).map(move |index| PrimRef { kind, index });
+        of(PrimKind::Quad, s.quads.len())
+            .chain(of(PrimKind::Triangle, s.triangles.len()))
+            .chain(of(PrimKind::Sphere, s.spheres.len()))
+            .chain(of(PrimKind::Ring, s.rings.len()))
+    }
+}
+
+impl Accel for BruteForce<'_> {
+    fn name(&self) -> &'static str {
+        "brute force"
+    }
+    fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
+        let mut best: Option<PrimHit> = None;
+        for prim in self.prims() {
+            let t_max = best.map_or(ray.t_max, |b| b.t);
+            if let Some(t) = self.hit(ray, prim, t_max) {
+                best = Some(PrimHit { t, prim, u: 0.0, v: 0.0 });
+            }
+        }
+        best
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.prims().any(|p| self.hit(ray, p, ray.t_max).is_some())
+    }
+}
+
+/// Same primitive and the same t, or both miss. t agrees within 1e-5 relative, plus the
+/// rounding of the ray origin itself (a few ULPs of its largest coordinate, over |d|): a ray
+/// that starts 1e-6 from a surface cannot have its t known to 1e-5 of 1e-6.
+pub fn same_hit(ray: &Ray, x: &Option<PrimHit>, y: &Option<PrimHit>) -> bool {
+    match (x, y) {
+        (None, None) => true,
+        (Some(x), Some(y)) => {
+            let origin_ulps = 8.0 * f32::EPSILON * ray.origin.abs().max_elem() / ray.direction.length();
+            let tolerance = 1e-5 * x.t.abs().max(y.t.abs()) + origin_ulps;
+            x.prim == y.prim && (x.t - y.t).abs() <= tolerance
+        }
+        _ => false,
+    }
+}
+
+/// Compares two backends' answers on a ray set; returns the number of rays on which they
+/// disagree (different primitive, t off by more than 1e-5 relative, or different occlusion).
+pub fn disagreements(a: &dyn Accel, b: &dyn Accel, rays: &[Ray], occlusion_rays: &[Ray]) -> (usize, usize) {
+    let mut closest = 0;
+    let mut ha = vec![None; rays.len()];
+    let mut hb = vec![None; rays.len()];
+    a.intersect_batch(rays, &mut ha);
+    b.intersect_batch(rays, &mut hb);
+    for ((x, y), ray) in ha.iter().zip(&hb).zip(rays) {
+        closest += usize::from(!same_hit(ray, x, y));
+    }
+    let mut oa = vec![false; occlusion_rays.len()];
+    let mut ob = vec![false; occlusion_rays.len()];
+    a.occluded_batch(occlusion_rays, &mut oa);
+    b.occluded_batch(occlusion_rays, &mut ob);
+    let occluded = oa.iter().zip(&ob).filter(|(x, y)| x != y).count();
+    (closest, occluded)
+}
