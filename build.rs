@@ -77,9 +77,11 @@ mod embree {
     }
 
     fn header_major(include_dir: &Path) -> Option<u32> {
-        [4, 3]
-            .into_iter()
-            .find(|major| include_dir.join(format!("embree{major}/rtcore.h")).is_file())
+        [4, 3].into_iter().find(|major| {
+            include_dir
+                .join(format!("embree{major}/rtcore.h"))
+                .is_file()
+        })
     }
 
     fn from_pkg_config() -> Option<Found> {
@@ -124,17 +126,21 @@ mod embree {
     }
 
     fn from_system_paths() -> Option<Found> {
-        ["/usr/include", "/usr/local/include", "/opt/homebrew/include"]
-            .into_iter()
-            .map(PathBuf::from)
-            .find_map(|include| {
-                let major = header_major(&include)?;
-                Some(Found {
-                    major,
-                    include_dirs: vec![include],
-                    lib_dirs: Vec::new(),
-                    how: "system include path".into(),
-                })
+        [
+            "/usr/include",
+            "/usr/local/include",
+            "/opt/homebrew/include",
+        ]
+        .into_iter()
+        .map(PathBuf::from)
+        .find_map(|include| {
+            let major = header_major(&include)?;
+            Some(Found {
+                major,
+                include_dirs: vec![include],
+                lib_dirs: Vec::new(),
+                how: "system include path".into(),
             })
+        })
     }
 }

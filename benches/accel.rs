@@ -29,11 +29,16 @@ fn queries(c: &mut Criterion) {
     group.sample_size(10);
     for kind in backends() {
         let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("build");
-        for (query, name, set) in [(Query::Closest, "closest", &rays), (Query::Occluded, "occluded", &shadow)] {
+        for (query, name, set) in [
+            (Query::Closest, "closest", &rays),
+            (Query::Occluded, "occluded", &shadow),
+        ] {
             for (mode, mname) in [(Mode::Single, "single"), (Mode::Batched, "batched")] {
-                group.bench_with_input(BenchmarkId::new(format!("{kind}/{name}/{mname}"), RAYS), set, |b, set| {
-                    b.iter(|| trace(accel.as_ref(), set, query, mode, false))
-                });
+                group.bench_with_input(
+                    BenchmarkId::new(format!("{kind}/{name}/{mname}"), RAYS),
+                    set,
+                    |b, set| b.iter(|| trace(accel.as_ref(), set, query, mode, false)),
+                );
             }
         }
     }

@@ -42,7 +42,12 @@ pub fn incoherent_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
     (0..n)
         .map(|i| {
             let mut rng = Rng::new(seed, i as u64, 0);
-            let o = lo + vec3(rng.next_f32() * size.x, rng.next_f32() * size.y, rng.next_f32() * size.z);
+            let o = lo
+                + vec3(
+                    rng.next_f32() * size.x,
+                    rng.next_f32() * size.y,
+                    rng.next_f32() * size.z,
+                );
             Ray::new(o, uniform_direction(&mut rng))
         })
         .collect()
@@ -84,7 +89,9 @@ pub fn trace(accel: &dyn Accel, rays: &[Ray], query: Query, mode: Mode, parallel
     let chunk = 4096;
     let work = |rays: &[Ray]| -> usize {
         match (query, mode) {
-            (Query::Closest, Mode::Single) => rays.iter().filter(|r| accel.intersect(r).is_some()).count(),
+            (Query::Closest, Mode::Single) => {
+                rays.iter().filter(|r| accel.intersect(r).is_some()).count()
+            }
             (Query::Occluded, Mode::Single) => rays.iter().filter(|r| accel.occluded(r)).count(),
             (Query::Closest, Mode::Batched) => {
                 let mut hits = vec![None; rays.len()];
@@ -129,14 +136,33 @@ pub struct Row {
     pub mrays_per_s: f64,
 }
 
+/// What `bench_accel` measured.
+#[derive(Clone, Debug, Default)]
+pub struct Report {
+    pub rows: Vec<Row>,
+    /// Build time of each backend, in seconds.
+    pub builds: Vec<(String, f64)>,
+}
+
 /// The full measurement over one scene. `n_rays` per ray set, `repeats` timings per cell.
-pub fn bench_accel(scene: &Scene, kinds: &[AccelKind], options: &AccelOptions, n_rays: usize, repeats: usize, threads: usize) -> Result<(Vec<Row>, Vec<(String, f64)>), accel::AccelError> {
+pub fn bench_accel(
+    scene: &Scene,
+    kinds: &[AccelKind],
+    options: &AccelOptions,
+    n_rays: usize,
+    repeats: usize,
+    threads: usize,
+) -> Result<Report, accel::AccelError> {
     let side = (n_rays as f64).sqrt().ceil() as u32;
     let camera = camera_rays(scene, side);
     let incoherent = incoherent_rays(scene, n_rays, 1);
     let sets = [
         ("camera", camera.clone(), occlusion_rays(scene, &camera, 2)),
-        ("incoherent", incoherent.clone(), occlusion_rays(scene, &incoherent, 3)),
+        (
+            "incoherent",
+            incoherent.clone(),
+            occlusion_rays(scene, &incoherent, 3),
+        ),
     ];
     let mut rows = Vec::new();
     let mut builds = Vec::new();
@@ -146,11 +172,20 @@ pub fn bench_accel(scene: &Scene, kinds: &[AccelKind], options: &AccelOptions, n
         let accel = built.expect("built at least once")?;
         builds.push((kind.to_string(), build_s));
         for (set_name, closest_rays, occl_rays) in &sets {
-            for (query, qname, rays) in [(Query::Closest, "closest", closest_rays), (Query::Occluded, "occluded", occl_rays)] {
+            for (query, qname, rays) in [
+                (Query::Closest, "closest", closest_rays),
+                (Query::Occluded, "occluded", occl_rays),
+            ] {
                 for (mode, mname) in [(Mode::Single, "single"), (Mode::Batched, "batched")] {
                     for (parallel, t) in [(false, 1), (true, threads)] {
                         let s = median_seconds(repeats, || {
-                            std::hint::black_box(trace(accel.as_ref(), rays, query, mode, parallel));
+                            std::hint::black_box(trace(
+                                accel.as_ref(),
+                                rays,
+                                query,
+                                mode,
+                                parallel,
+                            ));
                         });
                         rows.push(Row {
                             backend: kind.to_string(),
@@ -190,5 +225,5 @@ pub fn bench_accel(scene: &Scene, kinds: &[AccelKind], options: &AccelOptions, n
             }
         }
     }
-    Ok((rows, builds))
+    Ok(Report { rows, builds })
 }

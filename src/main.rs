@@ -46,7 +46,11 @@ fn normalize_args(args: impl Iterator<Item = String>) -> Vec<String> {
 }
 
 #[derive(Parser, Debug)]
-#[command(name = "render", version, about = "trilux: ray tracing, radiosity and photon mapping on Embree or a built-in BVH")]
+#[command(
+    name = "render",
+    version,
+    about = "trilux: ray tracing, radiosity and photon mapping on Embree or a built-in BVH"
+)]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 struct Cli {
     #[command(subcommand)]
@@ -197,14 +201,20 @@ impl RenderArgs {
                 .ambient_light
                 .as_ref()
                 .map_or(d.ambient_light, |a| vec3(a[0], a[1], a[2])),
-            num_form_factor_samples: self.num_form_factor_samples.unwrap_or(d.num_form_factor_samples),
+            num_form_factor_samples: self
+                .num_form_factor_samples
+                .unwrap_or(d.num_form_factor_samples),
             sphere_rasterization: self
                 .sphere_rasterization
                 .as_ref()
                 .map_or(d.sphere_rasterization, |s| (s[0], s[1])),
-            cylinder_ring_rasterization: self.cylinder_ring_rasterization.unwrap_or(d.cylinder_ring_rasterization),
+            cylinder_ring_rasterization: self
+                .cylinder_ring_rasterization
+                .unwrap_or(d.cylinder_ring_rasterization),
             num_photons_to_shoot: self.num_photons_to_shoot.unwrap_or(0),
-            num_photons_to_collect: self.num_photons_to_collect.unwrap_or(d.num_photons_to_collect),
+            num_photons_to_collect: self
+                .num_photons_to_collect
+                .unwrap_or(d.num_photons_to_collect),
             gather_indirect: self.gather_indirect,
             seed: self.seed,
             quiet: self.quiet,
@@ -227,11 +237,20 @@ impl RenderArgs {
                 ("-num_shadow_samples", self.num_shadow_samples > 0),
                 ("-num_antialias_samples", self.num_antialias_samples > 1),
                 ("-ambient_light", self.ambient_light.is_some()),
-                ("-num_form_factor_samples", self.num_form_factor_samples.is_some()),
+                (
+                    "-num_form_factor_samples",
+                    self.num_form_factor_samples.is_some(),
+                ),
                 ("-sphere_rasterization", self.sphere_rasterization.is_some()),
-                ("-cylinder_ring_rasterization", self.cylinder_ring_rasterization.is_some()),
+                (
+                    "-cylinder_ring_rasterization",
+                    self.cylinder_ring_rasterization.is_some(),
+                ),
                 ("-num_photons_to_shoot", self.num_photons_to_shoot.is_some()),
-                ("-num_photons_to_collect", self.num_photons_to_collect.is_some()),
+                (
+                    "-num_photons_to_collect",
+                    self.num_photons_to_collect.is_some(),
+                ),
                 ("-gather_indirect", self.gather_indirect),
                 ("-interpolate", self.interpolate),
             ];
@@ -268,7 +287,10 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     let input = args.input.as_ref().ok_or("missing -input")?;
     let settings = args.settings();
     if settings.width == 0 || settings.height == 0 {
-        return Err(format!("-size {} {}: both must be at least 1", settings.width, settings.height));
+        return Err(format!(
+            "-size {} {}: both must be at least 1",
+            settings.width, settings.height
+        ));
     }
     let pool = trilux::parallel::thread_pool(args.threads).map_err(|e| e.to_string())?;
     trilux::parallel::worker_start();
@@ -301,7 +323,9 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     }
 
     let build_start = Instant::now();
-    let accel = pool.install(|| accel::build(&scene, kind, &options)).map_err(|e| e.to_string())?;
+    let accel = pool
+        .install(|| accel::build(&scene, kind, &options))
+        .map_err(|e| e.to_string())?;
     let build_s = build_start.elapsed().as_secs_f64();
     let render_start = Instant::now();
     let film = pool.install(|| raycast::render(&scene, accel.as_ref(), &settings));
@@ -312,7 +336,10 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     if args.stats {
         let rays = settings.width as u64 * settings.height as u64;
         eprintln!("stats: scene load {load_s:.3} s, accel build ({kind}) {build_s:.3} s, render {render_s:.3} s");
-        eprintln!("stats: rays cast {rays} ({:.2} Mrays/s)", rays as f64 / render_s / 1e6);
+        eprintln!(
+            "stats: rays cast {rays} ({:.2} Mrays/s)",
+            rays as f64 / render_s / 1e6
+        );
     }
     if !args.quiet {
         eprintln!("wrote {}", output.display());
@@ -321,13 +348,18 @@ fn render(args: &RenderArgs) -> Result<(), String> {
 }
 
 fn default_output(input: &Path) -> PathBuf {
-    let stem = input.file_stem().map_or("render".into(), |s| s.to_string_lossy().into_owned());
+    let stem = input
+        .file_stem()
+        .map_or("render".into(), |s| s.to_string_lossy().into_owned());
     PathBuf::from(format!("{stem}.png"))
 }
 
 fn bench_accel(args: &BenchArgs) -> Result<(), String> {
     let scene = match args.scene.strip_prefix("terrain:") {
-        Some(n) => trilux::generate::terrain(n.parse().map_err(|_| format!("terrain:N needs a number, found {n}"))?),
+        Some(n) => trilux::generate::terrain(
+            n.parse()
+                .map_err(|_| format!("terrain:N needs a number, found {n}"))?,
+        ),
         None => Scene::load(Path::new(&args.scene)).map_err(|e| e.to_string())?,
     };
     let pool = trilux::parallel::thread_pool(args.threads).map_err(|e| e.to_string())?;
@@ -337,8 +369,17 @@ fn bench_accel(args: &BenchArgs) -> Result<(), String> {
         embree_robust: args.embree_robust,
         ..AccelOptions::default()
     };
-    let (rows, builds) = pool
-        .install(|| trilux::bench::bench_accel(&scene, &args.accel, &options, args.rays, args.repeats, threads))
+    let trilux::bench::Report { rows, builds } = pool
+        .install(|| {
+            trilux::bench::bench_accel(
+                &scene,
+                &args.accel,
+                &options,
+                args.rays,
+                args.repeats,
+                threads,
+            )
+        })
         .map_err(|e| e.to_string())?;
     println!(
         "scene: {} ({} primitives), {} rays per set, median of {} runs, embree robust: {}",

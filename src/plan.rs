@@ -28,9 +28,17 @@ pub struct Plan {
 }
 
 impl Plan {
-    pub fn new(scene: &Scene, engine: EngineKind, accel: AccelKind, settings: &RenderSettings) -> Plan {
+    pub fn new(
+        scene: &Scene,
+        engine: EngineKind,
+        accel: AccelKind,
+        settings: &RenderSettings,
+    ) -> Plan {
         let used = scene.used_materials();
-        let emitters = scene.quads.iter().map(|q| q.material)
+        let emitters = scene
+            .quads
+            .iter()
+            .map(|q| q.material)
             .chain(scene.triangles.materials.iter().copied())
             .chain(scene.spheres.iter().map(|s| s.material))
             .chain(scene.rings.iter().map(|r| r.material))
@@ -51,7 +59,10 @@ impl Plan {
             ));
         }
         if !engine.is_implemented() {
-            notes.push(format!("the {} engine is not implemented yet", engine.name()));
+            notes.push(format!(
+                "the {} engine is not implemented yet",
+                engine.name()
+            ));
         }
         Plan {
             engine,
@@ -87,14 +98,26 @@ impl fmt::Display for Plan {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "engine: {}", self.engine.name())?;
         writeln!(f, "accel: {}", self.accel)?;
-        let sided = if self.one_sided_quads { "one-sided" } else { "two-sided" };
+        let sided = if self.one_sided_quads {
+            "one-sided"
+        } else {
+            "two-sided"
+        };
         if self.quads > 0 {
-            writeln!(f, "quad geometry: {} ({sided})", plural(self.quads, "quad", "quads"))?;
+            writeln!(
+                f,
+                "quad geometry: {} ({sided})",
+                plural(self.quads, "quad", "quads")
+            )?;
         } else {
             writeln!(f, "quad geometry: none")?;
         }
         if self.triangles > 0 {
-            writeln!(f, "triangle geometry: {}", plural(self.triangles, "triangle", "triangles"))?;
+            writeln!(
+                f,
+                "triangle geometry: {}",
+                plural(self.triangles, "triangle", "triangles")
+            )?;
         } else {
             writeln!(f, "triangle geometry: none")?;
         }

@@ -20,7 +20,13 @@ fn allowed(n: usize) -> usize {
     (n as f64 * GRAZING_FRACTION).floor() as usize
 }
 
-fn check_against(reference: &dyn Accel, tested: &dyn Accel, rays: &[Ray], shadow: &[Ray], what: &str) {
+fn check_against(
+    reference: &dyn Accel,
+    tested: &dyn Accel,
+    rays: &[Ray],
+    shadow: &[Ray],
+    what: &str,
+) {
     let (closest, occluded) = disagreements(reference, tested, rays, shadow);
     println!(
         "{what}: {} vs {}: {closest} closest-hit and {occluded} occlusion disagreements in {} rays",
@@ -32,23 +38,43 @@ fn check_against(reference: &dyn Accel, tested: &dyn Accel, rays: &[Ray], shadow
         let (mut ha, mut hb) = (vec![None; rays.len()], vec![None; rays.len()]);
         reference.intersect_batch(rays, &mut ha);
         tested.intersect_batch(rays, &mut hb);
-        for (k, (a, b)) in ha.iter().zip(&hb).enumerate().filter(|(k, (a, b))| !common::same_hit(&rays[*k], a, b)).take(8) {
+        for (k, (a, b)) in ha
+            .iter()
+            .zip(&hb)
+            .enumerate()
+            .filter(|(k, (a, b))| !common::same_hit(&rays[*k], a, b))
+            .take(8)
+        {
             println!("ray {k} {:?}: {a:?} vs {b:?}", rays[k]);
         }
     }
-    assert!(closest <= allowed(rays.len()), "{what}: {closest} closest-hit disagreements");
-    assert!(occluded <= allowed(shadow.len()), "{what}: {occluded} occlusion disagreements");
+    assert!(
+        closest <= allowed(rays.len()),
+        "{what}: {closest} closest-hit disagreements"
+    );
+    assert!(
+        occluded <= allowed(shadow.len()),
+        "{what}: {occluded} occlusion disagreements"
+    );
 }
 
 fn single_equals_batched(accel: &dyn Accel, rays: &[Ray], what: &str) {
     let mut batched = vec![None; rays.len()];
     accel.intersect_batch(rays, &mut batched);
     let single: Vec<_> = rays.iter().map(|r| accel.intersect(r)).collect();
-    assert!(single == batched, "{what}: {} single and batched closest hits differ", accel.name());
+    assert!(
+        single == batched,
+        "{what}: {} single and batched closest hits differ",
+        accel.name()
+    );
     let mut occ = vec![false; rays.len()];
     accel.occluded_batch(rays, &mut occ);
     let single: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
-    assert!(single == occ, "{what}: {} single and batched occlusion differ", accel.name());
+    assert!(
+        single == occ,
+        "{what}: {} single and batched occlusion differ",
+        accel.name()
+    );
 }
 
 #[test]
@@ -95,8 +121,15 @@ fn backends_agree_on_a_million_rays_per_course_scene() {
                     .collect()
             })
             .collect();
-        let differ = surfaces[0].iter().zip(&surfaces[1]).filter(|(a, b)| a != b).count();
-        println!("{what}: {differ} different surfaces in {} camera rays", camera.len());
+        let differ = surfaces[0]
+            .iter()
+            .zip(&surfaces[1])
+            .filter(|(a, b)| a != b)
+            .count();
+        println!(
+            "{what}: {differ} different surfaces in {} camera rays",
+            camera.len()
+        );
         assert_eq!(differ, 0, "{what}: camera rays see different surfaces");
     }
 }
@@ -116,14 +149,33 @@ fn backends_agree_on_a_million_ray_terrain_of_a_million_triangles() {
     // The oracle on a sample: every backend against brute force on 300 rays.
     let oracle = BruteForce { scene: &scene };
     for accel in &built {
-        check_against(&oracle, accel.as_ref(), &rays[..300], &shadow[..300], "terrain (sample)");
+        check_against(
+            &oracle,
+            accel.as_ref(),
+            &rays[..300],
+            &shadow[..300],
+            "terrain (sample)",
+        );
     }
     if built.len() == 2 {
-        check_against(built[0].as_ref(), built[1].as_ref(), &rays, &shadow, "terrain");
+        check_against(
+            built[0].as_ref(),
+            built[1].as_ref(),
+            &rays,
+            &shadow,
+            "terrain",
+        );
     }
     let hits = built[0].as_ref();
-    let hit_count = rays.iter().take(10_000).filter(|r| hits.intersect(r).is_some()).count();
-    assert!(hit_count > 1000, "the terrain rays must actually hit the terrain ({hit_count})");
+    let hit_count = rays
+        .iter()
+        .take(10_000)
+        .filter(|r| hits.intersect(r).is_some())
+        .count();
+    assert!(
+        hit_count > 1000,
+        "the terrain rays must actually hit the terrain ({hit_count})"
+    );
 }
 
 #[test]
@@ -131,12 +183,18 @@ fn bvh_invariants_hold_on_every_scene() {
     for path in course_scenes().into_iter().chain(common::own_scenes()) {
         let scene = Scene::load(&path).expect("scene loads");
         let bvh = trilux::accel::bvh::Bvh::build(&scene).expect("builds");
-        bvh.validate(&scene).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        bvh.validate(&scene)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     }
     let empty = Scene::default();
     let bvh = trilux::accel::bvh::Bvh::build(&empty).expect("builds");
     bvh.validate(&empty).expect("empty tree is valid");
-    assert!(bvh.intersect(&Ray::new(trilux::geometry::Vec3::ZERO, trilux::geometry::vec3(0.0, 0.0, 1.0))).is_none());
+    assert!(bvh
+        .intersect(&Ray::new(
+            trilux::geometry::Vec3::ZERO,
+            trilux::geometry::vec3(0.0, 0.0, 1.0)
+        ))
+        .is_none());
 }
 
 #[test]
@@ -151,8 +209,16 @@ fn quads_are_one_sided_unless_two_sided() {
         for kind in backends() {
             let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
             assert!(accel.intersect(&from_front).is_some(), "{kind}: front hit");
-            assert_eq!(accel.intersect(&from_back).is_some(), two_sided, "{kind}: back hit, two-sided {two_sided}");
-            assert_eq!(accel.occluded(&from_back), two_sided, "{kind}: back occlusion, two-sided {two_sided}");
+            assert_eq!(
+                accel.intersect(&from_back).is_some(),
+                two_sided,
+                "{kind}: back hit, two-sided {two_sided}"
+            );
+            assert_eq!(
+                accel.occluded(&from_back),
+                two_sided,
+                "{kind}: back occlusion, two-sided {two_sided}"
+            );
         }
     }
 }

@@ -4,7 +4,9 @@
 //! primitives are read from consecutive memory.
 
 use super::{Accel, AccelError, PackedPrim};
-use crate::geometry::{faces_ray, intersect_quad, intersect_triangle_edges, Bounds3, Ray, RingShape, SphereShape, Vec3};
+use crate::geometry::{
+    faces_ray, intersect_quad, intersect_triangle_edges, Bounds3, Ray, RingShape, SphereShape, Vec3,
+};
 use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
 
 /// Number of SAH bins per axis.
@@ -97,7 +99,11 @@ impl Bvh {
             push(Bounds3::from_points(&q.vertices), PrimKind::Quad, i);
         }
         for i in 0..scene.triangles.len() {
-            push(Bounds3::from_points(&scene.triangles.vertices(i)), PrimKind::Triangle, i);
+            push(
+                Bounds3::from_points(&scene.triangles.vertices(i)),
+                PrimKind::Triangle,
+                i,
+            );
         }
         for (i, s) in scene.spheres.iter().enumerate() {
             push(s.shape.bounds(), PrimKind::Sphere, i);
@@ -128,10 +134,7 @@ impl Bvh {
             };
         }
 
-        let prims = build
-            .iter()
-            .map(|b| leaf_prim(scene, b.prim))
-            .collect();
+        let prims = build.iter().map(|b| leaf_prim(scene, b.prim)).collect();
         Ok(Bvh {
             nodes,
             prims,
@@ -160,16 +163,25 @@ impl Bvh {
                 max: n.max,
             };
             if n.count > 0 || (i == 0 && self.prims.is_empty()) {
-                for k in n.first as usize..(n.first + n.count) as usize {
+                let range = n.first as usize..(n.first + n.count) as usize;
+                for (k, count) in seen
+                    .iter_mut()
+                    .enumerate()
+                    .take(range.end)
+                    .skip(range.start)
+                {
                     let pb = prim_bounds(scene, self.prims[k].prim.unpack());
                     if !contains(&b, &pb) {
                         return Err(format!("primitive {k} sticks out of leaf {i}"));
                     }
-                    seen[k] += 1;
+                    *count += 1;
                 }
             } else {
                 for c in [n.first as usize, n.first as usize + 1] {
-                    let cn = self.nodes.get(c).ok_or(format!("node {i}: child {c} missing"))?;
+                    let cn = self
+                        .nodes
+                        .get(c)
+                        .ok_or(format!("node {i}: child {c} missing"))?;
                     let cb = Bounds3 {
                         min: cn.min,
                         max: cn.max,
@@ -190,7 +202,13 @@ impl Bvh {
     /// Tests the primitives of one leaf; returns the index of the closest hit and shrinks
     /// `t_max` to it.
     #[inline(always)]
-    fn leaf_closest(&self, node: &Node, ray: &Ray, t_max: &mut f32, best: &mut Option<(usize, f32, f32)>) {
+    fn leaf_closest(
+        &self,
+        node: &Node,
+        ray: &Ray,
+        t_max: &mut f32,
+        best: &mut Option<(usize, f32, f32)>,
+    ) {
         for k in node.first as usize..(node.first + node.count) as usize {
             if let Some((t, u, v)) = self.hit_prim(&self.prims[k], ray, *t_max) {
                 *t_max = t;
@@ -202,7 +220,9 @@ impl Bvh {
     #[inline(always)]
     fn hit_prim(&self, p: &LeafPrim, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
         match p.prim.kind() {
-            PrimKind::Triangle => intersect_triangle_edges(ray, t_max, p.v[0], p.v[1], p.v[2], true),
+            PrimKind::Triangle => {
+                intersect_triangle_edges(ray, t_max, p.v[0], p.v[1], p.v[2], true)
+            }
             PrimKind::Quad => {
                 if self.one_sided_quads && !faces_ray(p.normal, ray.direction) {
                     return None;
@@ -402,9 +422,11 @@ fn leaf_prim(scene: &Scene, prim: PrimRef) -> LeafPrim {
 }
 
 fn union_bounds(prims: &[BuildPrim]) -> (Bounds3, Bounds3) {
-    prims.iter().fold((Bounds3::EMPTY, Bounds3::EMPTY), |(b, c), p| {
-        (b.union(p.bounds), c.union_point(p.centroid))
-    })
+    prims
+        .iter()
+        .fold((Bounds3::EMPTY, Bounds3::EMPTY), |(b, c), p| {
+            (b.union(p.bounds), c.union_point(p.centroid))
+        })
 }
 
 /// Builds the subtree over `prims`, which start at `offset` in the final primitive order.
@@ -432,7 +454,11 @@ fn build_node(prims: &mut [BuildPrim], offset: usize, depth: usize) -> BuildNode
         None if n <= MAX_LEAF => return leaf,
         None => n / 2,
     };
-    let split = if split == 0 || split == n { n / 2 } else { split };
+    let split = if split == 0 || split == n {
+        n / 2
+    } else {
+        split
+    };
     let (left, right) = prims.split_at_mut(split);
     let (l, r) = if n > PARALLEL_THRESHOLD {
         rayon::join(
@@ -458,12 +484,17 @@ fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
 
 /// The cheapest SAH split: (axis, last bin of the left side, cost relative to one primitive
 /// intersection). None when all centroids coincide.
-fn best_split(prims: &[BuildPrim], bounds: &Bounds3, centroids: &Bounds3) -> Option<(usize, usize, f32)> {
+fn best_split(
+    prims: &[BuildPrim],
+    bounds: &Bounds3,
+    centroids: &Bounds3,
+) -> Option<(usize, usize, f32)> {
     let extent = centroids.extent();
     let parent_area = bounds.area().max(f32::MIN_POSITIVE);
     let mut best: Option<(usize, usize, f32)> = None;
     for axis in 0..3 {
-        if !(extent[axis] > 0.0) {
+        // Extents are finite (primitives with non-finite bounds are left out).
+        if extent[axis] <= 0.0 {
             continue;
         }
         let lo = centroids.min[axis];

@@ -9,7 +9,12 @@ use super::{Accel, AccelError, AccelOptions, EmbreeQuality};
 use crate::geometry::{Ray, RingShape, SphereShape};
 use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
 
-#[allow(non_camel_case_types, non_snake_case, non_upper_case_globals, dead_code)]
+#[allow(
+    non_camel_case_types,
+    non_snake_case,
+    non_upper_case_globals,
+    dead_code
+)]
 mod sys {
     include!(concat!(env!("OUT_DIR"), "/shim_bindings.rs"));
 }
@@ -81,13 +86,25 @@ impl UserShape for RingShape {
     }
 }
 
-unsafe extern "C" fn user_bounds<T: UserShape>(user: *const c_void, prim: u32, lower: *mut f32, upper: *mut f32) {
-    // SAFETY: `user` is the `Vec<T>` registered with this geometry, alive as long as the scene;
-    // Embree passes prim < the primitive count we gave, and lower/upper point to 3 floats each.
+unsafe extern "C" fn user_bounds<T: UserShape>(
+    user: *const c_void,
+    prim: u32,
+    lower: *mut f32,
+    upper: *mut f32,
+) {
+    // SAFETY: `user` points to the first of the geometry's shapes (a boxed slice alive as long
+    // as the scene); Embree passes prim < the primitive count we gave, and lower/upper point
+    // to 3 floats each.
     unsafe {
-        let shapes = &*(user as *const Vec<T>);
-        let b = shapes[prim as usize].bounds_of();
-        for (k, (lo, hi)) in b.min.to_array().into_iter().zip(b.max.to_array()).enumerate() {
+        let shape = &*(user as *const T).add(prim as usize);
+        let b = shape.bounds_of();
+        for (k, (lo, hi)) in b
+            .min
+            .to_array()
+            .into_iter()
+            .zip(b.max.to_array())
+            .enumerate()
+        {
             *lower.add(k) = lo;
             *upper.add(k) = hi;
         }
@@ -105,9 +122,9 @@ unsafe extern "C" fn user_intersect<T: UserShape>(
     // SAFETY: as in `user_bounds`; `ray` points to a TxRay, laid out as `Ray` (checked above),
     // and t/u/v to writable floats.
     unsafe {
-        let shapes = &*(user as *const Vec<T>);
+        let shape = &*(user as *const T).add(prim as usize);
         let ray = &*(ray as *const Ray);
-        match shapes[prim as usize].hit(ray, ray.t_max) {
+        match shape.hit(ray, ray.t_max) {
             Some(hit) => {
                 *t = hit;
                 *u = 0.0;
@@ -125,9 +142,10 @@ pub struct EmbreeAccel {
     scene: *mut sys::TxScene,
     /// The primitive kind of each Embree geometry id.
     kinds: Vec<PrimKind>,
-    /// User data of the sphere and ring geometries; Embree holds pointers into these boxes.
-    _spheres: Box<Vec<SphereShape>>,
-    _rings: Box<Vec<RingShape>>,
+    /// User data of the sphere and ring geometries: Embree holds pointers to their first
+    /// elements, which stay put when the struct moves.
+    spheres: Box<[SphereShape]>,
+    rings: Box<[RingShape]>,
 }
 
 // SAFETY: a committed Embree scene may be queried from any number of threads at once, and
@@ -164,8 +182,8 @@ impl EmbreeAccel {
             device,
             scene: tx_scene,
             kinds: Vec::new(),
-            _spheres: Box::new(scene.spheres.iter().map(|s| s.shape).collect()),
-            _rings: Box::new(scene.rings.iter().map(|r| r.shape).collect()),
+            spheres: scene.spheres.iter().map(|s| s.shape).collect(),
+            rings: scene.rings.iter().map(|r| r.shape).collect(),
         };
         if tx_scene.is_null() {
             // Drop would release a NULL scene: the shim accepts it.
@@ -178,13 +196,18 @@ impl EmbreeAccel {
                 .iter()
                 .flat_map(|q| q.vertices.iter().flat_map(|v| v.to_array()))
                 .collect();
-            let normals: Vec<f32> = scene.quads.iter().flat_map(|q| q.normal.to_array()).collect();
+            let normals: Vec<f32> = scene
+                .quads
+                .iter()
+                .flat_map(|q| q.normal.to_array())
+                .collect();
             let front = if !scene.two_sided_quads {
                 normals.as_ptr()
             } else {
                 std::ptr::null()
             };
-            let n = u32::try_from(scene.quads.len()).map_err(|_| AccelError::TooLarge(scene.quads.len()))?;
+            let n = u32::try_from(scene.quads.len())
+                .map_err(|_| AccelError::TooLarge(scene.quads.len()))?;
             // SAFETY: vertices holds 12 floats per quad and normals 3; the shim copies both.
             let id = unsafe { sys::tx_scene_add_quads(tx_scene, vertices.as_ptr(), n, front) };
             accel.register(id, PrimKind::Quad)?;
@@ -193,27 +216,42 @@ impl EmbreeAccel {
             let mesh = &scene.triangles;
             let vertices: Vec<f32> = mesh.positions.iter().flat_map(|v| v.to_array()).collect();
             let indices: Vec<u32> = mesh.indices.iter().flatten().copied().collect();
-            let nv = u32::try_from(mesh.positions.len()).map_err(|_| AccelError::TooLarge(mesh.positions.len()))?;
+            let nv = u32::try_from(mesh.positions.len())
+                .map_err(|_| AccelError::TooLarge(mesh.positions.len()))?;
             let nt = u32::try_from(mesh.len()).map_err(|_| AccelError::TooLarge(mesh.len()))?;
             // SAFETY: the arrays hold 3 floats per vertex and 3 indices per triangle; copied.
-            let id = unsafe { sys::tx_scene_add_triangles(tx_scene, vertices.as_ptr(), nv, indices.as_ptr(), nt) };
+            let id = unsafe {
+                sys::tx_scene_add_triangles(tx_scene, vertices.as_ptr(), nv, indices.as_ptr(), nt)
+            };
             accel.register(id, PrimKind::Triangle)?;
         }
-        if !accel._spheres.is_empty() {
-            let user = &*accel._spheres as *const Vec<SphereShape> as *const c_void;
-            let n = accel._spheres.len() as u32;
-            // SAFETY: `user` points into a box owned by `accel`, which outlives the scene.
+        if !accel.spheres.is_empty() {
+            let user = accel.spheres.as_ptr() as *const c_void;
+            let n = accel.spheres.len() as u32;
+            // SAFETY: `user` points into a boxed slice owned by `accel`, which outlives the scene.
             let id = unsafe {
-                sys::tx_scene_add_user(tx_scene, n, user, Some(user_bounds::<SphereShape>), Some(user_intersect::<SphereShape>))
+                sys::tx_scene_add_user(
+                    tx_scene,
+                    n,
+                    user,
+                    Some(user_bounds::<SphereShape>),
+                    Some(user_intersect::<SphereShape>),
+                )
             };
             accel.register(id, PrimKind::Sphere)?;
         }
-        if !accel._rings.is_empty() {
-            let user = &*accel._rings as *const Vec<RingShape> as *const c_void;
-            let n = accel._rings.len() as u32;
+        if !accel.rings.is_empty() {
+            let user = accel.rings.as_ptr() as *const c_void;
+            let n = accel.rings.len() as u32;
             // SAFETY: as for spheres.
             let id = unsafe {
-                sys::tx_scene_add_user(tx_scene, n, user, Some(user_bounds::<RingShape>), Some(user_intersect::<RingShape>))
+                sys::tx_scene_add_user(
+                    tx_scene,
+                    n,
+                    user,
+                    Some(user_bounds::<RingShape>),
+                    Some(user_intersect::<RingShape>),
+                )
             };
             accel.register(id, PrimKind::Ring)?;
         }
@@ -314,7 +352,12 @@ impl Accel for EmbreeAccel {
         for (rays, hits) in rays.chunks(CHUNK).zip(hits.chunks_mut(CHUNK)) {
             // SAFETY: `rays` has TxRay's layout; buf has room for rays.len() ≤ CHUNK hits.
             unsafe {
-                sys::tx_intersect_batch(self.scene, rays.as_ptr() as *const sys::TxRay, rays.len(), buf.as_mut_ptr())
+                sys::tx_intersect_batch(
+                    self.scene,
+                    rays.as_ptr() as *const sys::TxRay,
+                    rays.len(),
+                    buf.as_mut_ptr(),
+                )
             };
             for (out, h) in hits.iter_mut().zip(&buf) {
                 *out = self.convert(h);

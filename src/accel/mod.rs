@@ -8,8 +8,8 @@ pub mod embree;
 use std::fmt;
 
 use crate::geometry::Ray;
-use crate::scene::{PrimKind, PrimRef, Scene};
 pub use crate::scene::{PrimHit, SurfaceHit};
+use crate::scene::{PrimKind, PrimRef, Scene};
 
 /// Visibility queries over one scene's primitives. Implementations are immutable once built
 /// and safe to query from many threads at once.
@@ -109,7 +109,11 @@ pub enum AccelError {
 }
 
 /// Builds the chosen backend over the scene's primitives.
-pub fn build(scene: &Scene, kind: AccelKind, options: &AccelOptions) -> Result<Box<dyn Accel>, AccelError> {
+pub fn build(
+    scene: &Scene,
+    kind: AccelKind,
+    options: &AccelOptions,
+) -> Result<Box<dyn Accel>, AccelError> {
     match kind {
         AccelKind::Bvh => Ok(Box::new(bvh::Bvh::build(scene)?)),
         #[cfg(feature = "embree")]

@@ -70,7 +70,11 @@ impl Film {
             .iter()
             .flat_map(|c| c.to_array())
             .map(|v| {
-                let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
+                let v = if v.is_finite() {
+                    v.clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
                 (linear_to_srgb(v) * 255.0 + 0.5) as u8
             })
             .collect()
@@ -84,7 +88,12 @@ impl Film {
         write_atomically(path, |w| self.encode(format, w, path))
     }
 
-    fn encode(&self, format: ImageFormat, w: &mut BufWriter<File>, path: &Path) -> Result<(), FilmError> {
+    fn encode(
+        &self,
+        format: ImageFormat,
+        w: &mut BufWriter<File>,
+        path: &Path,
+    ) -> Result<(), FilmError> {
         let encode_err = |e: image::ImageError| FilmError::Encode {
             path: path.to_path_buf(),
             message: e.to_string(),
@@ -104,13 +113,14 @@ impl Film {
             }
             ImageFormat::Exr => {
                 let data: Vec<f32> = self.pixels.iter().flat_map(|c| c.to_array()).collect();
-                let img = image::Rgb32FImage::from_raw(self.width, self.height, data).ok_or_else(|| {
-                    FilmError::Encode {
+                let img = image::Rgb32FImage::from_raw(self.width, self.height, data).ok_or_else(
+                    || FilmError::Encode {
                         path: path.to_path_buf(),
                         message: "pixel count does not match the size".into(),
-                    }
-                })?;
-                img.write_to(w, image::ImageFormat::OpenExr).map_err(encode_err)
+                    },
+                )?;
+                img.write_to(w, image::ImageFormat::OpenExr)
+                    .map_err(encode_err)
             }
             ImageFormat::Pfm => {
                 // PFM: little-endian (negative scale), rows from the bottom up.
@@ -183,9 +193,16 @@ pub fn read_pfm(path: &Path) -> Result<Film, String> {
     let height: u32 = fields[2].parse().map_err(|_| bad())?;
     let scale: f32 = fields[3].parse().map_err(|_| bad())?;
     let n = width as usize * height as usize;
-    let data = bytes.get(pos..pos + 12 * n).ok_or_else(|| format!("{}: truncated PFM data", path.display()))?;
+    let data = bytes
+        .get(pos..pos + 12 * n)
+        .ok_or_else(|| format!("{}: truncated PFM data", path.display()))?;
     let value = |k: usize| {
-        let b = [data[4 * k], data[4 * k + 1], data[4 * k + 2], data[4 * k + 3]];
+        let b = [
+            data[4 * k],
+            data[4 * k + 1],
+            data[4 * k + 2],
+            data[4 * k + 3],
+        ];
         if scale < 0.0 {
             f32::from_le_bytes(b)
         } else {

@@ -22,9 +22,7 @@ impl Bounds3 {
     };
 
     pub fn from_points(points: &[Vec3]) -> Bounds3 {
-        points
-            .iter()
-            .fold(Bounds3::EMPTY, |b, &p| b.union_point(p))
+        points.iter().fold(Bounds3::EMPTY, |b, &p| b.union_point(p))
     }
     #[inline]
     pub fn union(self, o: Bounds3) -> Bounds3 {

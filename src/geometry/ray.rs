@@ -39,12 +39,19 @@ impl Ray {
     }
 }
 
-/// Moves a point off a surface so that a ray spawned from it does not hit that surface again:
-/// the offset of Wächter and Binder (Ray Tracing Gems, ch. 6). It adds a fixed number of
-/// floating-point steps (ULPs) along the geometric normal, so it scales with the coordinates,
-/// and a small absolute step near the origin where ULPs are tiny. `n` must point to the side
-/// the new ray leaves into.
-pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
+/// Moves a point off a surface so that a ray spawned from it does not hit that surface again.
+/// First by the point's own error bound `error` (absolute, per coordinate: the computed point
+/// lies within that distance of the true surface, as pbrt tracks it), pushed along the normal
+/// as far as the error box reaches; then by the offset of Wächter and Binder (Ray Tracing
+/// Gems, ch. 6): a fixed number of floating-point steps (ULPs) along the normal, scaled with
+/// the coordinates, with a small absolute step near the origin where ULPs are tiny. `n` must
+/// be a unit normal pointing to the side the new ray leaves into.
+pub fn offset_ray_origin(p: Vec3, n: Vec3, error: f32) -> Vec3 {
+    let reach = error * (n.x.abs() + n.y.abs() + n.z.abs());
+    ulp_offset(p + n * reach, n)
+}
+
+fn ulp_offset(p: Vec3, n: Vec3) -> Vec3 {
     const ORIGIN: f32 = 1.0 / 32.0;
     const FLOAT_SCALE: f32 = 1.0 / 65536.0;
     const INT_SCALE: f32 = 256.0;
@@ -68,16 +75,24 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     }
 }
 
-/// A ray leaving surface point `p` (geometric normal `ng`) in direction `dir`.
-pub fn spawn_ray(p: Vec3, ng: Vec3, dir: Vec3) -> Ray {
+/// A ray leaving surface point `p` (unit geometric normal `ng`, point error `error`) in
+/// direction `dir`.
+pub fn spawn_ray(p: Vec3, ng: Vec3, error: f32, dir: Vec3) -> Ray {
     let n = if ng.dot(dir) < 0.0 { -ng } else { ng };
-    Ray::new(offset_ray_origin(p, n), dir)
+    Ray::new(offset_ray_origin(p, n, error), dir)
 }
 
 /// A ray from surface point `p` towards `target` that stops just short of it (shadow rays).
-pub fn spawn_ray_to(p: Vec3, ng: Vec3, target: Vec3) -> Ray {
+pub fn spawn_ray_to(p: Vec3, ng: Vec3, error: f32, target: Vec3) -> Ray {
     let d = target - p;
     let n = if ng.dot(d) < 0.0 { -ng } else { ng };
-    let origin = offset_ray_origin(p, n);
+    let origin = offset_ray_origin(p, n, error);
     Ray::with_range(origin, target - origin, 0.0, 1.0 - 1e-4)
+}
+
+/// A bound on the rounding error of a point computed from coordinates of magnitude up to
+/// `magnitude` in a handful of floating-point operations.
+#[inline]
+pub fn point_error(magnitude: f32) -> f32 {
+    8.0 * f32::EPSILON * magnitude
 }

@@ -9,7 +9,13 @@ use super::vec::{vec3, Vec3};
 /// Möller–Trumbore ray–triangle test. Returns `(t, b1, b2)` with the hit at
 /// `v0 + b1·(v1 − v0) + b2·(v2 − v0)`, for `t` in `(ray.t_min, t_max)`.
 #[inline]
-pub fn intersect_triangle(ray: &Ray, t_max: f32, v0: Vec3, v1: Vec3, v2: Vec3) -> Option<(f32, f32, f32)> {
+pub fn intersect_triangle(
+    ray: &Ray,
+    t_max: f32,
+    v0: Vec3,
+    v1: Vec3,
+    v2: Vec3,
+) -> Option<(f32, f32, f32)> {
     intersect_triangle_within(ray, t_max, v0, v1, v2, true)
 }
 
@@ -74,7 +80,8 @@ pub fn intersect_quad(ray: &Ray, t_max: f32, v: &[Vec3; 4]) -> Option<(f32, f32,
     if b1 + b2 <= 1.0 {
         return Some(first);
     }
-    intersect_triangle_within(ray, t_max, v[2], v[3], v[1], false).map(|(t, a, b)| (t, 1.0 - a, 1.0 - b))
+    intersect_triangle_within(ray, t_max, v[2], v[3], v[1], false)
+        .map(|(t, a, b)| (t, 1.0 - a, 1.0 - b))
 }
 
 /// The front normal of a planar quad (unnormalised): cross product of its diagonals.
@@ -159,7 +166,12 @@ pub enum RingPart {
 }
 
 impl RingPart {
-    pub const ALL: [RingPart; 4] = [RingPart::Outer, RingPart::Inner, RingPart::Bottom, RingPart::Top];
+    pub const ALL: [RingPart; 4] = [
+        RingPart::Outer,
+        RingPart::Inner,
+        RingPart::Bottom,
+        RingPart::Top,
+    ];
 }
 
 /// A cylindrical ring: the solid between two coaxial cylinders of radius `r_in` and `r_out`,
@@ -175,8 +187,16 @@ pub struct RingShape {
 impl RingShape {
     pub fn bounds(&self) -> Bounds3 {
         Bounds3 {
-            min: vec3(self.base.x - self.r_out, self.base.y, self.base.z - self.r_out),
-            max: vec3(self.base.x + self.r_out, self.base.y + self.height, self.base.z + self.r_out),
+            min: vec3(
+                self.base.x - self.r_out,
+                self.base.y,
+                self.base.z - self.r_out,
+            ),
+            max: vec3(
+                self.base.x + self.r_out,
+                self.base.y + self.height,
+                self.base.z + self.r_out,
+            ),
         }
     }
 
@@ -192,7 +212,10 @@ impl RingShape {
                 limit = t;
             }
         }
-        for (y, part) in [(self.base.y, RingPart::Bottom), (self.base.y + self.height, RingPart::Top)] {
+        for (y, part) in [
+            (self.base.y, RingPart::Bottom),
+            (self.base.y + self.height, RingPart::Top),
+        ] {
             if let Some(t) = self.intersect_cap(ray, limit, y) {
                 best = Some((t, part));
                 limit = t;

@@ -12,7 +12,11 @@ pub fn mix64(mut z: u64) -> u64 {
 /// Hash of a seed and two counters (e.g. pixel and sample).
 #[inline]
 pub fn hash3(seed: u64, a: u64, b: u64) -> u64 {
-    mix64(seed ^ mix64(a.wrapping_add(0x9e37_79b9_7f4a_7c15) ^ mix64(b.wrapping_mul(0xd1b5_4a32_d192_ed03))))
+    mix64(
+        seed ^ mix64(
+            a.wrapping_add(0x9e37_79b9_7f4a_7c15) ^ mix64(b.wrapping_mul(0xd1b5_4a32_d192_ed03)),
+        ),
+    )
 }
 
 /// A small generator seeded from `hash3(seed, a, b)`.

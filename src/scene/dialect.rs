@@ -358,7 +358,10 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
         if k as usize >= scene.materials.len() {
             return Err(p.invalid(
                 at,
-                format!("m {k}: no such material ({} defined)", scene.materials.len()),
+                format!(
+                    "m {k}: no such material ({} defined)",
+                    scene.materials.len()
+                ),
             ));
         }
     }
@@ -366,9 +369,12 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
 }
 
 fn material_for(p: &Parser, tok: Token, current: Option<(u32, Token)>) -> Result<u32, SceneError> {
-    current
-        .map(|(k, _)| k)
-        .ok_or_else(|| p.invalid(tok, format!("`{}` before any `m` selects a material", tok.text)))
+    current.map(|(k, _)| k).ok_or_else(|| {
+        p.invalid(
+            tok,
+            format!("`{}` before any `m` selects a material", tok.text),
+        )
+    })
 }
 
 /// Rejects zero-area and non-planar quads; nearly degenerate ones are kept.
@@ -376,7 +382,7 @@ fn check_quad(p: &Parser, tok: Token, v: &[Vec3; 4]) -> Result<(), SceneError> {
     let n = quad_normal(v);
     let size = (v[2] - v[0]).length().max((v[3] - v[1]).length());
     let area2 = n.length();
-    if !(area2 > 0.0) || area2 <= f32::EPSILON * f32::EPSILON * size * size {
+    if area2.is_nan() || area2 <= f32::EPSILON * f32::EPSILON * size * size {
         return Err(p.invalid(tok, "degenerate quad: its area is zero".into()));
     }
     let unit = n / area2;

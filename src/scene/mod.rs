@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 pub use camera::{Camera, Projection};
 pub use error::SceneError;
-pub use surface::{PrimHit, SurfaceHit};
+pub use surface::{PrimHit, QuadNeighbours, SurfaceHit};
 pub use texture::Texture;
 
 use crate::geometry::{quad_normal, Bounds3, RingShape, SphereShape, Vec2, Vec3};
@@ -168,7 +168,7 @@ pub struct Scene {
     pub two_sided_quads: bool,
     /// For each quad, the quads that share a vertex position with it (built on first use; it
     /// settles hits on shared edges the same way whichever backend reported them).
-    pub(crate) quad_neighbours: std::sync::OnceLock<Vec<Vec<u32>>>,
+    pub quad_neighbours: QuadNeighbours,
     /// Problems that did not stop loading (e.g. a material that does not conserve energy).
     pub warnings: Vec<String>,
 }
@@ -194,6 +194,41 @@ impl Scene {
     /// Parses course-dialect text as if read from `path` (textures are not decoded).
     pub fn parse_dialect(path: &Path, text: &str) -> Result<Scene, SceneError> {
         dialect::parse(path, text)
+    }
+
+    /// The same scene scaled by `scale` about the origin, then moved by `offset` (camera
+    /// included): for checking that results do not depend on units or position.
+    pub fn transformed(&self, scale: f32, offset: Vec3) -> Scene {
+        let map = |p: Vec3| p * scale + offset;
+        let mut s = self.clone();
+        for q in &mut s.quads {
+            *q = Quad::new(q.vertices.map(map), q.tex_coords, q.material);
+        }
+        s.triangles.positions.iter_mut().for_each(|p| *p = map(*p));
+        for sp in &mut s.spheres {
+            sp.shape.centre = map(sp.shape.centre);
+            sp.shape.radius *= scale;
+        }
+        for r in &mut s.rings {
+            r.shape.base = map(r.shape.base);
+            r.shape.height *= scale;
+            r.shape.r_in *= scale;
+            r.shape.r_out *= scale;
+        }
+        let camera = self.camera();
+        s.camera = Some(Camera {
+            position: map(camera.position),
+            point_of_interest: map(camera.point_of_interest),
+            projection: match camera.projection {
+                Projection::Orthographic { size } => {
+                    Projection::Orthographic { size: size * scale }
+                }
+                p => p,
+            },
+            ..camera
+        });
+        s.quad_neighbours = Default::default();
+        s
     }
 
     /// The camera of the file, or the default camera for the scene's bounds.
@@ -276,9 +311,15 @@ impl Scene {
     /// Decodes the textures of the materials in use ("pay only for what the scene uses").
     fn decode_used_textures(&mut self) -> Result<(), SceneError> {
         let used = self.used_materials();
-        let dir = self.path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let dir = self
+            .path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
         for (i, m) in self.materials.iter_mut().enumerate() {
-            let Some(file) = &m.texture_file else { continue };
+            let Some(file) = &m.texture_file else {
+                continue;
+            };
             if !used[i] {
                 continue;
             }

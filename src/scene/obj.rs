@@ -105,13 +105,17 @@ fn convert_material(m: &tobj::Material) -> Material {
     let ior = m.optical_density.filter(|n| *n > 0.0).unwrap_or(1.5);
     let transmitted = param(m, "Tf")
         .filter(|_| matches!(illum, 4 | 6 | 7 | 9))
-        .or_else(|| m.dissolve.filter(|d| *d < 1.0).map(|d| Vec3::splat(1.0 - d)))
+        .or_else(|| {
+            m.dissolve
+                .filter(|d| *d < 1.0)
+                .map(|d| Vec3::splat(1.0 - d))
+        })
         .unwrap_or(Vec3::ZERO);
     Material {
         diffuse: rgb(m.diffuse),
         texture_file: m.diffuse_texture.as_ref().map(Into::into),
         reflective: if mirror { rgb(m.specular) } else { Vec3::ZERO },
-        emitted: param(m, "Ke").unwrap_or(Vec3::ZERO),
+        emitted: rgb(m.emissive),
         transmitted,
         ior,
         ..Material::default()

@@ -3,7 +3,30 @@
 //! two backends give bit-identical surfaces whenever they agree on the primitive.
 
 use super::{PrimKind, PrimRef, Scene};
-use crate::geometry::{faces_ray, intersect_quad, vec2, Ray, RingPart, Vec2, Vec3};
+use crate::geometry::{
+    faces_ray, intersect_quad, point_error, spawn_ray, spawn_ray_to, vec2, Ray, RingPart, Vec2,
+    Vec3,
+};
+
+impl SurfaceHit {
+    /// A ray leaving this surface point in direction `dir`, offset so it cannot hit the
+    /// surface it leaves.
+    pub fn spawn_ray(&self, dir: Vec3) -> Ray {
+        spawn_ray(self.point, self.geometric_normal, self.error, dir)
+    }
+
+    /// A ray from this surface point that stops just short of `target`.
+    pub fn spawn_ray_to(&self, target: Vec3) -> Ray {
+        spawn_ray_to(self.point, self.geometric_normal, self.error, target)
+    }
+}
+
+fn max_abs(points: &[Vec3]) -> f32 {
+    points
+        .iter()
+        .map(|p| p.abs().max_elem())
+        .fold(0.0, f32::max)
+}
 
 /// What an acceleration structure reports for a closest hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -25,6 +48,8 @@ pub struct SurfaceHit {
     pub geometric_normal: Vec3,
     /// Unit shading normal (interpolated where a mesh gives vertex normals).
     pub shading_normal: Vec3,
+    /// Bound on the absolute error of `point` in each coordinate (see `offset_ray_origin`).
+    pub error: f32,
     /// The primitive's own parameters in [0,1]².
     pub uv: (f32, f32),
     /// Texture coordinates (the primitive's `vt`, or its parameters when it has none).
@@ -57,6 +82,7 @@ impl Scene {
                 SurfaceHit {
                     t,
                     point,
+                    error: point_error(max_abs(vs)),
                     geometric_normal: q.normal,
                     shading_normal: q.normal,
                     uv: (u, v),
@@ -100,6 +126,7 @@ impl Scene {
                 SurfaceHit {
                     t,
                     point,
+                    error: point_error(max_abs(&[p0, p1, p2])),
                     geometric_normal: ng,
                     shading_normal,
                     uv: (b1, b2),
@@ -118,6 +145,7 @@ impl Scene {
                 SurfaceHit {
                     t,
                     point,
+                    error: point_error(s.shape.centre.abs().max_elem() + s.shape.radius),
                     geometric_normal: n,
                     shading_normal: n,
                     uv,
@@ -152,7 +180,10 @@ impl Scene {
                             z: r.shape.base.z + radial.z * radius,
                         }
                     }
-                    RingPart::Bottom => Vec3 { y: r.shape.base.y, ..p },
+                    RingPart::Bottom => Vec3 {
+                        y: r.shape.base.y,
+                        ..p
+                    },
                     RingPart::Top => Vec3 {
                         y: r.shape.base.y + r.shape.height,
                         ..p
@@ -163,6 +194,9 @@ impl Scene {
                 SurfaceHit {
                     t,
                     point,
+                    error: point_error(
+                        r.shape.base.abs().max_elem() + r.shape.r_out + r.shape.height,
+                    ),
                     geometric_normal: n,
                     shading_normal: n,
                     uv,
@@ -175,12 +209,18 @@ impl Scene {
     }
 }
 
+/// Derived data of a scene: for each quad, the quads sharing a vertex position with it.
+/// Built on first use, so scenes are still made with plain struct literals.
+#[derive(Clone, Debug, Default)]
+pub struct QuadNeighbours(std::sync::OnceLock<Vec<Vec<u32>>>);
+
 /// Hits this close to a quad's border (in its parameters) may lie on an edge it shares.
 const EDGE_BAND: f32 = 1e-4;
 
 impl Scene {
     fn quad_neighbours(&self) -> &[Vec<u32>] {
         self.quad_neighbours
+            .0
             .get_or_init(|| quad_adjacency(&self.quads))
     }
 
@@ -200,7 +240,8 @@ impl Scene {
         let own = intersect_quad(ray, f32::INFINITY, &self.quads[i].vertices)
             .unwrap_or((hit.t, hit.u, hit.v));
         let (u, v) = (own.1, own.2);
-        let near_border = u < EDGE_BAND || v < EDGE_BAND || u > 1.0 - EDGE_BAND || v > 1.0 - EDGE_BAND;
+        let near_border =
+            u < EDGE_BAND || v < EDGE_BAND || u > 1.0 - EDGE_BAND || v > 1.0 - EDGE_BAND;
         if !near_border {
             return (i, own);
         }
@@ -221,7 +262,13 @@ impl Scene {
 fn quad_adjacency(quads: &[super::Quad]) -> Vec<Vec<u32>> {
     use std::collections::HashMap;
     // Bit patterns as keys; adding 0.0 folds -0.0 into 0.0.
-    let key = |p: Vec3| [(p.x + 0.0).to_bits(), (p.y + 0.0).to_bits(), (p.z + 0.0).to_bits()];
+    let key = |p: Vec3| {
+        [
+            (p.x + 0.0).to_bits(),
+            (p.y + 0.0).to_bits(),
+            (p.z + 0.0).to_bits(),
+        ]
+    };
     let mut at_vertex: HashMap<[u32; 3], Vec<u32>> = HashMap::new();
     for (k, q) in quads.iter().enumerate() {
         for &p in &q.vertices {

@@ -30,12 +30,10 @@ impl Texture {
         let (width, height) = img.dimensions();
         let texels = img
             .pixels()
-            .map(|p| {
-                Vec3 {
-                    x: srgb_to_linear(p[0] as f32 / 255.0),
-                    y: srgb_to_linear(p[1] as f32 / 255.0),
-                    z: srgb_to_linear(p[2] as f32 / 255.0),
-                }
+            .map(|p| Vec3 {
+                x: srgb_to_linear(p[0] as f32 / 255.0),
+                y: srgb_to_linear(p[1] as f32 / 255.0),
+                z: srgb_to_linear(p[2] as f32 / 255.0),
             })
             .collect();
         Ok(Texture {

@@ -94,7 +94,12 @@ impl Accel for BruteForce<'_> {
         for prim in self.prims() {
             let t_max = best.map_or(ray.t_max, |b| b.t);
             if let Some(t) = self.hit(ray, prim, t_max) {
-                best = Some(PrimHit { t, prim, u: 0.0, v: 0.0 });
+                best = Some(PrimHit {
+                    t,
+                    prim,
+                    u: 0.0,
+                    v: 0.0,
+                });
             }
         }
         best
@@ -111,7 +116,8 @@ pub fn same_hit(ray: &Ray, x: &Option<PrimHit>, y: &Option<PrimHit>) -> bool {
     match (x, y) {
         (None, None) => true,
         (Some(x), Some(y)) => {
-            let origin_ulps = 8.0 * f32::EPSILON * ray.origin.abs().max_elem() / ray.direction.length();
+            let origin_ulps =
+                8.0 * f32::EPSILON * ray.origin.abs().max_elem() / ray.direction.length();
             let tolerance = 1e-5 * x.t.abs().max(y.t.abs()) + origin_ulps;
             x.prim == y.prim && (x.t - y.t).abs() <= tolerance
         }
@@ -121,7 +127,12 @@ pub fn same_hit(ray: &Ray, x: &Option<PrimHit>, y: &Option<PrimHit>) -> bool {
 
 /// Compares two backends' answers on a ray set; returns the number of rays on which they
 /// disagree (different primitive, t off by more than 1e-5 relative, or different occlusion).
-pub fn disagreements(a: &dyn Accel, b: &dyn Accel, rays: &[Ray], occlusion_rays: &[Ray]) -> (usize, usize) {
+pub fn disagreements(
+    a: &dyn Accel,
+    b: &dyn Accel,
+    rays: &[Ray],
+    occlusion_rays: &[Ray],
+) -> (usize, usize) {
     let mut closest = 0;
     let mut ha = vec![None; rays.len()];
     let mut hb = vec![None; rays.len()];

@@ -1,0 +1,309 @@
+//! The `render` command as a user runs it: course command lines verbatim, both backends giving
+//! identical images, `--plan`, output formats, thread-count independence, clear errors.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use common::{backends, course_scenes};
+
+fn render(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_render"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("render runs")
+}
+
+fn ok(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "render failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("trilux-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+#[test]
+fn every_course_scene_renders_identically_with_both_backends() {
+    let dir = temp_dir("backends");
+    for scene in course_scenes() {
+        let input = scene.to_str().unwrap();
+        let stem = scene.file_stem().unwrap().to_string_lossy().into_owned();
+        let mut images = Vec::new();
+        for kind in backends() {
+            let out = format!("{stem}.{kind}.png");
+            ok(&render(
+                &dir,
+                &[
+                    "-input",
+                    input,
+                    "-size",
+                    "160",
+                    "120",
+                    "--accel",
+                    &kind.to_string(),
+                    "-o",
+                    &out,
+                    "--quiet",
+                ],
+            ));
+            images.push(std::fs::read(dir.join(&out)).expect("image written"));
+        }
+        assert!(
+            images.windows(2).all(|w| w[0] == w[1]),
+            "{stem}: backends give different images"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn course_command_lines_run_verbatim() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let dir = temp_dir("verbatim");
+    let scene = |name: &str| course.join(name).to_string_lossy().into_owned();
+    let lines: Vec<Vec<String>> = vec![
+        vec![
+            "-input".into(),
+            scene("reflective_spheres.obj"),
+            "-num_bounces".into(),
+            "3".into(),
+            "-num_shadow_samples".into(),
+            "1".into(),
+        ],
+        vec![
+            "-size".into(),
+            "30".into(),
+            "15".into(),
+            "-input".into(),
+            scene("l.obj"),
+            "-num_form_factor_samples".into(),
+            "10".into(),
+            "-num_shadow_samples".into(),
+            "1".into(),
+        ],
+        vec![
+            "-input".into(),
+            scene("cornell_box_diffuse_sphere.obj"),
+            "-ambient_light".into(),
+            "0.2".into(),
+            "0.2".into(),
+            "0.2".into(),
+            "-sphere_rasterization".into(),
+            "16".into(),
+            "12".into(),
+        ],
+        vec![
+            "-input".into(),
+            scene("reflective_ring.obj"),
+            "-num_photons_to_shoot".into(),
+            "10000".into(),
+            "-num_antialias_samples".into(),
+            "4".into(),
+            "-gather_indirect".into(),
+            "-num_photons_to_collect".into(),
+            "50".into(),
+            "-cylinder_ring_rasterization".into(),
+            "20".into(),
+            "-interpolate".into(),
+        ],
+        vec![
+            "--input".into(),
+            scene("l.obj"),
+            "--num-shadow-samples".into(),
+            "1".into(),
+            "--size".into(),
+            "20".into(),
+            "20".into(),
+        ],
+    ];
+    for line in &lines {
+        let args: Vec<&str> = line.iter().map(String::as_str).collect();
+        let out = render(&dir, &args);
+        ok(&out);
+        let stem = Path::new(&line[line.iter().position(|a| a.ends_with("input")).unwrap() + 1])
+            .file_stem()
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        assert!(
+            dir.join(format!("{stem}.png")).is_file(),
+            "default output <stem>.png for {line:?}"
+        );
+    }
+    // Flags of engines that do not exist yet are accepted and say so.
+    let out = render(
+        &dir,
+        &[
+            "-input",
+            &scene("l.obj"),
+            "-num_photons_to_shoot",
+            "10",
+            "-size",
+            "8",
+            "8",
+        ],
+    );
+    ok(&out);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("-num_photons_to_shoot is accepted"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn plan_reports_what_the_scene_needs() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let dir = temp_dir("plan");
+    let spheres = ok(&render(
+        &dir,
+        &[
+            "--plan",
+            "-input",
+            course.join("reflective_spheres.obj").to_str().unwrap(),
+        ],
+    ));
+    assert!(spheres.contains("user geometry: 2 spheres"), "{spheres}");
+    assert!(spheres.contains("photon map: no"), "{spheres}");
+    assert!(spheres.contains("radiosity mesh: no"), "{spheres}");
+    let cornell = ok(&render(
+        &dir,
+        &[
+            "--plan",
+            "-input",
+            course.join("cornell_box.obj").to_str().unwrap(),
+        ],
+    ));
+    assert!(cornell.contains("user geometry: none"), "{cornell}");
+    assert!(
+        cornell.contains("quad geometry: 6 quads (one-sided)"),
+        "{cornell}"
+    );
+    let ring = ok(&render(
+        &dir,
+        &[
+            "--plan",
+            "-input",
+            course.join("reflective_ring.obj").to_str().unwrap(),
+        ],
+    ));
+    assert!(ring.contains("user geometry: 1 ring"), "{ring}");
+    assert!(ring.contains("textures decoded: 1"), "{ring}");
+    assert!(
+        std::fs::read_dir(&dir).unwrap().next().is_none(),
+        "--plan writes no image"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn output_formats_are_linear_and_written_atomically() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let dir = temp_dir("formats");
+    let input = course.join("reflective_spheres.obj");
+    for name in ["a.png", "a.exr", "a.pfm"] {
+        ok(&render(
+            &dir,
+            &[
+                "-input",
+                input.to_str().unwrap(),
+                "-size",
+                "40",
+                "30",
+                "-o",
+                name,
+                "--quiet",
+            ],
+        ));
+        assert!(
+            dir.join(name).metadata().unwrap().len() > 100,
+            "{name} written"
+        );
+    }
+    // The top-left corner sees the background: sRGB (0.2, 0.1, 0.6) from the file, linear here.
+    let film = trilux::film::read_pfm(&dir.join("a.pfm")).expect("PFM reads back");
+    let corner = film.get(0, 0);
+    let expected = [0.2f32, 0.1, 0.6].map(trilux::scene::texture::srgb_to_linear);
+    for (got, want) in corner.to_array().iter().zip(expected) {
+        assert!(
+            (got - want).abs() < 1e-6,
+            "corner {corner:?}, expected {expected:?}"
+        );
+    }
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        names.iter().all(|n| !n.ends_with(".tmp")),
+        "no temporary file left: {names:?}"
+    );
+    let out = render(&dir, &["-input", input.to_str().unwrap(), "-o", "a.jpg"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown image format"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn thread_count_does_not_change_the_image() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let dir = temp_dir("threads");
+    let input = course.join("textured_plane_reflective_sphere.obj");
+    for t in ["1", "2"] {
+        ok(&render(
+            &dir,
+            &[
+                "-input",
+                input.to_str().unwrap(),
+                "-size",
+                "64",
+                "64",
+                "--threads",
+                t,
+                "--seed",
+                "7",
+                "-o",
+                &format!("t{t}.png"),
+            ],
+        ));
+    }
+    assert_eq!(
+        std::fs::read(dir.join("t1.png")).unwrap(),
+        std::fs::read(dir.join("t2.png")).unwrap()
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_input_is_a_clear_error() {
+    let dir = temp_dir("bad");
+    std::fs::write(
+        dir.join("bad.obj"),
+        "material\ndiffuse 1 1 1\nm 0\nv 0 0 0\nf 1 2 3 4\n",
+    )
+    .unwrap();
+    let out = render(&dir, &["-input", "bad.obj"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.obj:5:"), "{err}");
+    assert!(err.contains("out of range"), "{err}");
+    assert!(!dir.join("bad.png").exists(), "no image for a bad scene");
+    let out = render(&dir, &["-input", "missing.obj"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.obj"));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,190 @@
+//! Analytic checks of the primitives through every backend: far spheres, every surface of a
+//! ring, and secondary rays that never re-hit the surface they leave, at scene scales from
+//! 1e-3 to 1e4.
+
+mod common;
+
+use common::{backends, course_scenes};
+use trilux::accel::{self, closest_surface, AccelOptions};
+use trilux::bench::uniform_direction;
+use trilux::geometry::{vec3, Ray, RingPart, RingShape, SphereShape, Vec3};
+use trilux::sampling::Rng;
+use trilux::scene::{Material, PrimKind, Ring, Scene, Sphere};
+
+fn one_material() -> Vec<Material> {
+    vec![Material {
+        diffuse: Vec3::splat(0.5),
+        ..Material::default()
+    }]
+}
+
+#[test]
+fn far_sphere_is_hit_accurately() {
+    let centre = vec3(1e4, 0.0, 0.0);
+    let scene = Scene {
+        materials: one_material(),
+        spheres: vec![Sphere {
+            shape: SphereShape {
+                centre,
+                radius: 1.0,
+            },
+            material: 0,
+        }],
+        ..Scene::default()
+    };
+    for kind in backends() {
+        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+        // Head on: t = 1e4 − 1 exactly.
+        let head_on = Ray::new(Vec3::ZERO, vec3(1.0, 0.0, 0.0));
+        let hit = accel.intersect(&head_on).expect("head-on ray hits");
+        assert!((hit.t - 9999.0).abs() <= 1e-3, "{kind}: t = {}", hit.t);
+        // Off-centre rays aimed at points of the sphere: the hit lies on the sphere within
+        // 1e-3 of its radius.
+        let mut misses = 0;
+        for k in 0..1000u64 {
+            let mut rng = Rng::new(5, k, 0);
+            let target = centre + uniform_direction(&mut rng) * 0.999;
+            let ray = Ray::new(Vec3::ZERO, (target - Vec3::ZERO).normalized());
+            match closest_surface(accel.as_ref(), &scene, &ray) {
+                Some(s) => {
+                    let r = (ray.at(s.t) - centre).length();
+                    assert!(
+                        (r - 1.0).abs() <= 1e-3,
+                        "{kind}: hit at distance {r} from the centre"
+                    );
+                }
+                None => misses += 1,
+            }
+        }
+        assert_eq!(misses, 0, "{kind}: rays aimed inside the sphere missed it");
+    }
+}
+
+fn ring_scene() -> Scene {
+    Scene {
+        materials: one_material(),
+        rings: vec![Ring {
+            shape: RingShape {
+                base: vec3(0.0, 0.0, 0.0),
+                height: 2.0,
+                r_in: 4.0,
+                r_out: 4.1,
+            },
+            material: 0,
+        }],
+        ..Scene::default()
+    }
+}
+
+#[test]
+fn ring_surfaces_and_hole() {
+    let scene = ring_scene();
+    // (ray, expected part, expected t); None: a miss.
+    let cases: [(Ray, Option<(RingPart, f32)>); 6] = [
+        // Down the axis, through the hole.
+        (Ray::new(vec3(0.0, 10.0, 0.0), vec3(0.0, -1.0, 0.0)), None),
+        // From outside at mid-height: the outer wall at x = 4.1.
+        (
+            Ray::new(vec3(10.0, 1.0, 0.0), vec3(-1.0, 0.0, 0.0)),
+            Some((RingPart::Outer, 5.9)),
+        ),
+        // From the axis at mid-height: the inner wall at x = 4.
+        (
+            Ray::new(vec3(0.0, 1.0, 0.0), vec3(1.0, 0.0, 0.0)),
+            Some((RingPart::Inner, 4.0)),
+        ),
+        // From above onto the top annulus at radius 4.05.
+        (
+            Ray::new(vec3(4.05, 5.0, 0.0), vec3(0.0, -1.0, 0.0)),
+            Some((RingPart::Top, 3.0)),
+        ),
+        // From below onto the bottom annulus.
+        (
+            Ray::new(vec3(0.0, -3.0, 4.05), vec3(0.0, 1.0, 0.0)),
+            Some((RingPart::Bottom, 3.0)),
+        ),
+        // Above the ring entirely.
+        (Ray::new(vec3(10.0, 2.5, 0.0), vec3(-1.0, 0.0, 0.0)), None),
+    ];
+    for kind in backends() {
+        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+        for (ray, expected) in &cases {
+            let hit = closest_surface(accel.as_ref(), &scene, ray);
+            match (expected, hit) {
+                (None, None) => {}
+                (Some((part, t)), Some(s)) => {
+                    assert!(
+                        (s.t - t).abs() < 1e-4,
+                        "{kind}: {ray:?}: t {} expected {t}",
+                        s.t
+                    );
+                    let expected_normal = scene.rings[0].shape.normal_at(s.point, *part);
+                    assert!(
+                        (s.geometric_normal - expected_normal).length() < 1e-4,
+                        "{kind}: {ray:?}: normal {:?}, expected that of {part:?}",
+                        s.geometric_normal
+                    );
+                    assert!(accel.occluded(ray), "{kind}: occlusion agrees with the hit");
+                }
+                (e, h) => panic!("{kind}: {ray:?}: expected {e:?}, got {h:?}"),
+            }
+        }
+        // The inner wall's normal points into the hole.
+        let s = closest_surface(accel.as_ref(), &scene, &cases[2].0).expect("hit");
+        assert!(
+            s.geometric_normal.x < -0.99,
+            "inner wall normal faces the axis"
+        );
+    }
+}
+
+/// From random visible points, rays leave the surface by the offset of Wächter & Binder in
+/// random directions on the open side; none may hit its own surface again at a tiny t.
+#[test]
+fn secondary_rays_never_rehit_their_surface_at_any_scale() {
+    for path in course_scenes() {
+        let base = Scene::load(&path).expect("loads");
+        for scale in [1e-3f32, 1e-1, 1.0, 1e2, 1e4] {
+            let scene = base.transformed(scale, Vec3::ZERO);
+            let extent = scene.bounds().extent().max_elem();
+            for kind in backends() {
+                let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+                let rays = trilux::bench::camera_rays(&scene, 64);
+                let mut spawned = 0;
+                for (k, ray) in rays.iter().enumerate() {
+                    let Some(s) = closest_surface(accel.as_ref(), &scene, ray) else {
+                        continue;
+                    };
+                    // The side the camera ray came from.
+                    let side = if s.geometric_normal.dot(ray.direction) < 0.0 {
+                        s.geometric_normal
+                    } else {
+                        -s.geometric_normal
+                    };
+                    let mut rng = Rng::new(9, k as u64, 0);
+                    for _ in 0..8 {
+                        let mut d = uniform_direction(&mut rng);
+                        if d.dot(side) < 0.0 {
+                            d = -d;
+                        }
+                        let leave = s.spawn_ray(d);
+                        spawned += 1;
+                        if let Some(h) = accel.intersect(&leave) {
+                            let self_hit = h.prim == s.prim && h.t < 1e-4 * extent;
+                            let planar = matches!(s.prim.kind, PrimKind::Quad | PrimKind::Triangle);
+                            assert!(
+                                !(self_hit || (planar && h.prim == s.prim)),
+                                "{} at scale {scale} ({kind}): ray from {:?} re-hit its {:?} at t = {}",
+                                path.display(),
+                                s.point,
+                                s.prim,
+                                h.t
+                            );
+                        }
+                    }
+                }
+                assert!(spawned > 1000, "enough surface points were tested");
+            }
+        }
+    }
+}

@@ -1,0 +1,289 @@
+//! Every error class of docs/scene-format.md names the file and the line, and no input —
+//! however malformed — panics the parser (a bounded proptest over token soup).
+
+mod common;
+
+use std::path::Path;
+
+use proptest::prelude::*;
+use trilux::scene::{Scene, SceneError};
+
+const MATERIAL: &str = "material\ndiffuse 0.5 0.5 0.5\nreflective 0 0 0\nemitted 0 0 0\n";
+const QUAD: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+
+fn parse(text: &str) -> Result<Scene, SceneError> {
+    Scene::parse_dialect(Path::new("bad.obj"), text)
+}
+
+/// Asserts the text fails on `line` with a message containing each of `words`.
+fn fails_at(text: &str, line: u32, words: &[&str]) {
+    let err = parse(text).expect_err("malformed scene must be rejected");
+    let message = err.to_string();
+    assert_eq!(err.line(), Some(line), "wrong line in: {message}");
+    assert!(
+        message.starts_with(&format!("bad.obj:{line}:")),
+        "no file:line in: {message}"
+    );
+    for w in words {
+        assert!(message.contains(w), "`{w}` missing from: {message}");
+    }
+}
+
+#[test]
+fn unknown_token() {
+    fails_at(
+        &format!("{MATERIAL}m 0\nbogus 1 2\n"),
+        6,
+        &["expected a scene token", "`bogus`"],
+    );
+}
+
+#[test]
+fn missing_argument() {
+    fails_at(
+        "material\ndiffuse 0.5 0.5\n",
+        2,
+        &["expected a real number", "the end of the file"],
+    );
+}
+
+#[test]
+fn non_numeric_argument() {
+    fails_at(
+        &format!("{MATERIAL}v 1 two 3\n"),
+        5,
+        &["expected a real number", "`two`"],
+    );
+    fails_at(
+        &format!("{MATERIAL}v 1 nan 3\n"),
+        5,
+        &["expected a real number", "`nan`"],
+    );
+}
+
+#[test]
+fn face_index_out_of_range() {
+    fails_at(
+        &format!("{MATERIAL}m 0\n{QUAD}f 1 2 3 9\n"),
+        10,
+        &["face index 9 out of range", "4 vertices"],
+    );
+    fails_at(
+        &format!("{MATERIAL}m 0\n{QUAD}f 0 1 2 3\n"),
+        10,
+        &["face index 0 out of range"],
+    );
+}
+
+#[test]
+fn selecting_a_missing_material() {
+    fails_at(
+        &format!("{MATERIAL}m 3\n{QUAD}f 1 2 3 4\n"),
+        5,
+        &["m 3: no such material", "1 defined"],
+    );
+}
+
+#[test]
+fn face_before_any_material() {
+    fails_at(
+        &format!("{MATERIAL}{QUAD}f 1 2 3 4\n"),
+        9,
+        &["`f` before any `m`"],
+    );
+}
+
+#[test]
+fn non_planar_quad() {
+    fails_at(
+        &format!("{MATERIAL}m 0\nv 0 0 0\nv 1 0 0\nv 1 1 0.5\nv 0 1 0\nf 1 2 3 4\n"),
+        10,
+        &["non-planar quad"],
+    );
+}
+
+#[test]
+fn degenerate_quad() {
+    fails_at(
+        &format!("{MATERIAL}m 0\nv 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3 4\n"),
+        10,
+        &["degenerate quad"],
+    );
+}
+
+#[test]
+fn nearly_degenerate_quad_is_loaded() {
+    let scene = parse(&format!(
+        "{MATERIAL}m 0\nv 0 0 0\nv 1 0 0\nv 1 1e-5 0\nv 0 1e-5 0\nf 1 2 3 4\n"
+    ))
+    .expect("a thin quad is valid");
+    assert_eq!(scene.quads.len(), 1);
+}
+
+#[test]
+fn negative_radius() {
+    fails_at(
+        &format!("{MATERIAL}m 0\ns 0 0 0 -1\n"),
+        6,
+        &["sphere radius must be > 0"],
+    );
+}
+
+#[test]
+fn ring_radii_out_of_order() {
+    fails_at(
+        &format!("{MATERIAL}m 0\nr 0 0 0 2 4 4\n"),
+        6,
+        &["0 < r_in < r_out"],
+    );
+    fails_at(
+        &format!("{MATERIAL}m 0\nr 0 0 0 2 5 4\n"),
+        6,
+        &["0 < r_in < r_out"],
+    );
+    fails_at(
+        &format!("{MATERIAL}m 0\nr 0 0 0 0 1 2\n"),
+        6,
+        &["ring height must be > 0"],
+    );
+}
+
+#[test]
+fn unreadable_texture() {
+    let dir = std::env::temp_dir().join(format!("trilux-texture-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("scene.obj");
+    std::fs::write(
+        &path,
+        format!("\n\nmaterial\ntexture_file missing.ppm\n\nm 0\n{QUAD}f 1 2 3 4\n"),
+    )
+    .expect("write");
+    let err = Scene::load(&path).expect_err("missing texture must be rejected");
+    assert_eq!(err.line(), Some(3), "{err}");
+    assert!(err.to_string().contains("cannot read texture"), "{err}");
+    // A texture no primitive uses is not decoded, so it cannot fail the load.
+    std::fs::write(
+        &path,
+        format!(
+            "material\ndiffuse 1 1 1\nmaterial\ntexture_file missing.ppm\nm 0\n{QUAD}f 1 2 3 4\n"
+        ),
+    )
+    .expect("write");
+    let scene = Scene::load(&path).expect("unused texture is not read");
+    assert!(scene.textures.is_empty());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn unreadable_file() {
+    let err = Scene::load(Path::new("/nonexistent/scene.obj")).expect_err("missing file");
+    assert!(err.to_string().contains("/nonexistent/scene.obj"), "{err}");
+}
+
+#[test]
+fn energy_violation_is_a_warning_naming_the_material() {
+    let dir = std::env::temp_dir().join(format!("trilux-energy-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("scene.obj");
+    std::fs::write(
+        &path,
+        format!(
+            "{MATERIAL}material\ndiffuse 0.8 0.8 0.8\nreflective 0.5 0 0\nm 1\n{QUAD}f 1 2 3 4\n"
+        ),
+    )
+    .expect("write");
+    let scene = Scene::load(&path).expect("loads with a warning");
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    assert!(
+        scene.warnings[0].contains(":5: material 1"),
+        "{}",
+        scene.warnings[0]
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn every_course_scene_loads() {
+    for path in common::course_scenes() {
+        let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert!(scene.primitive_count() > 0, "{}", path.display());
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    }
+}
+
+#[test]
+fn standard_obj_is_read_by_content() {
+    let dir = std::env::temp_dir().join(format!("trilux-obj-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("mesh.txt");
+    std::fs::write(
+        dir.join("mesh.mtl"),
+        "newmtl lamp\nKd 0.2 0.3 0.4\nKe 5 5 5\n",
+    )
+    .expect("write mtl");
+    std::fs::write(
+        &path,
+        "mtllib mesh.mtl\ns off\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl lamp\nf 1 2 3 4\n",
+    )
+    .expect("write");
+    let scene = Scene::load(&path).expect("standard OBJ loads");
+    assert_eq!(scene.triangles.len(), 2, "the polygon is triangulated");
+    let m = &scene.materials[scene.triangles.materials[0] as usize];
+    assert_eq!(m.emitted.x, 5.0);
+    assert_eq!(m.diffuse.z, 0.4);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+fn token() -> impl Strategy<Value = String> {
+    prop_oneof![
+        Just("material".to_string()),
+        Just("diffuse".to_string()),
+        Just("reflective".to_string()),
+        Just("emitted".to_string()),
+        Just("transmitted".to_string()),
+        Just("ior".to_string()),
+        Just("roughness".to_string()),
+        Just("texture_file".to_string()),
+        Just("m".to_string()),
+        Just("v".to_string()),
+        Just("vt".to_string()),
+        Just("f".to_string()),
+        Just("s".to_string()),
+        Just("r".to_string()),
+        Just("background_color".to_string()),
+        Just("PerspectiveCamera".to_string()),
+        Just("OrthographicCamera".to_string()),
+        Just("{".to_string()),
+        Just("}".to_string()),
+        Just("camera_position".to_string()),
+        Just("angle".to_string()),
+        Just("#".to_string()),
+        Just("\n".to_string()),
+        (-5i64..20).prop_map(|k| k.to_string()),
+        any::<f32>().prop_map(|x| x.to_string()),
+        "[ -~]{0,6}",
+        "\\PC{0,3}",
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 3000, ..ProptestConfig::default() })]
+
+    /// Any token soup parses or fails with an error that names a line; it never panics.
+    #[test]
+    fn parser_never_panics(tokens in proptest::collection::vec(token(), 0..60)) {
+        let text = tokens.join(" ");
+        if let Err(e) = parse(&text) {
+            prop_assert!(e.to_string().starts_with("bad.obj"));
+        }
+    }
+
+    /// Mutating a valid course file byte by byte never panics the parser.
+    #[test]
+    fn mutated_course_text_never_panics(pos in 0usize..400, byte in any::<u8>()) {
+        let mut text = format!("{MATERIAL}m 0\n{QUAD}f 1 2 3 4\ns 0 0 1 0.5\nr 0 0 0 1 0.5 0.6\nPerspectiveCamera {{\ncamera_position 0 0 5\npoint_of_interest 0 0 0\nup 0 1 0\nangle 0.5\n}}\n").into_bytes();
+        let k = pos % text.len();
+        text[k] = byte;
+        let _ = parse(&String::from_utf8_lossy(&text));
+    }
+}
