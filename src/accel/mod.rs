@@ -119,7 +119,11 @@ pub fn build(
         #[cfg(feature = "embree")]
         AccelKind::Embree => Ok(Box::new(embree::EmbreeAccel::build(scene, options)?)),
         #[cfg(not(feature = "embree"))]
-        AccelKind::Embree => Err(AccelError::EmbreeUnavailable),
+        AccelKind::Embree => {
+            // The options are Embree's alone.
+            let _ = options;
+            Err(AccelError::EmbreeUnavailable)
+        }
     }
 }
 
