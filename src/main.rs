@@ -306,8 +306,7 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     let options = args.accel_options();
     let plan = Plan::new(&scene, args.engine, kind, &settings);
     if args.plan {
-        print!("scene: {}\n{plan}", input.display());
-        return Ok(());
+        return emit(&format!("scene: {}\n{plan}", input.display()));
     }
     if !args.engine.is_implemented() {
         return Err(format!(
@@ -381,28 +380,44 @@ fn bench_accel(args: &BenchArgs) -> Result<(), String> {
             )
         })
         .map_err(|e| e.to_string())?;
-    println!(
-        "scene: {} ({} primitives), {} rays per set, median of {} runs, embree robust: {}",
-        args.scene,
-        scene.primitive_count(),
-        args.rays,
-        args.repeats,
-        args.embree_robust
+    let mut lines = vec![
+        format!(
+            "scene: {} ({} primitives), {} rays per set, median of {} runs, embree robust: {}",
+            args.scene,
+            scene.primitive_count(),
+            args.rays,
+            args.repeats,
+            args.embree_robust
+        ),
+        String::new(),
+        "| backend | build (s) |".into(),
+        "|---|---|".into(),
+    ];
+    lines.extend(
+        builds
+            .iter()
+            .map(|(name, s)| format!("| {name} | {s:.3} |")),
     );
-    println!();
-    println!("| backend | build (s) |");
-    println!("|---|---|");
-    for (name, s) in &builds {
-        println!("| {name} | {s:.3} |");
-    }
-    println!();
-    println!("| backend | rays | query | mode | threads | Mrays/s |");
-    println!("|---|---|---|---|---|---|");
-    for r in &rows {
-        println!(
+    lines.push(String::new());
+    lines.push("| backend | rays | query | mode | threads | Mrays/s |".into());
+    lines.push("|---|---|---|---|---|---|".into());
+    lines.extend(rows.iter().map(|r| {
+        format!(
             "| {} | {} | {} | {} | {} | {:.2} |",
             r.backend, r.rays, r.query, r.mode, r.threads, r.mrays_per_s
-        );
+        )
+    }));
+    lines.push(String::new());
+    emit(&lines.join("\n"))
+}
+
+/// Writes to standard output; a closed pipe (`render --plan | head`) is not an error.
+fn emit(text: &str) -> Result<(), String> {
+    use std::io::Write;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(format!("cannot write to standard output: {e}"))
+        }
+        _ => Ok(()),
     }
-    Ok(())
 }
