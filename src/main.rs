@@ -7,10 +7,13 @@ use std::time::Instant;
 
 use clap::{Args, Parser, Subcommand};
 
+use std::sync::atomic::Ordering::Relaxed;
 use trilux::accel::{self, AccelKind, AccelOptions, EmbreeQuality};
-use trilux::engines::{raycast, EngineKind, RenderSettings};
+
+use trilux::engines::{raycast, raytrace, EngineKind, RenderSettings, RenderStats};
 use trilux::geometry::vec3;
 use trilux::plan::Plan;
+use trilux::sampling::Pattern;
 use trilux::scene::Scene;
 
 /// The course program's flags, accepted with one dash and underscores (`-num_bounces 3`) as
@@ -123,7 +126,7 @@ struct RenderArgs {
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [256, 256])]
     size: Vec<u32>,
     /// Lighting engine.
-    #[arg(long, value_enum, default_value_t = EngineKind::Raycast)]
+    #[arg(long, value_enum, default_value_t = EngineKind::Raytrace)]
     engine: EngineKind,
     /// Visibility backend (default: embree when this build has it).
     #[arg(long, value_enum)]
@@ -165,6 +168,15 @@ struct RenderArgs {
     /// Ambient radiance R G B.
     #[arg(long, num_args = 3, value_names = ["R", "G", "B"], allow_negative_numbers = true)]
     ambient_light: Option<Vec<f32>>,
+    /// Placement of the points on each light for soft shadows.
+    #[arg(long, value_enum, default_value_t = Pattern::Jittered)]
+    light_sampling: Pattern,
+    /// Thin-lens radius for depth of field (0: pinhole).
+    #[arg(long, default_value_t = 0.0)]
+    aperture: f32,
+    /// Distance of the plane in focus (default: the camera's point of interest).
+    #[arg(long)]
+    focus_distance: Option<f32>,
     /// Point pairs per form factor (radiosity engine).
     #[arg(long)]
     num_form_factor_samples: Option<u32>,
@@ -216,6 +228,9 @@ impl RenderArgs {
                 .num_photons_to_collect
                 .unwrap_or(d.num_photons_to_collect),
             gather_indirect: self.gather_indirect,
+            light_sampling: self.light_sampling,
+            aperture: self.aperture,
+            focus_distance: self.focus_distance,
             seed: self.seed,
             quiet: self.quiet,
         }
@@ -228,33 +243,39 @@ impl RenderArgs {
         }
     }
 
-    /// Flags the chosen engine does not read yet, named so the user knows they had no effect.
+    /// Flags given that the chosen engine does not read, named so the user knows they had
+    /// no effect.
     fn unused_flags(&self) -> Vec<&'static str> {
-        let mut unused = Vec::new();
+        let ray_tracing = [
+            ("-num_bounces", self.num_bounces > 0),
+            ("-num_shadow_samples", self.num_shadow_samples > 0),
+            ("-num_antialias_samples", self.num_antialias_samples > 1),
+            ("-ambient_light", self.ambient_light.is_some()),
+            ("--aperture", self.aperture > 0.0),
+        ];
+        // The radiosity and photon engines do not exist yet: their flags are read by nothing.
+        let later_engines = [
+            (
+                "-num_form_factor_samples",
+                self.num_form_factor_samples.is_some(),
+            ),
+            ("-sphere_rasterization", self.sphere_rasterization.is_some()),
+            (
+                "-cylinder_ring_rasterization",
+                self.cylinder_ring_rasterization.is_some(),
+            ),
+            ("-interpolate", self.interpolate),
+            ("-num_photons_to_shoot", self.num_photons_to_shoot.is_some()),
+            (
+                "-num_photons_to_collect",
+                self.num_photons_to_collect.is_some(),
+            ),
+            ("-gather_indirect", self.gather_indirect),
+        ];
+        let mut unused: Vec<&'static str> =
+            later_engines.iter().filter(|c| c.1).map(|c| c.0).collect();
         if self.engine == EngineKind::Raycast {
-            let checks: [(&str, bool); 11] = [
-                ("-num_bounces", self.num_bounces > 0),
-                ("-num_shadow_samples", self.num_shadow_samples > 0),
-                ("-num_antialias_samples", self.num_antialias_samples > 1),
-                ("-ambient_light", self.ambient_light.is_some()),
-                (
-                    "-num_form_factor_samples",
-                    self.num_form_factor_samples.is_some(),
-                ),
-                ("-sphere_rasterization", self.sphere_rasterization.is_some()),
-                (
-                    "-cylinder_ring_rasterization",
-                    self.cylinder_ring_rasterization.is_some(),
-                ),
-                ("-num_photons_to_shoot", self.num_photons_to_shoot.is_some()),
-                (
-                    "-num_photons_to_collect",
-                    self.num_photons_to_collect.is_some(),
-                ),
-                ("-gather_indirect", self.gather_indirect),
-                ("-interpolate", self.interpolate),
-            ];
-            unused.extend(checks.iter().filter(|c| c.1).map(|c| c.0));
+            unused.extend(ray_tracing.iter().filter(|c| c.1).map(|c| c.0));
         }
         unused
     }
@@ -316,7 +337,7 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     }
     for flag in args.unused_flags() {
         eprintln!(
-            "note: {flag} is accepted but the {} engine does not use it (its engine is not implemented yet)",
+            "note: {flag} is accepted but has no effect: the {} engine does not read it (the radiosity and photon engines are not implemented yet)",
             args.engine.name()
         );
     }
@@ -327,18 +348,38 @@ fn render(args: &RenderArgs) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     let build_s = build_start.elapsed().as_secs_f64();
     let render_start = Instant::now();
-    let film = pool.install(|| raycast::render(&scene, accel.as_ref(), &settings));
+    let (film, stats) = pool.install(|| match args.engine {
+        EngineKind::Raycast => {
+            let film = raycast::render(&scene, accel.as_ref(), &settings);
+            let stats = RenderStats::default();
+            stats
+                .camera_rays
+                .store(settings.width as u64 * settings.height as u64, Relaxed);
+            (film, stats)
+        }
+        _ => raytrace::render(&scene, accel.as_ref(), &settings),
+    });
     let render_s = render_start.elapsed().as_secs_f64();
+    let non_finite = stats.non_finite_samples.load(Relaxed);
+    if non_finite > 0 {
+        eprintln!(
+            "warning: {non_finite} samples were NaN or infinite and were left out of the image"
+        );
+    }
 
     let output = args.output.clone().unwrap_or_else(|| default_output(input));
     film.write(&output).map_err(|e| e.to_string())?;
     if args.stats {
-        let rays = settings.width as u64 * settings.height as u64;
+        let rays = stats.total_rays();
         eprintln!("stats: scene load {load_s:.3} s, accel build ({kind}) {build_s:.3} s, render {render_s:.3} s");
         eprintln!(
-            "stats: rays cast {rays} ({:.2} Mrays/s)",
-            rays as f64 / render_s / 1e6
+            "stats: rays cast {rays} ({:.2} Mrays/s): camera {}, shadow {}, secondary {}",
+            rays as f64 / render_s / 1e6,
+            stats.camera_rays.load(Relaxed),
+            stats.shadow_rays.load(Relaxed),
+            stats.secondary_rays.load(Relaxed)
         );
+        eprintln!("stats: non-finite samples {non_finite}");
     }
     if !args.quiet {
         eprintln!("wrote {}", output.display());

@@ -292,9 +292,14 @@ proptest! {
 /// materials, camera and background; only the texture images are our own.
 #[test]
 fn own_scenes_match_the_course_scenes() {
-    let Some(course) = common::course_dir() else { return };
+    let Some(course) = common::course_dir() else {
+        return;
+    };
     let own = common::own_scenes();
-    assert!(own.len() >= 7, "scenes/ holds our versions of the course scenes");
+    assert!(
+        own.len() >= 7,
+        "scenes/ holds our versions of the course scenes"
+    );
     for path in own {
         let theirs_path = course.join(path.file_name().unwrap());
         if !theirs_path.exists() {
@@ -308,9 +313,17 @@ fn own_scenes_match_the_course_scenes() {
         assert_eq!(ours.rings, theirs.rings, "{what}: rings");
         assert_eq!(ours.camera, theirs.camera, "{what}: camera");
         assert_eq!(ours.background, theirs.background, "{what}: background");
-        assert_eq!(ours.materials.len(), theirs.materials.len(), "{what}: materials");
+        assert_eq!(
+            ours.materials.len(),
+            theirs.materials.len(),
+            "{what}: materials"
+        );
         for (a, b) in ours.materials.iter().zip(&theirs.materials) {
-            assert_eq!((a.diffuse, a.reflective, a.emitted), (b.diffuse, b.reflective, b.emitted), "{what}");
+            assert_eq!(
+                (a.diffuse, a.reflective, a.emitted),
+                (b.diffuse, b.reflective, b.emitted),
+                "{what}"
+            );
             assert_eq!(a.texture_file, b.texture_file, "{what}: texture name");
         }
     }

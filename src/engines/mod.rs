@@ -1,7 +1,10 @@
 //! The lighting engines. Each takes the scene, an `Accel` and the settings and fills a `Film`.
 //! So far: `raycast`, the course's MATERIALS view (first surface's emitted + albedo).
 
+pub mod lights;
+pub mod optics;
 pub mod raycast;
+pub mod raytrace;
 
 use crate::geometry::Vec3;
 
@@ -22,7 +25,7 @@ pub enum EngineKind {
 
 impl EngineKind {
     pub fn is_implemented(self) -> bool {
-        matches!(self, EngineKind::Raycast)
+        matches!(self, EngineKind::Raycast | EngineKind::Raytrace)
     }
     pub fn name(self) -> &'static str {
         match self {
@@ -32,6 +35,25 @@ impl EngineKind {
             EngineKind::Photon => "photon",
             EngineKind::Path => "path",
         }
+    }
+}
+
+/// Counters of one render, printed by `--stats`.
+#[derive(Debug, Default)]
+pub struct RenderStats {
+    pub camera_rays: std::sync::atomic::AtomicU64,
+    pub shadow_rays: std::sync::atomic::AtomicU64,
+    pub secondary_rays: std::sync::atomic::AtomicU64,
+    /// Samples that came out NaN or infinite: excluded from the image, and counted here.
+    pub non_finite_samples: std::sync::atomic::AtomicU64,
+}
+
+impl RenderStats {
+    pub fn total_rays(&self) -> u64 {
+        use std::sync::atomic::Ordering::Relaxed;
+        self.camera_rays.load(Relaxed)
+            + self.shadow_rays.load(Relaxed)
+            + self.secondary_rays.load(Relaxed)
     }
 }
 
@@ -62,6 +84,13 @@ pub struct RenderSettings {
     pub num_photons_to_collect: u32,
     /// Final gathering for indirect light (`-gather_indirect`, default off).
     pub gather_indirect: bool,
+    /// Placement of points on lights (`--light-sampling`, default jittered).
+    pub light_sampling: crate::sampling::Pattern,
+    /// Thin-lens radius (`--aperture`, default 0: a pinhole camera).
+    pub aperture: f32,
+    /// Distance of the plane in focus (`--focus-distance`, default: the camera's distance
+    /// to its point of interest).
+    pub focus_distance: Option<f32>,
     /// Seed of every random number (`--seed`, default 0).
     pub seed: u64,
     /// No progress bars (`--quiet`).
@@ -83,6 +112,9 @@ impl Default for RenderSettings {
             num_photons_to_shoot: 0,
             num_photons_to_collect: 100,
             gather_indirect: false,
+            light_sampling: crate::sampling::Pattern::Jittered,
+            aperture: 0.0,
+            focus_distance: None,
             seed: 0,
             quiet: false,
         }

@@ -44,3 +44,58 @@ impl Rng {
         (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
     }
 }
+
+/// How points on a light (or in a pixel) are placed (`--light-sampling`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Pattern {
+    /// Independent uniform points.
+    Random,
+    /// The centres of a grid of strata (no randomness).
+    Stratified,
+    /// One uniform point in each stratum of the grid.
+    #[default]
+    Jittered,
+}
+
+/// The grid of strata for `n` samples: √n × √n when n is a square, else n × 1 (n strata along
+/// the first axis, which callers align with the longer edge).
+pub fn strata(n: u32) -> (u32, u32) {
+    let r = (n as f64).sqrt().round() as u32;
+    if r * r == n {
+        (r, r)
+    } else {
+        (n.max(1), 1)
+    }
+}
+
+/// Sample `k` of `n` in [0,1)² with the given pattern.
+#[inline]
+pub fn sample_2d(pattern: Pattern, k: u32, n: u32, rng: &mut Rng) -> (f32, f32) {
+    let (nx, ny) = strata(n);
+    let (ix, iy) = (k % nx, k / nx);
+    match pattern {
+        Pattern::Random => (rng.next_f32(), rng.next_f32()),
+        Pattern::Stratified => ((ix as f32 + 0.5) / nx as f32, (iy as f32 + 0.5) / ny as f32),
+        Pattern::Jittered => (
+            (ix as f32 + rng.next_f32()) / nx as f32,
+            (iy as f32 + rng.next_f32()) / ny as f32,
+        ),
+    }
+}
+
+/// A uniform point on the unit disk (concentric mapping of Shirley and Chiu).
+pub fn sample_disk(u: f32, v: f32) -> (f32, f32) {
+    let (a, b) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    let (r, phi) = if a.abs() > b.abs() {
+        (a, std::f32::consts::FRAC_PI_4 * (b / a))
+    } else {
+        (
+            b,
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (a / b),
+        )
+    };
+    (r * phi.cos(), r * phi.sin())
+}

@@ -64,6 +64,38 @@ impl Camera {
         }
     }
 
+    /// The ray through screen point (x, y) of a thin lens: `aperture` is the lens radius,
+    /// `focus_distance` the distance (along the view direction) of the plane in focus, and
+    /// (lens_u, lens_v) in [0,1)² picks the point on the lens. Aperture 0 is the pinhole.
+    pub fn lens_ray(
+        &self,
+        x: f32,
+        y: f32,
+        aperture: f32,
+        focus_distance: f32,
+        lens_u: f32,
+        lens_v: f32,
+    ) -> Ray {
+        let ray = self.generate_ray(x, y);
+        if aperture <= 0.0 {
+            return ray;
+        }
+        let (forward, horizontal, up) = self.frame();
+        let along = ray.direction.dot(forward);
+        if along <= 0.0 {
+            return ray;
+        }
+        let focus = ray.at(focus_distance / along);
+        let (dx, dy) = crate::sampling::sample_disk(lens_u, lens_v);
+        let origin = ray.origin + horizontal * (dx * aperture) + up * (dy * aperture);
+        Ray::new(origin, (focus - origin).normalized())
+    }
+
+    /// Distance from the camera to its point of interest: the default focus distance.
+    pub fn focus_distance(&self) -> f32 {
+        (self.point_of_interest - self.position).length()
+    }
+
     /// Screen coordinates of pixel (i, j) of a W×H image, j counted from the bottom; `(dx, dy)`
     /// is the position inside the pixel, (0.5, 0.5) at its centre.
     pub fn screen_point(i: u32, j: u32, dx: f32, dy: f32, width: u32, height: u32) -> (f32, f32) {

@@ -1,0 +1,252 @@
+//! The scene's emitters as area lights: every primitive whose material emits. Each can be
+//! sampled uniformly by area, and has a centre for the course's one-shadow-ray mode.
+
+use crate::geometry::{vec3, RingPart, RingShape, SphereShape, Vec3};
+use crate::scene::{Color, PrimKind, PrimRef, Scene};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightShape {
+    /// A planar parallelogram `origin + u·edge_u + v·edge_v`, emitting on its front side.
+    Parallelogram {
+        origin: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        normal: Vec3,
+    },
+    /// A triangle `v0 + u·e1 + v·e2` (u + v ≤ 1), emitting on both sides.
+    Triangle {
+        v0: Vec3,
+        e1: Vec3,
+        e2: Vec3,
+        normal: Vec3,
+    },
+    Sphere(SphereShape),
+    Ring(RingShape),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    pub shape: LightShape,
+    /// Emitted radiance.
+    pub emitted: Color,
+    pub area: f32,
+    pub prim: PrimRef,
+}
+
+/// A point on a light with its outward unit normal; `one_sided` lights emit only where
+/// `normal · direction > 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightPoint {
+    pub point: Vec3,
+    pub normal: Vec3,
+    pub one_sided: bool,
+}
+
+impl Light {
+    /// Emitters of the scene, in primitive order.
+    pub fn collect(scene: &Scene) -> Vec<Light> {
+        let mut lights = Vec::new();
+        let emitted = |m: u32| scene.materials[m as usize].emitted;
+        for (i, q) in scene.quads.iter().enumerate() {
+            let e = emitted(q.material);
+            if e.max_elem() > 0.0 {
+                let [v0, v1, _, v3] = q.vertices;
+                lights.push(Light {
+                    shape: LightShape::Parallelogram {
+                        origin: v0,
+                        edge_u: v1 - v0,
+                        edge_v: v3 - v0,
+                        normal: q.normal,
+                    },
+                    emitted: e,
+                    area: q.area(),
+                    prim: prim(PrimKind::Quad, i),
+                });
+            }
+        }
+        for i in 0..scene.triangles.len() {
+            let e = emitted(scene.triangles.materials[i]);
+            if e.max_elem() > 0.0 {
+                let [a, b, c] = scene.triangles.vertices(i);
+                let n = (b - a).cross(c - a);
+                lights.push(Light {
+                    shape: LightShape::Triangle {
+                        v0: a,
+                        e1: b - a,
+                        e2: c - a,
+                        normal: n.normalized(),
+                    },
+                    emitted: e,
+                    area: 0.5 * n.length(),
+                    prim: prim(PrimKind::Triangle, i),
+                });
+            }
+        }
+        for (i, s) in scene.spheres.iter().enumerate() {
+            let e = emitted(s.material);
+            if e.max_elem() > 0.0 {
+                let r = s.shape.radius;
+                lights.push(Light {
+                    shape: LightShape::Sphere(s.shape),
+                    emitted: e,
+                    area: 4.0 * std::f32::consts::PI * r * r,
+                    prim: prim(PrimKind::Sphere, i),
+                });
+            }
+        }
+        for (i, r) in scene.rings.iter().enumerate() {
+            let e = emitted(r.material);
+            if e.max_elem() > 0.0 {
+                lights.push(Light {
+                    shape: LightShape::Ring(r.shape),
+                    emitted: e,
+                    area: ring_part_areas(&r.shape).iter().sum(),
+                    prim: prim(PrimKind::Ring, i),
+                });
+            }
+        }
+        lights
+    }
+
+    /// Whether the first sampling axis runs along the longer edge (for strata N×1).
+    fn swap_axes(&self) -> bool {
+        match self.shape {
+            LightShape::Parallelogram { edge_u, edge_v, .. } => edge_v.length() > edge_u.length(),
+            _ => false,
+        }
+    }
+
+    /// The point used by the course's single shadow ray (and by the unshadowed mode): the
+    /// centre of a planar light, the point of a sphere or ring nearest to `towards`.
+    pub fn centre(&self, towards: Vec3) -> LightPoint {
+        match self.shape {
+            LightShape::Parallelogram {
+                origin,
+                edge_u,
+                edge_v,
+                normal,
+            } => LightPoint {
+                point: origin + edge_u * 0.5 + edge_v * 0.5,
+                normal,
+                one_sided: true,
+            },
+            LightShape::Triangle { v0, e1, e2, normal } => LightPoint {
+                point: v0 + (e1 + e2) * (1.0 / 3.0),
+                normal,
+                one_sided: false,
+            },
+            LightShape::Sphere(s) => {
+                let n = (towards - s.centre).normalized();
+                LightPoint {
+                    point: s.centre + n * s.radius,
+                    normal: n,
+                    one_sided: true,
+                }
+            }
+            LightShape::Ring(r) => {
+                let n = vec3(towards.x - r.base.x, 0.0, towards.z - r.base.z).normalized();
+                LightPoint {
+                    point: vec3(r.base.x, r.base.y + 0.5 * r.height, r.base.z) + n * r.r_out,
+                    normal: n,
+                    one_sided: true,
+                }
+            }
+        }
+    }
+
+    /// A point uniformly distributed by area, from (u, v) in [0,1)².
+    pub fn sample(&self, u: f32, v: f32) -> LightPoint {
+        let (u, v) = if self.swap_axes() { (v, u) } else { (u, v) };
+        match self.shape {
+            LightShape::Parallelogram {
+                origin,
+                edge_u,
+                edge_v,
+                normal,
+            } => LightPoint {
+                point: origin + edge_u * u + edge_v * v,
+                normal,
+                one_sided: true,
+            },
+            LightShape::Triangle { v0, e1, e2, normal } => {
+                // Fold the unit square onto the triangle.
+                let (a, b) = if u + v > 1.0 {
+                    (1.0 - u, 1.0 - v)
+                } else {
+                    (u, v)
+                };
+                LightPoint {
+                    point: v0 + e1 * a + e2 * b,
+                    normal,
+                    one_sided: false,
+                }
+            }
+            LightShape::Sphere(s) => {
+                let z = 1.0 - 2.0 * u;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = std::f32::consts::TAU * v;
+                let n = vec3(r * phi.cos(), z, r * phi.sin());
+                LightPoint {
+                    point: s.centre + n * s.radius,
+                    normal: n,
+                    one_sided: true,
+                }
+            }
+            LightShape::Ring(r) => sample_ring(&r, u, v),
+        }
+    }
+}
+
+fn prim(kind: PrimKind, index: usize) -> PrimRef {
+    PrimRef {
+        kind,
+        index: index as u32,
+    }
+}
+
+fn ring_part_areas(r: &RingShape) -> [f32; 4] {
+    let tau = std::f32::consts::TAU;
+    let cap = 0.5 * tau * (r.r_out * r.r_out - r.r_in * r.r_in);
+    [tau * r.r_out * r.height, tau * r.r_in * r.height, cap, cap]
+}
+
+/// Uniform by area over the ring's four surfaces: `u` picks the surface in proportion to
+/// its area and is then reused within it.
+fn sample_ring(r: &RingShape, u: f32, v: f32) -> LightPoint {
+    let areas = ring_part_areas(r);
+    let total: f32 = areas.iter().sum();
+    let mut x = u * total;
+    let mut part = 3;
+    for (k, a) in areas.iter().enumerate() {
+        if x < *a {
+            part = k;
+            break;
+        }
+        x -= a;
+    }
+    let w = (x / areas[part]).clamp(0.0, 1.0);
+    let phi = std::f32::consts::TAU * v;
+    let radial = vec3(phi.cos(), 0.0, phi.sin());
+    let part = RingPart::ALL[part];
+    let point = match part {
+        RingPart::Outer | RingPart::Inner => {
+            let radius = if part == RingPart::Outer {
+                r.r_out
+            } else {
+                r.r_in
+            };
+            r.base + radial * radius + vec3(0.0, w * r.height, 0.0)
+        }
+        RingPart::Bottom | RingPart::Top => {
+            // Uniform in the annulus: radius² uniform between r_in² and r_out².
+            let rho = (r.r_in * r.r_in + w * (r.r_out * r.r_out - r.r_in * r.r_in)).sqrt();
+            let y = if part == RingPart::Top { r.height } else { 0.0 };
+            r.base + radial * rho + vec3(0.0, y, 0.0)
+        }
+    };
+    LightPoint {
+        point,
+        normal: r.normal_at(point, part),
+        one_sided: true,
+    }
+}

@@ -1,0 +1,65 @@
+//! Specular optics: mirror reflection, refraction and the Fresnel reflectance of dielectrics.
+
+use crate::geometry::Vec3;
+
+/// `d` reflected about the unit normal `n`.
+#[inline]
+pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - n * (2.0 * d.dot(n))
+}
+
+/// `d` (unit) refracted through a surface with unit normal `n` facing the incoming side, from
+/// index `eta_i` into `eta_t`; None on total internal reflection.
+pub fn refract(d: Vec3, n: Vec3, eta_i: f32, eta_t: f32) -> Option<Vec3> {
+    let eta = eta_i / eta_t;
+    let cos_i = -d.dot(n);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some(d * eta + n * (eta * cos_i - cos_t))
+}
+
+/// Fresnel reflectance of an unpolarised ray at a smooth dielectric boundary (the exact
+/// formula, not Schlick's): `cos_i` of the incoming ray, indices on both sides. 1 under total
+/// internal reflection.
+pub fn fresnel_dielectric(cos_i: f32, eta_i: f32, eta_t: f32) -> f32 {
+    let cos_i = cos_i.clamp(0.0, 1.0);
+    let sin_t = eta_i / eta_t * (1.0 - cos_i * cos_i).max(0.0).sqrt();
+    if sin_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin_t * sin_t).max(0.0).sqrt();
+    let parallel = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+    let perpendicular = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    0.5 * (parallel * parallel + perpendicular * perpendicular)
+}
+
+/// A direction in the Phong lobe `cosⁿ` around the unit vector `axis`, from (u, v) in [0,1)².
+pub fn sample_lobe(axis: Vec3, exponent: f32, u: f32, v: f32) -> Vec3 {
+    let cos_t = u.powf(1.0 / (exponent + 1.0));
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * v;
+    let (t, b) = orthonormal_basis(axis);
+    (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + axis * cos_t).normalized()
+}
+
+/// Two unit vectors that complete `n` to an orthonormal basis (Duff et al. 2017).
+pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3 {
+            x: 1.0 + sign * n.x * n.x * a,
+            y: sign * b,
+            z: -sign * n.x,
+        },
+        Vec3 {
+            x: b,
+            y: sign + n.y * n.y * a,
+            z: -n.y,
+        },
+    )
+}

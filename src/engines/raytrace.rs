@@ -1,0 +1,275 @@
+//! Whitted and distribution ray tracing, physically based: `emitted` is radiance, `diffuse`
+//! is albedo, a Lambertian surface of albedo ρ under irradiance E has radiance ρE/π.
+//!
+//! Direct light comes from every emitter by the area estimator `Le·cosθ·cosθ'·A / (N·r²)`,
+//! with N shadow rays per light (`-num_shadow_samples`: 0 = the light's centre, unoccluded;
+//! 1 = one shadow ray to the centre; N > 1 = N points placed by `--light-sampling`). Mirrors,
+//! glossy reflection and glass recurse to `-num_bounces`; the diffuse indirect rest is the
+//! constant `-ambient_light` (an indirect source from radiosity or photons replaces it when
+//! those engines land).
+
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+use rayon::prelude::*;
+
+use super::lights::Light;
+use super::optics::{fresnel_dielectric, reflect, refract, sample_lobe};
+use super::{RenderSettings, RenderStats};
+use crate::accel::Accel;
+use crate::film::Film;
+use crate::geometry::{Ray, Vec3};
+use crate::sampling::{sample_2d, Pattern, Rng};
+use crate::scene::{Camera, Color, PrimKind, Scene, SurfaceHit};
+
+/// Branches of the ray tree whose weight falls below this are not traced: their
+/// contribution cannot reach 1e-4 of the pixel.
+const MIN_WEIGHT: f32 = 1e-4;
+
+/// Ray counts of one row, added to the shared counters once per row.
+#[derive(Default)]
+struct Counts {
+    camera: u64,
+    shadow: u64,
+    secondary: u64,
+    non_finite: u64,
+}
+
+struct Tracer<'a> {
+    scene: &'a Scene,
+    accel: &'a dyn Accel,
+    settings: &'a RenderSettings,
+    lights: Vec<Light>,
+}
+
+impl Tracer<'_> {
+    /// Radiance arriving along `ray` whose closest hit is `hit`; `depth` specular bounces so
+    /// far, `weight` the product of the specular weights above (to prune faint branches).
+    fn shade(
+        &self,
+        ray: &Ray,
+        hit: Option<SurfaceHit>,
+        depth: u32,
+        weight: f32,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
+        let Some(s) = hit else {
+            return self.scene.background;
+        };
+        let m = &self.scene.materials[s.material as usize];
+        // The normal on the side the ray arrived from.
+        let front = s.geometric_normal.dot(ray.direction) < 0.0;
+        let n = if front {
+            s.geometric_normal
+        } else {
+            -s.geometric_normal
+        };
+        let closed = matches!(s.prim.kind, PrimKind::Sphere | PrimKind::Ring);
+        let mut radiance = Vec3::ZERO;
+        if front || closed || self.scene.two_sided_quads {
+            radiance += m.emitted;
+        }
+        let albedo = self.scene.albedo(&s);
+        if albedo.max_elem() > 0.0 {
+            let irradiance_over_pi = self.direct(&s, n, rng, counts);
+            radiance += albedo.mul_elem(irradiance_over_pi + self.settings.ambient_light);
+        }
+        if depth >= self.settings.num_bounces {
+            return radiance;
+        }
+        if m.reflective.max_elem() > 0.0 && weight * m.reflective.max_elem() > MIN_WEIGHT {
+            let mirror = reflect(ray.direction, n);
+            let dir = if m.roughness > 0.0 {
+                let exponent = (2.0 / (m.roughness * m.roughness) - 2.0).max(0.0);
+                let d = sample_lobe(mirror, exponent, rng.next_f32(), rng.next_f32());
+                if d.dot(n) <= 0.0 {
+                    mirror
+                } else {
+                    d
+                }
+            } else {
+                mirror
+            };
+            let w = weight * m.reflective.max_elem();
+            radiance +=
+                m.reflective
+                    .mul_elem(self.trace(&s.spawn_ray(dir), depth + 1, w, rng, counts));
+        }
+        if m.transmitted.max_elem() > 0.0 && weight * m.transmitted.max_elem() > MIN_WEIGHT {
+            // Entering a closed surface from outside goes from air into the material.
+            let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
+            let cos_i = -ray.direction.dot(n);
+            let f = fresnel_dielectric(cos_i, eta_i, eta_t);
+            let w = weight * m.transmitted.max_elem();
+            let mut through = Vec3::ZERO;
+            if f > 0.0 && w * f > MIN_WEIGHT {
+                let r = s.spawn_ray(reflect(ray.direction, n));
+                through += self.trace(&r, depth + 1, w * f, rng, counts) * f;
+            }
+            if f < 1.0 && w * (1.0 - f) > MIN_WEIGHT {
+                if let Some(t) = refract(ray.direction, n, eta_i, eta_t) {
+                    let r = s.spawn_ray(t.normalized());
+                    through += self.trace(&r, depth + 1, w * (1.0 - f), rng, counts) * (1.0 - f);
+                }
+            }
+            radiance += m.transmitted.mul_elem(through);
+        }
+        radiance
+    }
+
+    fn trace(
+        &self,
+        ray: &Ray,
+        depth: u32,
+        weight: f32,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
+        counts.secondary += 1;
+        let hit = crate::accel::closest_surface(self.accel, self.scene, ray);
+        self.shade(ray, hit, depth, weight, rng, counts)
+    }
+
+    /// Direct irradiance at a surface point divided by π, so that albedo × this is the
+    /// reflected radiance. `n`: the normal on the side being lit.
+    fn direct(&self, s: &SurfaceHit, n: Vec3, rng: &mut Rng, counts: &mut Counts) -> Color {
+        let samples = self.settings.num_shadow_samples;
+        let mut total = Vec3::ZERO;
+        let mut rays = Vec::new();
+        let mut weights = Vec::new();
+        for light in &self.lights {
+            if light.prim == s.prim {
+                continue;
+            }
+            let points: Vec<_> = match samples {
+                0 | 1 => vec![light.centre(s.point)],
+                _ => (0..samples)
+                    .map(|k| {
+                        let (u, v) = sample_2d(self.settings.light_sampling, k, samples, rng);
+                        light.sample(u, v)
+                    })
+                    .collect(),
+            };
+            let per_sample = light.area / points.len() as f32 / std::f32::consts::PI;
+            rays.clear();
+            weights.clear();
+            for p in &points {
+                let w = p.point - s.point;
+                let r2 = w.length_squared();
+                if r2 <= 0.0 {
+                    continue;
+                }
+                let dir = w / r2.sqrt();
+                let cos_surface = n.dot(dir);
+                let cos_light = -p.normal.dot(dir);
+                let cos_light = if p.one_sided {
+                    cos_light
+                } else {
+                    cos_light.abs()
+                };
+                if cos_surface <= 0.0 || cos_light <= 0.0 {
+                    continue;
+                }
+                let g = cos_surface * cos_light / r2 * per_sample;
+                if samples == 0 {
+                    total += light.emitted * g;
+                } else {
+                    rays.push(s.spawn_ray_to(p.point));
+                    weights.push(g);
+                }
+            }
+            if !rays.is_empty() {
+                let mut blocked = vec![false; rays.len()];
+                self.accel.occluded_batch(&rays, &mut blocked);
+                counts.shadow += rays.len() as u64;
+                let visible: f32 = weights
+                    .iter()
+                    .zip(&blocked)
+                    .filter(|(_, &b)| !b)
+                    .map(|(w, _)| w)
+                    .sum();
+                total += light.emitted * visible;
+            }
+        }
+        total
+    }
+}
+
+/// Renders the scene by ray tracing; returns the film and the counters of the render.
+pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (Film, RenderStats) {
+    let tracer = Tracer {
+        scene,
+        accel,
+        settings,
+        lights: Light::collect(scene),
+    };
+    let (w, h) = (settings.width, settings.height);
+    let camera = scene.camera();
+    let focus = settings
+        .focus_distance
+        .unwrap_or_else(|| camera.focus_distance());
+    let spp = settings.num_antialias_samples.max(1);
+    let stats = RenderStats::default();
+    let mut film = Film::new(w, h);
+    let bar = crate::progress::bar(h as u64, "raytrace", settings.quiet);
+    film.pixels
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(row, out)| {
+            let j = h - 1 - row as u32;
+            let mut counts = Counts::default();
+            // The camera rays of the whole row go to the Accel as one batch.
+            let mut rngs = Vec::with_capacity((w * spp) as usize);
+            let mut rays = Vec::with_capacity((w * spp) as usize);
+            for i in 0..w {
+                let pixel = j as u64 * w as u64 + i as u64;
+                for k in 0..spp {
+                    let mut rng = Rng::new(settings.seed, pixel, k as u64);
+                    let (dx, dy) = if spp == 1 {
+                        (0.5, 0.5)
+                    } else {
+                        sample_2d(Pattern::Jittered, k, spp, &mut rng)
+                    };
+                    let (x, y) = Camera::screen_point(i, j, dx, dy, w, h);
+                    let (lu, lv) = (rng.next_f32(), rng.next_f32());
+                    rays.push(camera.lens_ray(x, y, settings.aperture, focus, lu, lv));
+                    rngs.push(rng);
+                }
+            }
+            let mut hits = vec![None; rays.len()];
+            accel.intersect_batch(&rays, &mut hits);
+            counts.camera += rays.len() as u64;
+            for (i, pixel) in out.iter_mut().enumerate() {
+                let mut sum = Vec3::ZERO;
+                let mut good = 0u32;
+                for k in 0..spp as usize {
+                    let idx = i * spp as usize + k;
+                    let ray = &rays[idx];
+                    let hit = hits[idx].map(|h| scene.surface(ray, &h));
+                    let l = tracer.shade(ray, hit, 0, 1.0, &mut rngs[idx], &mut counts);
+                    if l.is_finite() {
+                        sum += l;
+                        good += 1;
+                    } else {
+                        counts.non_finite += 1;
+                    }
+                }
+                *pixel = if good > 0 {
+                    sum / good as f32
+                } else {
+                    Vec3::ZERO
+                };
+            }
+            add(&stats.camera_rays, counts.camera);
+            add(&stats.shadow_rays, counts.shadow);
+            add(&stats.secondary_rays, counts.secondary);
+            add(&stats.non_finite_samples, counts.non_finite);
+            bar.inc(1);
+        });
+    bar.finish_and_clear();
+    (film, stats)
+}
+
+fn add(counter: &AtomicU64, n: u64) {
+    counter.fetch_add(n, Relaxed);
+}
