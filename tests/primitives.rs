@@ -188,3 +188,34 @@ fn secondary_rays_never_rehit_their_surface_at_any_scale() {
         }
     }
 }
+
+/// A camera ray of the Cornell box (512×512, found in an antialiased render) that runs exactly
+/// through the edge where the back wall meets the ceiling: Embree reports the back wall, the
+/// BVH the ceiling, at the same t. Whichever is reported, the surface is the same.
+#[test]
+fn a_hit_on_a_shared_edge_settles_to_one_surface() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let scene = Scene::load(&course.join("cornell_box.obj")).expect("loads");
+    let ray = Ray::new(
+        vec3(0.0, 0.0, 8.0),
+        vec3(0.04883026, 0.110299796, -0.99269813),
+    );
+    let surfaces: Vec<_> = [1u32, 2]
+        .into_iter()
+        .map(|index| {
+            let reported = trilux::accel::PrimHit {
+                t: 9.0662,
+                prim: trilux::scene::PrimRef {
+                    kind: PrimKind::Quad,
+                    index,
+                },
+                u: 0.72135246,
+                v: if index == 1 { 1.0 } else { 2.7e-7 },
+            };
+            scene.surface(&ray, &reported)
+        })
+        .collect();
+    assert_eq!(surfaces[0], surfaces[1]);
+}

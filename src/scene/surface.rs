@@ -237,20 +237,40 @@ impl Scene {
             }
             intersect_quad(ray, t_max, &q.vertices)
         };
-        let own = intersect_quad(ray, f32::INFINITY, &self.quads[i].vertices)
-            .unwrap_or((hit.t, hit.u, hit.v));
+        let fallback = (i, (hit.t, hit.u, hit.v));
+        let Some(own) = exact(i, f32::INFINITY) else {
+            // The exact routine misses where the backend hit (the ray runs along the very
+            // border): settle among the neighbours, else keep the backend's answer.
+            return self
+                .nearest_neighbour_hit(i, ray, &exact)
+                .unwrap_or(fallback);
+        };
         let (u, v) = (own.1, own.2);
         let near_border =
             u < EDGE_BAND || v < EDGE_BAND || u > 1.0 - EDGE_BAND || v > 1.0 - EDGE_BAND;
         if !near_border {
             return (i, own);
         }
-        let mut best = (i, own);
+        match self.nearest_neighbour_hit(i, ray, &exact) {
+            Some(n) if n.1 .0 < own.0 || (n.1 .0 == own.0 && n.0 < i) => n,
+            _ => (i, own),
+        }
+    }
+
+    /// The closest exact hit among the quads sharing a vertex with quad `i` (ties to the
+    /// lowest index).
+    fn nearest_neighbour_hit(
+        &self,
+        i: usize,
+        ray: &Ray,
+        exact: &impl Fn(usize, f32) -> Option<(f32, f32, f32)>,
+    ) -> Option<(usize, (f32, f32, f32))> {
+        let mut best: Option<(usize, (f32, f32, f32))> = None;
         for &k in &self.quad_neighbours()[i] {
             let k = k as usize;
             if let Some(h) = exact(k, ray.t_max) {
-                if h.0 < best.1 .0 || (h.0 == best.1 .0 && k < best.0) {
-                    best = (k, h);
+                if best.is_none_or(|b| h.0 < b.1 .0 || (h.0 == b.1 .0 && k < b.0)) {
+                    best = Some((k, h));
                 }
             }
         }
