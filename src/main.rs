@@ -177,6 +177,11 @@ struct RenderArgs {
     /// Distance of the plane in focus (default: the camera's point of interest).
     #[arg(long)]
     focus_distance: Option<f32>,
+    /// Trace pixel (X, Y) (column from the left, row from the bottom) and write its rays
+    /// beside the image: OUT.raytree.png (eye rays white, reflected/refracted red, shadow
+    /// green) and OUT.raytree.obj (the segments as OBJ lines).
+    #[arg(long, num_args = 2, value_names = ["X", "Y"])]
+    ray_tree: Option<Vec<u32>>,
     /// Point pairs per form factor (radiosity engine).
     #[arg(long)]
     num_form_factor_samples: Option<u32>,
@@ -369,6 +374,16 @@ fn render(args: &RenderArgs) -> Result<(), String> {
 
     let output = args.output.clone().unwrap_or_else(|| default_output(input));
     film.write(&output).map_err(|e| e.to_string())?;
+    if let Some(xy) = &args.ray_tree {
+        write_ray_tree(
+            &scene,
+            accel.as_ref(),
+            &settings,
+            &film,
+            &output,
+            (xy[0], xy[1]),
+        )?;
+    }
     if args.stats {
         let rays = stats.total_rays();
         eprintln!("stats: scene load {load_s:.3} s, accel build ({kind}) {build_s:.3} s, render {render_s:.3} s");
@@ -461,4 +476,38 @@ fn emit(text: &str) -> Result<(), String> {
         }
         _ => Ok(()),
     }
+}
+
+/// Writes the ray tree of one pixel beside the image (`--ray-tree X Y`).
+fn write_ray_tree(
+    scene: &Scene,
+    accel: &dyn trilux::accel::Accel,
+    settings: &RenderSettings,
+    film: &trilux::film::Film,
+    output: &Path,
+    (x, y): (u32, u32),
+) -> Result<(), String> {
+    if x >= settings.width || y >= settings.height {
+        return Err(format!(
+            "--ray-tree {x} {y}: the pixel is outside the {}×{} image",
+            settings.width, settings.height
+        ));
+    }
+    let segments = raytrace::ray_tree(scene, accel, settings, x, y);
+    let stem = output.with_extension("");
+    let png = PathBuf::from(format!("{}.raytree.png", stem.display()));
+    let obj = PathBuf::from(format!("{}.raytree.obj", stem.display()));
+    trilux::film::ray_tree::overlay(film, &scene.camera(), &segments)
+        .write(&png)
+        .map_err(|e| e.to_string())?;
+    trilux::film::ray_tree::write_obj(&segments, &obj).map_err(|e| e.to_string())?;
+    if !settings.quiet {
+        eprintln!(
+            "wrote {} and {} ({} rays)",
+            png.display(),
+            obj.display(),
+            segments.len()
+        );
+    }
+    Ok(())
 }

@@ -308,3 +308,59 @@ fn bad_input_is_a_clear_error() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.obj"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn ray_tree_is_written_beside_the_image() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let dir = temp_dir("raytree");
+    let input = course.join("reflective_spheres.obj");
+    // Pixel (32, 24) of a 64×64 image is on the large mirror sphere.
+    ok(&render(
+        &dir,
+        &[
+            "-input",
+            input.to_str().unwrap(),
+            "-size",
+            "64",
+            "64",
+            "-num_bounces",
+            "2",
+            "-num_shadow_samples",
+            "4",
+            "--ray-tree",
+            "32",
+            "24",
+            "-o",
+            "img.png",
+            "--quiet",
+        ],
+    ));
+    let obj = std::fs::read_to_string(dir.join("img.raytree.obj")).expect("OBJ written");
+    assert!(obj.contains("o Eye_0"), "{obj}");
+    assert!(obj.contains("o Specular_"), "the mirror reflects: {obj}");
+    assert!(
+        obj.contains("o Shadow_"),
+        "shadow rays towards the light: {obj}"
+    );
+    assert!(dir.join("img.raytree.png").is_file());
+    let out = render(
+        &dir,
+        &[
+            "-input",
+            input.to_str().unwrap(),
+            "-size",
+            "8",
+            "8",
+            "--ray-tree",
+            "9",
+            "0",
+        ],
+    );
+    assert!(
+        !out.status.success(),
+        "a pixel outside the image is an error"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

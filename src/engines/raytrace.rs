@@ -34,11 +34,32 @@ struct Counts {
     non_finite: u64,
 }
 
+/// What a segment of a ray tree is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SegmentKind {
+    /// The camera ray.
+    Eye,
+    /// A reflected or refracted ray.
+    Specular,
+    /// A ray towards a point on a light.
+    Shadow,
+}
+
+/// One ray of a ray tree, from its origin to where it ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    pub from: Vec3,
+    pub to: Vec3,
+    pub kind: SegmentKind,
+}
+
 struct Tracer<'a> {
     scene: &'a Scene,
     accel: &'a dyn Accel,
     settings: &'a RenderSettings,
     lights: Vec<Light>,
+    /// The rays traced, when recording a ray tree (`--ray-tree`); None while rendering.
+    tree: Option<std::sync::Mutex<Vec<Segment>>>,
 }
 
 impl Tracer<'_> {
@@ -127,7 +148,28 @@ impl Tracer<'_> {
     ) -> Color {
         counts.secondary += 1;
         let hit = crate::accel::closest_surface(self.accel, self.scene, ray);
+        self.record(ray, hit.as_ref(), SegmentKind::Specular);
         self.shade(ray, hit, depth, weight, rng, counts)
+    }
+
+    /// Adds a ray to the ray tree, when one is being recorded.
+    fn record(&self, ray: &Ray, hit: Option<&SurfaceHit>, kind: SegmentKind) {
+        if let Some(tree) = &self.tree {
+            let to = match hit {
+                Some(s) => s.point,
+                // A ray that leaves the scene is drawn out to twice the scene's size.
+                None => {
+                    ray.at(2.0 * self.scene.bounds().extent().length() / ray.direction.length())
+                }
+            };
+            if let Ok(mut t) = tree.lock() {
+                t.push(Segment {
+                    from: ray.origin,
+                    to,
+                    kind,
+                });
+            }
+        }
     }
 
     /// Direct irradiance at a surface point divided by π, so that albedo × this is the
@@ -174,7 +216,17 @@ impl Tracer<'_> {
                 if samples == 0 {
                     total += light.emitted * g;
                 } else {
-                    rays.push(s.spawn_ray_to(p.point));
+                    let shadow = s.spawn_ray_to(p.point);
+                    if let Some(tree) = &self.tree {
+                        if let Ok(mut t) = tree.lock() {
+                            t.push(Segment {
+                                from: shadow.origin,
+                                to: p.point,
+                                kind: SegmentKind::Shadow,
+                            });
+                        }
+                    }
+                    rays.push(shadow);
                     weights.push(g);
                 }
             }
@@ -202,6 +254,7 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (F
         accel,
         settings,
         lights: Light::collect(scene),
+        tree: None,
     };
     let (w, h) = (settings.width, settings.height);
     let camera = scene.camera();
@@ -222,17 +275,9 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (F
             let mut rngs = Vec::with_capacity((w * spp) as usize);
             let mut rays = Vec::with_capacity((w * spp) as usize);
             for i in 0..w {
-                let pixel = j as u64 * w as u64 + i as u64;
                 for k in 0..spp {
-                    let mut rng = Rng::new(settings.seed, pixel, k as u64);
-                    let (dx, dy) = if spp == 1 {
-                        (0.5, 0.5)
-                    } else {
-                        sample_2d(Pattern::Jittered, k, spp, &mut rng)
-                    };
-                    let (x, y) = Camera::screen_point(i, j, dx, dy, w, h);
-                    let (lu, lv) = (rng.next_f32(), rng.next_f32());
-                    rays.push(camera.lens_ray(x, y, settings.aperture, focus, lu, lv));
+                    let (ray, rng) = camera_sample(&camera, settings, focus, (i, j), k);
+                    rays.push(ray);
                     rngs.push(rng);
                 }
             }
@@ -270,6 +315,63 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (F
     (film, stats)
 }
 
+/// Camera ray `k` of pixel (i, j) (j from the bottom) and the generator that the rest of its
+/// path draws from: both depend only on (seed, pixel, sample).
+fn camera_sample(
+    camera: &Camera,
+    settings: &RenderSettings,
+    focus: f32,
+    (i, j): (u32, u32),
+    k: u32,
+) -> (Ray, Rng) {
+    let (w, h) = (settings.width, settings.height);
+    let spp = settings.num_antialias_samples.max(1);
+    let mut rng = Rng::new(settings.seed, j as u64 * w as u64 + i as u64, k as u64);
+    let (dx, dy) = if spp == 1 {
+        (0.5, 0.5)
+    } else {
+        sample_2d(Pattern::Jittered, k, spp, &mut rng)
+    };
+    let (x, y) = Camera::screen_point(i, j, dx, dy, w, h);
+    let (lu, lv) = (rng.next_f32(), rng.next_f32());
+    (camera.lens_ray(x, y, settings.aperture, focus, lu, lv), rng)
+}
+
 fn add(counter: &AtomicU64, n: u64) {
     counter.fetch_add(n, Relaxed);
+}
+
+/// The ray tree of pixel (x, y) (column from the left, row from the bottom, as the course's
+/// screen coordinates): every ray its samples trace, in the order traced. The samples are
+/// those of `render` with the same settings, so the tree explains that pixel of the image.
+pub fn ray_tree(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+    x: u32,
+    y: u32,
+) -> Vec<Segment> {
+    let tracer = Tracer {
+        scene,
+        accel,
+        settings,
+        lights: Light::collect(scene),
+        tree: Some(std::sync::Mutex::new(Vec::new())),
+    };
+    let camera = scene.camera();
+    let focus = settings
+        .focus_distance
+        .unwrap_or_else(|| camera.focus_distance());
+    let spp = settings.num_antialias_samples.max(1);
+    let mut counts = Counts::default();
+    for k in 0..spp {
+        let (ray, mut rng) = camera_sample(&camera, settings, focus, (x, y), k);
+        let hit = crate::accel::closest_surface(accel, scene, &ray);
+        tracer.record(&ray, hit.as_ref(), SegmentKind::Eye);
+        tracer.shade(&ray, hit, 0, 1.0, &mut rng, &mut counts);
+    }
+    tracer
+        .tree
+        .and_then(|t| t.into_inner().ok())
+        .unwrap_or_default()
 }

@@ -2,6 +2,8 @@
 //! (linear float). Files are written atomically: to a temporary file beside the target, then
 //! renamed over it, so an interrupted render never leaves a broken image.
 
+pub mod ray_tree;
+
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
