@@ -364,3 +364,47 @@ fn ray_tree_is_written_beside_the_image() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The ray-tracing command lines of the course, verbatim, each with both backends: the
+/// images must be identical.
+#[test]
+fn course_ray_tracing_commands_give_identical_images_with_both_backends() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let commands = [
+        "-input reflective_spheres.obj",
+        "-input reflective_spheres.obj -num_bounces 1",
+        "-input reflective_spheres.obj -num_bounces 3 -num_shadow_samples 1",
+        "-input textured_plane_reflective_sphere.obj -num_bounces 1 -num_shadow_samples 1",
+        "-input textured_plane_reflective_sphere.obj -num_bounces 1 -num_shadow_samples 4",
+        "-input textured_plane_reflective_sphere.obj -num_bounces 1 -num_shadow_samples 9 -num_antialias_samples 9",
+        "-input cornell_box_diffuse_sphere.obj -ambient_light 0.0 0.0 0.0",
+        "-input cornell_box_diffuse_sphere.obj -ambient_light 0.0 0.0 0.0 -num_shadow_samples 1",
+        "-input cornell_box_diffuse_sphere.obj -ambient_light 0.2 0.2 0.2 -num_shadow_samples 1",
+        "-input cornell_box_diffuse_sphere.obj -ambient_light 0.2 0.2 0.2 -num_shadow_samples 10",
+        "-input cornell_box_diffuse_sphere.obj -ambient_light 0.2 0.2 0.2 -num_shadow_samples 100",
+    ];
+    for (k, command) in commands.iter().enumerate() {
+        let mut images = Vec::new();
+        for kind in backends() {
+            // Run from the course folder, as the course does: `-input NAME.obj`.
+            let dir = temp_dir(&format!("course-{k}-{kind}"));
+            let mut args: Vec<String> = command.split_whitespace().map(String::from).collect();
+            let input = course.join(&args[1]);
+            args[1] = input.to_string_lossy().into_owned();
+            args.extend(["--accel".into(), kind.to_string(), "--quiet".into()]);
+            let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+            ok(&render(&dir, &argv));
+            let stem = input.file_stem().unwrap().to_string_lossy().into_owned();
+            images.push(
+                std::fs::read(dir.join(format!("{stem}.png"))).expect("default output written"),
+            );
+            std::fs::remove_dir_all(&dir).ok();
+        }
+        assert!(
+            images.windows(2).all(|w| w[0] == w[1]),
+            "`{command}`: the backends' images differ"
+        );
+    }
+}

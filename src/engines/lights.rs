@@ -31,6 +31,8 @@ pub struct Light {
     pub emitted: Color,
     pub area: f32,
     pub prim: PrimRef,
+    /// The first sampling axis runs along `edge_v` (the longer edge), for N×1 strata.
+    swap_axes: bool,
 }
 
 /// A point on a light with its outward unit normal; `one_sided` lights emit only where
@@ -61,6 +63,7 @@ impl Light {
                     emitted: e,
                     area: q.area(),
                     prim: prim(PrimKind::Quad, i),
+                    swap_axes: (v3 - v0).length() > (v1 - v0).length(),
                 });
             }
         }
@@ -79,6 +82,7 @@ impl Light {
                     emitted: e,
                     area: 0.5 * n.length(),
                     prim: prim(PrimKind::Triangle, i),
+                    swap_axes: false,
                 });
             }
         }
@@ -91,6 +95,7 @@ impl Light {
                     emitted: e,
                     area: 4.0 * std::f32::consts::PI * r * r,
                     prim: prim(PrimKind::Sphere, i),
+                    swap_axes: false,
                 });
             }
         }
@@ -102,18 +107,11 @@ impl Light {
                     emitted: e,
                     area: ring_part_areas(&r.shape).iter().sum(),
                     prim: prim(PrimKind::Ring, i),
+                    swap_axes: false,
                 });
             }
         }
         lights
-    }
-
-    /// Whether the first sampling axis runs along the longer edge (for strata N×1).
-    fn swap_axes(&self) -> bool {
-        match self.shape {
-            LightShape::Parallelogram { edge_u, edge_v, .. } => edge_v.length() > edge_u.length(),
-            _ => false,
-        }
     }
 
     /// The point used by the course's single shadow ray (and by the unshadowed mode): the
@@ -156,7 +154,7 @@ impl Light {
 
     /// A point uniformly distributed by area, from (u, v) in [0,1)².
     pub fn sample(&self, u: f32, v: f32) -> LightPoint {
-        let (u, v) = if self.swap_axes() { (v, u) } else { (u, v) };
+        let (u, v) = if self.swap_axes { (v, u) } else { (u, v) };
         match self.shape {
             LightShape::Parallelogram {
                 origin,

@@ -18,20 +18,24 @@ use super::{RenderSettings, RenderStats};
 use crate::accel::Accel;
 use crate::film::Film;
 use crate::geometry::{Ray, Vec3};
-use crate::sampling::{sample_2d, Pattern, Rng};
+use crate::sampling::{Pattern, Rng, Strata};
 use crate::scene::{Camera, Color, PrimKind, Scene, SurfaceHit};
 
 /// Branches of the ray tree whose weight falls below this are not traced: their
 /// contribution cannot reach 1e-4 of the pixel.
 const MIN_WEIGHT: f32 = 1e-4;
 
-/// Ray counts of one row, added to the shared counters once per row.
+/// Ray counts of one row, added to the shared counters once per row, and the scratch
+/// buffers of its shadow rays (reused from one shading point to the next).
 #[derive(Default)]
 struct Counts {
     camera: u64,
     shadow: u64,
     secondary: u64,
     non_finite: u64,
+    shadow_rays: Vec<Ray>,
+    shadow_weights: Vec<f32>,
+    blocked: Vec<bool>,
 }
 
 /// What a segment of a ray tree is.
@@ -177,25 +181,22 @@ impl Tracer<'_> {
     fn direct(&self, s: &SurfaceHit, n: Vec3, rng: &mut Rng, counts: &mut Counts) -> Color {
         let samples = self.settings.num_shadow_samples;
         let mut total = Vec3::ZERO;
-        let mut rays = Vec::new();
-        let mut weights = Vec::new();
         for light in &self.lights {
             if light.prim == s.prim {
                 continue;
             }
-            let points: Vec<_> = match samples {
-                0 | 1 => vec![light.centre(s.point)],
-                _ => (0..samples)
-                    .map(|k| {
-                        let (u, v) = sample_2d(self.settings.light_sampling, k, samples, rng);
-                        light.sample(u, v)
-                    })
-                    .collect(),
-            };
-            let per_sample = light.area / points.len() as f32 / std::f32::consts::PI;
-            rays.clear();
-            weights.clear();
-            for p in &points {
+            let count = samples.max(1);
+            let strata = Strata::new(self.settings.light_sampling, samples);
+            let per_sample = light.area / count as f32 / std::f32::consts::PI;
+            counts.shadow_rays.clear();
+            counts.shadow_weights.clear();
+            for k in 0..count {
+                let p = if samples <= 1 {
+                    light.centre(s.point)
+                } else {
+                    let (u, v) = strata.sample(k, rng);
+                    light.sample(u, v)
+                };
                 let w = p.point - s.point;
                 let r2 = w.length_squared();
                 if r2 <= 0.0 {
@@ -215,28 +216,32 @@ impl Tracer<'_> {
                 let g = cos_surface * cos_light / r2 * per_sample;
                 if samples == 0 {
                     total += light.emitted * g;
-                } else {
-                    let shadow = s.spawn_ray_to(p.point);
-                    if let Some(tree) = &self.tree {
-                        if let Ok(mut t) = tree.lock() {
-                            t.push(Segment {
-                                from: shadow.origin,
-                                to: p.point,
-                                kind: SegmentKind::Shadow,
-                            });
-                        }
-                    }
-                    rays.push(shadow);
-                    weights.push(g);
+                    continue;
                 }
+                let shadow = s.spawn_ray_to(p.point);
+                if let Some(tree) = &self.tree {
+                    if let Ok(mut t) = tree.lock() {
+                        t.push(Segment {
+                            from: shadow.origin,
+                            to: p.point,
+                            kind: SegmentKind::Shadow,
+                        });
+                    }
+                }
+                counts.shadow_rays.push(shadow);
+                counts.shadow_weights.push(g);
             }
-            if !rays.is_empty() {
-                let mut blocked = vec![false; rays.len()];
-                self.accel.occluded_batch(&rays, &mut blocked);
-                counts.shadow += rays.len() as u64;
-                let visible: f32 = weights
+            let n_rays = counts.shadow_rays.len();
+            if n_rays > 0 {
+                counts.blocked.clear();
+                counts.blocked.resize(n_rays, false);
+                self.accel
+                    .occluded_batch(&counts.shadow_rays, &mut counts.blocked);
+                counts.shadow += n_rays as u64;
+                let visible: f32 = counts
+                    .shadow_weights
                     .iter()
-                    .zip(&blocked)
+                    .zip(&counts.blocked)
                     .filter(|(_, &b)| !b)
                     .map(|(w, _)| w)
                     .sum();
@@ -330,7 +335,7 @@ fn camera_sample(
     let (dx, dy) = if spp == 1 {
         (0.5, 0.5)
     } else {
-        sample_2d(Pattern::Jittered, k, spp, &mut rng)
+        Strata::new(Pattern::Jittered, spp).sample(k, &mut rng)
     };
     let (x, y) = Camera::screen_point(i, j, dx, dy, w, h);
     let (lu, lv) = (rng.next_f32(), rng.next_f32());

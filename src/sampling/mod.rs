@@ -57,29 +57,37 @@ pub enum Pattern {
     Jittered,
 }
 
-/// The grid of strata for `n` samples: √n × √n when n is a square, else n × 1 (n strata along
-/// the first axis, which callers align with the longer edge).
-pub fn strata(n: u32) -> (u32, u32) {
-    let r = (n as f64).sqrt().round() as u32;
-    if r * r == n {
-        (r, r)
-    } else {
-        (n.max(1), 1)
-    }
+/// `n` samples in [0,1)² placed by a pattern over a grid of strata: √n × √n when n is a
+/// square, else n × 1 (n strata along the first axis, which callers align with the longer
+/// edge).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Strata {
+    pattern: Pattern,
+    nx: u32,
+    ny: u32,
 }
 
-/// Sample `k` of `n` in [0,1)² with the given pattern.
-#[inline]
-pub fn sample_2d(pattern: Pattern, k: u32, n: u32, rng: &mut Rng) -> (f32, f32) {
-    let (nx, ny) = strata(n);
-    let (ix, iy) = (k % nx, k / nx);
-    match pattern {
-        Pattern::Random => (rng.next_f32(), rng.next_f32()),
-        Pattern::Stratified => ((ix as f32 + 0.5) / nx as f32, (iy as f32 + 0.5) / ny as f32),
-        Pattern::Jittered => (
-            (ix as f32 + rng.next_f32()) / nx as f32,
-            (iy as f32 + rng.next_f32()) / ny as f32,
-        ),
+impl Strata {
+    pub fn new(pattern: Pattern, n: u32) -> Strata {
+        let n = n.max(1);
+        let r = (n as f64).sqrt().round() as u32;
+        let (nx, ny) = if r * r == n { (r, r) } else { (n, 1) };
+        Strata { pattern, nx, ny }
+    }
+
+    /// Sample `k` (of the n the grid was made for).
+    #[inline]
+    pub fn sample(&self, k: u32, rng: &mut Rng) -> (f32, f32) {
+        let (nx, ny) = (self.nx, self.ny);
+        let (ix, iy) = (k % nx, k / nx);
+        match self.pattern {
+            Pattern::Random => (rng.next_f32(), rng.next_f32()),
+            Pattern::Stratified => ((ix as f32 + 0.5) / nx as f32, (iy as f32 + 0.5) / ny as f32),
+            Pattern::Jittered => (
+                (ix as f32 + rng.next_f32()) / nx as f32,
+                (iy as f32 + rng.next_f32()) / ny as f32,
+            ),
+        }
     }
 }
 
