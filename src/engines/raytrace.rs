@@ -17,7 +17,7 @@ use super::optics::{fresnel_dielectric, reflect, refract, sample_lobe};
 use super::{RenderSettings, RenderStats};
 use crate::accel::Accel;
 use crate::film::Film;
-use crate::geometry::{Ray, Vec3};
+use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
 use crate::sampling::{Pattern, Rng, Strata};
 use crate::scene::{Camera, Color, PrimKind, Scene, SurfaceHit};
 
@@ -181,6 +181,8 @@ impl Tracer<'_> {
     fn direct(&self, s: &SurfaceHit, n: Vec3, rng: &mut Rng, counts: &mut Counts) -> Color {
         let samples = self.settings.num_shadow_samples;
         let mut total = Vec3::ZERO;
+        // Every shadow ray leaves on the lit side (n · dir > 0): one offset origin serves all.
+        let origin = offset_ray_origin(s.point, n, s.error);
         for light in &self.lights {
             if light.prim == s.prim {
                 continue;
@@ -218,7 +220,7 @@ impl Tracer<'_> {
                     total += light.emitted * g;
                     continue;
                 }
-                let shadow = s.spawn_ray_to(p.point);
+                let shadow = shadow_ray(origin, p.point);
                 if let Some(tree) = &self.tree {
                     if let Ok(mut t) = tree.lock() {
                         t.push(Segment {

@@ -86,7 +86,12 @@ pub fn spawn_ray(p: Vec3, ng: Vec3, error: f32, dir: Vec3) -> Ray {
 pub fn spawn_ray_to(p: Vec3, ng: Vec3, error: f32, target: Vec3) -> Ray {
     let d = target - p;
     let n = if ng.dot(d) < 0.0 { -ng } else { ng };
-    let origin = offset_ray_origin(p, n, error);
+    shadow_ray(offset_ray_origin(p, n, error), target)
+}
+
+/// The ray from `origin` (already off its surface) that stops just short of `target`.
+#[inline]
+pub fn shadow_ray(origin: Vec3, target: Vec3) -> Ray {
     Ray::with_range(origin, target - origin, 0.0, 1.0 - 1e-4)
 }
 
