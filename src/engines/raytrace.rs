@@ -199,23 +199,20 @@ impl Tracer<'_> {
                     let (u, v) = strata.sample(k, rng);
                     light.sample(u, v)
                 };
+                // cosθ·cosθ'/r² = (n·w)(−n'·w)/r⁴ with w unnormalised: no square root.
                 let w = p.point - s.point;
                 let r2 = w.length_squared();
-                if r2 <= 0.0 {
-                    continue;
-                }
-                let dir = w / r2.sqrt();
-                let cos_surface = n.dot(dir);
-                let cos_light = -p.normal.dot(dir);
-                let cos_light = if p.one_sided {
-                    cos_light
+                let along_surface = n.dot(w);
+                let along_light = -p.normal.dot(w);
+                let along_light = if p.one_sided {
+                    along_light
                 } else {
-                    cos_light.abs()
+                    along_light.abs()
                 };
-                if cos_surface <= 0.0 || cos_light <= 0.0 {
+                if r2.is_nan() || r2 <= 0.0 || along_surface <= 0.0 || along_light <= 0.0 {
                     continue;
                 }
-                let g = cos_surface * cos_light / r2 * per_sample;
+                let g = along_surface * along_light / (r2 * r2) * per_sample;
                 if samples == 0 {
                     total += light.emitted * g;
                     continue;
