@@ -219,3 +219,50 @@ fn a_hit_on_a_shared_edge_settles_to_one_surface() {
         .collect();
     assert_eq!(surfaces[0], surfaces[1]);
 }
+
+/// No ray slips through a closed room: rays from points inside the course's Cornell box,
+/// aimed exactly at its corners, at points along its edges and along the diagonals of its
+/// walls (where the two triangles of a quad meet), must all hit a wall — with every backend.
+#[test]
+fn no_ray_leaks_out_of_a_closed_box() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let scene = Scene::load(&course.join("cornell_box.obj")).expect("loads");
+    let mut targets = Vec::new();
+    for q in &scene.quads {
+        let v = q.vertices;
+        for k in 0..4 {
+            let (a, b) = (v[k], v[(k + 1) % 4]);
+            for s in 0..=16 {
+                targets.push(a + (b - a) * (s as f32 / 16.0));
+            }
+        }
+        for s in 0..=16 {
+            targets.push(v[1] + (v[3] - v[1]) * (s as f32 / 16.0));
+        }
+    }
+    for kind in backends() {
+        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+        let mut leaks = 0;
+        for (k, &target) in targets.iter().enumerate() {
+            let mut rng = Rng::new(17, k as u64, 0);
+            // Inside the box [-1,1]³, away from the walls.
+            let origin = vec3(
+                rng.next_f32() * 1.6 - 0.8,
+                rng.next_f32() * 1.6 - 0.8,
+                rng.next_f32() * 1.6 - 0.8,
+            );
+            let ray = Ray::new(origin, target - origin);
+            if accel.intersect(&ray).is_none() || !accel.occluded(&ray) {
+                leaks += 1;
+            }
+        }
+        assert_eq!(
+            leaks,
+            0,
+            "{kind}: {leaks} of {} rays left the closed box",
+            targets.len()
+        );
+    }
+}

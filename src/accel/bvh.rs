@@ -5,7 +5,8 @@
 
 use super::{Accel, AccelError, PackedPrim};
 use crate::geometry::{
-    faces_ray, intersect_quad, intersect_triangle_edges, Bounds3, Ray, RingShape, SphereShape, Vec3,
+    faces_ray, intersect_quad_sheared, intersect_triangle_sheared, Bounds3, Ray, RayShear,
+    RingShape, SphereShape, Vec3,
 };
 use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
 
@@ -32,8 +33,8 @@ struct Node {
     count: u32,
 }
 
-/// A primitive copied into leaf order: a triangle's first vertex and its two edges, a quad's
-/// four vertices and its front normal, or for spheres and rings just the reference into
+/// A primitive copied into leaf order: a triangle's three vertices, a quad's four vertices
+/// and its front normal, or for spheres and rings just the reference into
 /// `spheres`/`rings`.
 #[derive(Clone, Copy, Debug)]
 struct LeafPrim {
@@ -206,11 +207,12 @@ impl Bvh {
         &self,
         node: &Node,
         ray: &Ray,
+        shear: &RayShear,
         t_max: &mut f32,
         best: &mut Option<(usize, f32, f32)>,
     ) {
         for k in node.first as usize..(node.first + node.count) as usize {
-            if let Some((t, u, v)) = self.hit_prim(&self.prims[k], ray, *t_max) {
+            if let Some((t, u, v)) = self.hit_prim(&self.prims[k], ray, shear, *t_max) {
                 *t_max = t;
                 *best = Some((k, u, v));
             }
@@ -218,16 +220,22 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn hit_prim(&self, p: &LeafPrim, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+    fn hit_prim(
+        &self,
+        p: &LeafPrim,
+        ray: &Ray,
+        shear: &RayShear,
+        t_max: f32,
+    ) -> Option<(f32, f32, f32)> {
         match p.prim.kind() {
             PrimKind::Triangle => {
-                intersect_triangle_edges(ray, t_max, p.v[0], p.v[1], p.v[2], true)
+                intersect_triangle_sheared(ray, shear, t_max, p.v[0], p.v[1], p.v[2])
             }
             PrimKind::Quad => {
                 if self.one_sided_quads && !faces_ray(p.normal, ray.direction) {
                     return None;
                 }
-                intersect_quad(ray, t_max, &p.v)
+                intersect_quad_sheared(ray, shear, t_max, &p.v)
             }
             PrimKind::Sphere => self.spheres[p.prim.index() as usize]
                 .intersect(ray, t_max)
@@ -354,10 +362,11 @@ impl Accel for Bvh {
     }
 
     fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
+        let shear = RayShear::new(ray);
         let mut t_max = ray.t_max;
         let mut best = None;
         self.traverse(ray, &mut t_max, |node, t_max| {
-            self.leaf_closest(node, ray, t_max, &mut best);
+            self.leaf_closest(node, ray, &shear, t_max, &mut best);
             false
         });
         best.map(|(k, u, v)| PrimHit {
@@ -369,11 +378,12 @@ impl Accel for Bvh {
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
+        let shear = RayShear::new(ray);
         let mut t_max = ray.t_max;
         let mut hit = false;
         self.traverse(ray, &mut t_max, |node, t_max| {
             for k in node.first as usize..(node.first + node.count) as usize {
-                if self.hit_prim(&self.prims[k], ray, *t_max).is_some() {
+                if self.hit_prim(&self.prims[k], ray, &shear, *t_max).is_some() {
                     hit = true;
                     return true;
                 }
@@ -410,7 +420,7 @@ fn leaf_prim(scene: &Scene, prim: PrimRef) -> LeafPrim {
         PrimKind::Quad => (scene.quads[i].vertices, scene.quads[i].normal),
         PrimKind::Triangle => {
             let [a, b, c] = scene.triangles.vertices(i);
-            ([a, b - a, c - a, Vec3::ZERO], Vec3::ZERO)
+            ([a, b, c, c], Vec3::ZERO)
         }
         PrimKind::Sphere | PrimKind::Ring => ([Vec3::ZERO; 4], Vec3::ZERO),
     };

@@ -9,7 +9,7 @@ mod vec;
 pub use bounds::Bounds3;
 pub use ray::{offset_ray_origin, point_error, shadow_ray, spawn_ray, spawn_ray_to, Ray};
 pub use shapes::{
-    faces_ray, intersect_quad, intersect_triangle, intersect_triangle_edges, quad_normal, RingPart,
-    RingShape, SphereShape,
+    faces_ray, intersect_quad, intersect_quad_sheared, intersect_triangle,
+    intersect_triangle_sheared, quad_normal, RayShear, RingPart, RingShape, SphereShape,
 };
 pub use vec::{vec2, vec3, Vec2, Vec3};
