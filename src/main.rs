@@ -10,7 +10,7 @@ use clap::{Args, Parser, Subcommand};
 use std::sync::atomic::Ordering::Relaxed;
 use trilux::accel::{self, AccelKind, AccelOptions, EmbreeQuality};
 
-use trilux::engines::{raycast, raytrace, EngineKind, RenderSettings, RenderStats};
+use trilux::engines::{path, raycast, raytrace, EngineKind, RenderSettings, RenderStats};
 use trilux::geometry::vec3;
 use trilux::plan::Plan;
 use trilux::sampling::Pattern;
@@ -279,8 +279,16 @@ impl RenderArgs {
         ];
         let mut unused: Vec<&'static str> =
             later_engines.iter().filter(|c| c.1).map(|c| c.0).collect();
-        if self.engine == EngineKind::Raycast {
-            unused.extend(ray_tracing.iter().filter(|c| c.1).map(|c| c.0));
+        match self.engine {
+            EngineKind::Raycast => unused.extend(ray_tracing.iter().filter(|c| c.1).map(|c| c.0)),
+            // The path tracer follows every bounce and samples the lights itself.
+            EngineKind::Path => unused.extend(
+                ray_tracing[..4]
+                    .iter()
+                    .filter(|c| c.1 && c.0 != "-num_antialias_samples")
+                    .map(|c| c.0),
+            ),
+            _ => {}
         }
         unused
     }
@@ -362,6 +370,7 @@ fn render(args: &RenderArgs) -> Result<(), String> {
                 .store(settings.width as u64 * settings.height as u64, Relaxed);
             (film, stats)
         }
+        EngineKind::Path => path::render(&scene, accel.as_ref(), &settings),
         _ => raytrace::render(&scene, accel.as_ref(), &settings),
     });
     let render_s = render_start.elapsed().as_secs_f64();

@@ -3,8 +3,19 @@
 
 pub mod lights;
 pub mod optics;
+pub mod path;
 pub mod raycast;
 pub mod raytrace;
+
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+use rayon::prelude::*;
+
+use crate::accel::Accel;
+use crate::film::Film;
+use crate::geometry::Ray;
+use crate::sampling::{Pattern, Rng, Strata};
+use crate::scene::{Camera, Color, Scene, SurfaceHit};
 
 use crate::geometry::Vec3;
 
@@ -19,13 +30,16 @@ pub enum EngineKind {
     Radiosity,
     /// Photon mapping (not implemented yet).
     Photon,
-    /// The unbiased reference path tracer (not implemented yet).
+    /// The unbiased reference path tracer.
     Path,
 }
 
 impl EngineKind {
     pub fn is_implemented(self) -> bool {
-        matches!(self, EngineKind::Raycast | EngineKind::Raytrace)
+        matches!(
+            self,
+            EngineKind::Raycast | EngineKind::Raytrace | EngineKind::Path
+        )
     }
     pub fn name(self) -> &'static str {
         match self {
@@ -41,16 +55,15 @@ impl EngineKind {
 /// Counters of one render, printed by `--stats`.
 #[derive(Debug, Default)]
 pub struct RenderStats {
-    pub camera_rays: std::sync::atomic::AtomicU64,
-    pub shadow_rays: std::sync::atomic::AtomicU64,
-    pub secondary_rays: std::sync::atomic::AtomicU64,
+    pub camera_rays: AtomicU64,
+    pub shadow_rays: AtomicU64,
+    pub secondary_rays: AtomicU64,
     /// Samples that came out NaN or infinite: excluded from the image, and counted here.
-    pub non_finite_samples: std::sync::atomic::AtomicU64,
+    pub non_finite_samples: AtomicU64,
 }
 
 impl RenderStats {
     pub fn total_rays(&self) -> u64 {
-        use std::sync::atomic::Ordering::Relaxed;
         self.camera_rays.load(Relaxed)
             + self.shadow_rays.load(Relaxed)
             + self.secondary_rays.load(Relaxed)
@@ -119,4 +132,109 @@ impl Default for RenderSettings {
             quiet: false,
         }
     }
+}
+
+/// Ray counts of one row of pixels, added to the shared counters once per row, and scratch
+/// buffers for shadow rays (reused from one shading point to the next).
+#[derive(Default)]
+pub(crate) struct Counts {
+    pub camera: u64,
+    pub shadow: u64,
+    pub secondary: u64,
+    pub non_finite: u64,
+    pub shadow_rays: Vec<Ray>,
+    pub shadow_weights: Vec<f32>,
+    pub blocked: Vec<bool>,
+}
+
+/// Camera ray `k` of pixel (i, j) (j from the bottom) and the generator that the rest of its
+/// path draws from: both depend only on (seed, pixel, sample).
+pub(crate) fn camera_sample(
+    camera: &Camera,
+    settings: &RenderSettings,
+    focus: f32,
+    (i, j): (u32, u32),
+    k: u32,
+) -> (Ray, Rng) {
+    let (w, h) = (settings.width, settings.height);
+    let spp = settings.num_antialias_samples.max(1);
+    let mut rng = Rng::new(settings.seed, j as u64 * w as u64 + i as u64, k as u64);
+    let (dx, dy) = if spp == 1 {
+        (0.5, 0.5)
+    } else {
+        Strata::new(Pattern::Jittered, spp).sample(k, &mut rng)
+    };
+    let (x, y) = Camera::screen_point(i, j, dx, dy, w, h);
+    let (lu, lv) = (rng.next_f32(), rng.next_f32());
+    (camera.lens_ray(x, y, settings.aperture, focus, lu, lv), rng)
+}
+
+/// The pixel loop every sampling engine shares: rows in parallel, the camera rays of a row
+/// traced as one batch, `-num_antialias_samples` per pixel averaged with a box filter, and
+/// samples that come out NaN or infinite left out and counted. `radiance` gives the radiance
+/// along a camera ray from its closest hit.
+pub(crate) fn render_pixels(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+    label: &str,
+    radiance: impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, &mut Counts) -> Color + Sync,
+) -> (Film, RenderStats) {
+    let (w, h) = (settings.width, settings.height);
+    let camera = scene.camera();
+    let focus = settings
+        .focus_distance
+        .unwrap_or_else(|| camera.focus_distance());
+    let spp = settings.num_antialias_samples.max(1) as usize;
+    let stats = RenderStats::default();
+    let mut film = Film::new(w, h);
+    let bar = crate::progress::bar(h as u64, label, settings.quiet);
+    film.pixels
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(row, out)| {
+            let j = h - 1 - row as u32;
+            let mut counts = Counts::default();
+            let mut rngs = Vec::with_capacity(w as usize * spp);
+            let mut rays = Vec::with_capacity(w as usize * spp);
+            for i in 0..w {
+                for k in 0..spp as u32 {
+                    let (ray, rng) = camera_sample(&camera, settings, focus, (i, j), k);
+                    rays.push(ray);
+                    rngs.push(rng);
+                }
+            }
+            let mut hits = vec![None; rays.len()];
+            accel.intersect_batch(&rays, &mut hits);
+            counts.camera += rays.len() as u64;
+            for (i, pixel) in out.iter_mut().enumerate() {
+                let mut sum = Vec3::ZERO;
+                let mut good = 0u32;
+                for idx in i * spp..(i + 1) * spp {
+                    let ray = &rays[idx];
+                    let hit = hits[idx].map(|h| scene.surface(ray, &h));
+                    let l = radiance(ray, hit, &mut rngs[idx], &mut counts);
+                    if l.is_finite() {
+                        sum += l;
+                        good += 1;
+                    } else {
+                        counts.non_finite += 1;
+                    }
+                }
+                *pixel = if good > 0 {
+                    sum / good as f32
+                } else {
+                    Vec3::ZERO
+                };
+            }
+            stats.camera_rays.fetch_add(counts.camera, Relaxed);
+            stats.shadow_rays.fetch_add(counts.shadow, Relaxed);
+            stats.secondary_rays.fetch_add(counts.secondary, Relaxed);
+            stats
+                .non_finite_samples
+                .fetch_add(counts.non_finite, Relaxed);
+            bar.inc(1);
+        });
+    bar.finish_and_clear();
+    (film, stats)
 }

@@ -8,35 +8,18 @@
 //! constant `-ambient_light` (an indirect source from radiosity or photons replaces it when
 //! those engines land).
 
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
-
-use rayon::prelude::*;
-
 use super::lights::Light;
 use super::optics::{fresnel_dielectric, reflect, refract, sample_lobe};
-use super::{RenderSettings, RenderStats};
+use super::{camera_sample, render_pixels, Counts, RenderSettings, RenderStats};
 use crate::accel::Accel;
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
-use crate::sampling::{Pattern, Rng, Strata};
-use crate::scene::{Camera, Color, PrimKind, Scene, SurfaceHit};
+use crate::sampling::{Rng, Strata};
+use crate::scene::{Color, PrimKind, Scene, SurfaceHit};
 
 /// Branches of the ray tree whose weight falls below this are not traced: their
 /// contribution cannot reach 1e-4 of the pixel.
 const MIN_WEIGHT: f32 = 1e-4;
-
-/// Ray counts of one row, added to the shared counters once per row, and the scratch
-/// buffers of its shadow rays (reused from one shading point to the next).
-#[derive(Default)]
-struct Counts {
-    camera: u64,
-    shadow: u64,
-    secondary: u64,
-    non_finite: u64,
-    shadow_rays: Vec<Ray>,
-    shadow_weights: Vec<f32>,
-    blocked: Vec<bool>,
-}
 
 /// What a segment of a ray tree is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -260,89 +243,13 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (F
         lights: Light::collect(scene),
         tree: None,
     };
-    let (w, h) = (settings.width, settings.height);
-    let camera = scene.camera();
-    let focus = settings
-        .focus_distance
-        .unwrap_or_else(|| camera.focus_distance());
-    let spp = settings.num_antialias_samples.max(1);
-    let stats = RenderStats::default();
-    let mut film = Film::new(w, h);
-    let bar = crate::progress::bar(h as u64, "raytrace", settings.quiet);
-    film.pixels
-        .par_chunks_mut(w as usize)
-        .enumerate()
-        .for_each(|(row, out)| {
-            let j = h - 1 - row as u32;
-            let mut counts = Counts::default();
-            // The camera rays of the whole row go to the Accel as one batch.
-            let mut rngs = Vec::with_capacity((w * spp) as usize);
-            let mut rays = Vec::with_capacity((w * spp) as usize);
-            for i in 0..w {
-                for k in 0..spp {
-                    let (ray, rng) = camera_sample(&camera, settings, focus, (i, j), k);
-                    rays.push(ray);
-                    rngs.push(rng);
-                }
-            }
-            let mut hits = vec![None; rays.len()];
-            accel.intersect_batch(&rays, &mut hits);
-            counts.camera += rays.len() as u64;
-            for (i, pixel) in out.iter_mut().enumerate() {
-                let mut sum = Vec3::ZERO;
-                let mut good = 0u32;
-                for k in 0..spp as usize {
-                    let idx = i * spp as usize + k;
-                    let ray = &rays[idx];
-                    let hit = hits[idx].map(|h| scene.surface(ray, &h));
-                    let l = tracer.shade(ray, hit, 0, 1.0, &mut rngs[idx], &mut counts);
-                    if l.is_finite() {
-                        sum += l;
-                        good += 1;
-                    } else {
-                        counts.non_finite += 1;
-                    }
-                }
-                *pixel = if good > 0 {
-                    sum / good as f32
-                } else {
-                    Vec3::ZERO
-                };
-            }
-            add(&stats.camera_rays, counts.camera);
-            add(&stats.shadow_rays, counts.shadow);
-            add(&stats.secondary_rays, counts.secondary);
-            add(&stats.non_finite_samples, counts.non_finite);
-            bar.inc(1);
-        });
-    bar.finish_and_clear();
-    (film, stats)
-}
-
-/// Camera ray `k` of pixel (i, j) (j from the bottom) and the generator that the rest of its
-/// path draws from: both depend only on (seed, pixel, sample).
-fn camera_sample(
-    camera: &Camera,
-    settings: &RenderSettings,
-    focus: f32,
-    (i, j): (u32, u32),
-    k: u32,
-) -> (Ray, Rng) {
-    let (w, h) = (settings.width, settings.height);
-    let spp = settings.num_antialias_samples.max(1);
-    let mut rng = Rng::new(settings.seed, j as u64 * w as u64 + i as u64, k as u64);
-    let (dx, dy) = if spp == 1 {
-        (0.5, 0.5)
-    } else {
-        Strata::new(Pattern::Jittered, spp).sample(k, &mut rng)
-    };
-    let (x, y) = Camera::screen_point(i, j, dx, dy, w, h);
-    let (lu, lv) = (rng.next_f32(), rng.next_f32());
-    (camera.lens_ray(x, y, settings.aperture, focus, lu, lv), rng)
-}
-
-fn add(counter: &AtomicU64, n: u64) {
-    counter.fetch_add(n, Relaxed);
+    render_pixels(
+        scene,
+        accel,
+        settings,
+        "raytrace",
+        |ray, hit, rng, counts| tracer.shade(ray, hit, 0, 1.0, rng, counts),
+    )
 }
 
 /// The ray tree of pixel (x, y) (column from the left, row from the bottom, as the course's

@@ -1,0 +1,244 @@
+//! The unbiased reference path tracer, the yardstick every error figure is measured against.
+//!
+//! At each diffuse vertex: next-event estimation (one light chosen in proportion to its power,
+//! one point on it uniform by area) combined with cosine-weighted sampling of the Lambertian
+//! BRDF by multiple importance sampling (power heuristic). Mirrors, glossy lobes and glass are
+//! sampled as in the ray tracer, one branch at a time (glass chooses reflection with the
+//! Fresnel probability). Paths end by Russian roulette on their throughput from the fourth
+//! vertex on, which keeps the estimate unbiased. `-num_antialias_samples` is the number of
+//! paths per pixel; every random number comes from (seed, pixel, sample).
+
+use std::collections::HashMap;
+
+use super::lights::Light;
+use super::optics::{fresnel_dielectric, orthonormal_basis, reflect, refract, sample_lobe};
+use super::{render_pixels, Counts, RenderSettings, RenderStats};
+use crate::accel::{closest_surface, Accel};
+use crate::film::Film;
+use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
+use crate::sampling::Rng;
+use crate::scene::{Color, PrimKind, PrimRef, Scene, SurfaceHit};
+
+/// Vertices after which Russian roulette may end a path.
+const ROULETTE_FROM: u32 = 3;
+/// A hard bound on path length, far beyond what roulette lets through (reached with
+/// probability below 0.95^1000 even in a closed white room).
+const MAX_VERTICES: u32 = 1000;
+
+struct PathTracer<'a> {
+    scene: &'a Scene,
+    accel: &'a dyn Accel,
+    lights: Vec<Light>,
+    /// Cumulative light-selection probabilities (∝ emitted power: max(Le) × area).
+    cdf: Vec<f32>,
+    light_of: HashMap<PrimRef, usize>,
+}
+
+/// What the previous vertex of a path tells the next: where it was and with what density the
+/// direction was chosen (None after a specular bounce or at the camera).
+#[derive(Clone, Copy)]
+struct Previous {
+    point: Vec3,
+    bsdf_pdf: Option<f32>,
+}
+
+impl PathTracer<'_> {
+    fn new<'a>(scene: &'a Scene, accel: &'a dyn Accel) -> PathTracer<'a> {
+        let lights = Light::collect(scene);
+        let mut cdf = Vec::with_capacity(lights.len());
+        let mut total = 0.0;
+        for l in &lights {
+            total += l.emitted.max_elem() * l.area;
+            cdf.push(total);
+        }
+        if total > 0.0 {
+            cdf.iter_mut().for_each(|c| *c /= total);
+        }
+        let light_of = lights
+            .iter()
+            .enumerate()
+            .map(|(k, l)| (l.prim, k))
+            .collect();
+        PathTracer {
+            scene,
+            accel,
+            lights,
+            cdf,
+            light_of,
+        }
+    }
+
+    fn selection_probability(&self, k: usize) -> f32 {
+        self.cdf[k] - if k == 0 { 0.0 } else { self.cdf[k - 1] }
+    }
+
+    /// Solid-angle density with which next-event estimation picks the direction from `from`
+    /// to `hit` on light `k`.
+    fn light_pdf(&self, k: usize, from: Vec3, hit: &SurfaceHit) -> f32 {
+        let w = hit.point - from;
+        let r2 = w.length_squared();
+        let cos_light = (hit.geometric_normal.dot(w) / r2.sqrt()).abs();
+        if cos_light <= 0.0 {
+            return 0.0;
+        }
+        self.selection_probability(k) * r2 / (cos_light * self.lights[k].area)
+    }
+
+    /// Next-event estimation at a diffuse point: radiance reflected per unit albedo from one
+    /// light sample, weighted against BRDF sampling by the power heuristic.
+    fn sample_light(&self, s: &SurfaceHit, n: Vec3, rng: &mut Rng, counts: &mut Counts) -> Color {
+        let total = self.cdf.last().copied().unwrap_or(0.0);
+        if total <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let x = rng.next_f32();
+        let k = self
+            .cdf
+            .partition_point(|&c| c <= x)
+            .min(self.lights.len() - 1);
+        let light = &self.lights[k];
+        if light.prim == s.prim {
+            return Vec3::ZERO;
+        }
+        let p = light.sample(rng.next_f32(), rng.next_f32());
+        let w = p.point - s.point;
+        let r2 = w.length_squared();
+        let r = r2.sqrt();
+        let cos_surface = n.dot(w) / r;
+        let cos_light = -p.normal.dot(w) / r;
+        let cos_light = if p.one_sided {
+            cos_light
+        } else {
+            cos_light.abs()
+        };
+        if r2.is_nan() || r2 <= 0.0 || cos_surface <= 0.0 || cos_light <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let light_pdf = self.selection_probability(k) * r2 / (cos_light * light.area);
+        let bsdf_pdf = cos_surface / std::f32::consts::PI;
+        let weight = light_pdf * light_pdf / (light_pdf * light_pdf + bsdf_pdf * bsdf_pdf);
+        counts.shadow += 1;
+        let origin = offset_ray_origin(s.point, n, s.error);
+        if self.accel.occluded(&shadow_ray(origin, p.point)) {
+            return Vec3::ZERO;
+        }
+        light.emitted * (cos_surface / std::f32::consts::PI * weight / light_pdf)
+    }
+
+    fn radiance(
+        &self,
+        camera_ray: &Ray,
+        first: Option<SurfaceHit>,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
+        let mut radiance = Vec3::ZERO;
+        let mut throughput = Vec3::ONE;
+        let mut ray = *camera_ray;
+        let mut hit = first;
+        let mut previous = Previous {
+            point: ray.origin,
+            bsdf_pdf: None,
+        };
+        for vertex in 0..MAX_VERTICES {
+            let Some(s) = hit else {
+                radiance += throughput.mul_elem(self.scene.background);
+                break;
+            };
+            let m = &self.scene.materials[s.material as usize];
+            let front = s.geometric_normal.dot(ray.direction) < 0.0;
+            let n = if front {
+                s.geometric_normal
+            } else {
+                -s.geometric_normal
+            };
+            let closed = matches!(s.prim.kind, PrimKind::Sphere | PrimKind::Ring);
+            if m.is_emissive() && (front || closed || self.scene.two_sided_quads) {
+                let weight = match (previous.bsdf_pdf, self.light_of.get(&s.prim)) {
+                    (Some(bsdf_pdf), Some(&k)) => {
+                        let light_pdf = self.light_pdf(k, previous.point, &s);
+                        bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + light_pdf * light_pdf)
+                    }
+                    _ => 1.0,
+                };
+                radiance += throughput.mul_elem(m.emitted) * weight;
+            }
+            let albedo = self.scene.albedo(&s);
+            let (d, r, t) = (
+                albedo.max_elem(),
+                m.reflective.max_elem(),
+                m.transmitted.max_elem(),
+            );
+            let total = d + r + t;
+            if total <= 0.0 {
+                break;
+            }
+            let choice = rng.next_f32() * total;
+            let dir;
+            if choice < d {
+                let lobe = albedo * (total / d);
+                radiance += throughput
+                    .mul_elem(lobe)
+                    .mul_elem(self.sample_light(&s, n, rng, counts));
+                let (dir_local, cos) = cosine_hemisphere(rng.next_f32(), rng.next_f32());
+                let (tx, ty) = orthonormal_basis(n);
+                dir = tx * dir_local.x + ty * dir_local.y + n * dir_local.z;
+                throughput = throughput.mul_elem(lobe);
+                previous = Previous {
+                    point: s.point,
+                    bsdf_pdf: Some(cos / std::f32::consts::PI),
+                };
+            } else if choice < d + r {
+                let mirror = reflect(ray.direction, n);
+                dir = if m.roughness > 0.0 {
+                    let exponent = (2.0 / (m.roughness * m.roughness) - 2.0).max(0.0);
+                    let g = sample_lobe(mirror, exponent, rng.next_f32(), rng.next_f32());
+                    if g.dot(n) <= 0.0 {
+                        mirror
+                    } else {
+                        g
+                    }
+                } else {
+                    mirror
+                };
+                throughput = throughput.mul_elem(m.reflective * (total / r));
+                previous.bsdf_pdf = None;
+            } else {
+                let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
+                let f = fresnel_dielectric(-ray.direction.dot(n), eta_i, eta_t);
+                dir = match refract(ray.direction, n, eta_i, eta_t) {
+                    Some(refracted) if rng.next_f32() >= f => refracted.normalized(),
+                    _ => reflect(ray.direction, n),
+                };
+                throughput = throughput.mul_elem(m.transmitted * (total / t));
+                previous.bsdf_pdf = None;
+            }
+            if vertex >= ROULETTE_FROM {
+                let survive = throughput.max_elem().min(0.95);
+                if rng.next_f32() >= survive {
+                    break;
+                }
+                throughput = throughput / survive;
+            }
+            ray = s.spawn_ray(dir);
+            counts.secondary += 1;
+            hit = closest_surface(self.accel, self.scene, &ray);
+        }
+        radiance
+    }
+}
+
+/// A cosine-distributed direction around +z and its cosine.
+fn cosine_hemisphere(u: f32, v: f32) -> (Vec3, f32) {
+    let (x, y) = crate::sampling::sample_disk(u, v);
+    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+    (Vec3 { x, y, z }, z)
+}
+
+/// Renders the scene by path tracing; returns the film and the counters of the render.
+pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (Film, RenderStats) {
+    let tracer = PathTracer::new(scene, accel);
+    render_pixels(scene, accel, settings, "path", |ray, hit, rng, counts| {
+        tracer.radiance(ray, hit, rng, counts)
+    })
+}

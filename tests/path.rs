@@ -1,0 +1,93 @@
+//! The reference path tracer against closed forms: the furnace (a closed box of albedo ρ whose
+//! walls all emit Le has radiance Le/(1−ρ) everywhere) and the floor under a square light.
+
+mod common;
+
+use std::path::Path;
+
+use common::backends;
+use trilux::accel::{self, AccelOptions};
+use trilux::engines::{path, RenderSettings};
+use trilux::geometry::Vec3;
+use trilux::scene::Scene;
+
+/// A closed cube of six inward-facing quads, all of albedo ρ and emitting Le = 1, seen from
+/// a camera inside it (every pixel sees a wall; the black background cannot be seen).
+fn furnace(rho: f32) -> Scene {
+    let text = format!(
+        "material\ndiffuse {rho} {rho} {rho}\nemitted 1 1 1\n\
+         v -1 -1 -1\nv 1 -1 -1\nv -1 1 -1\nv 1 1 -1\nv -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\n\
+         m 0\nf 5 7 8 6\nf 1 2 4 3\nf 3 4 8 7\nf 1 5 6 2\nf 1 3 7 5\nf 2 6 8 4\n\
+         background_color 0 0 0\n\
+         PerspectiveCamera {{\ncamera_position 0.1 0.2 0.5\npoint_of_interest 0 0 -1\nup 0 1 0\nangle 1.2\n}}\n"
+    );
+    Scene::parse_dialect(Path::new("furnace.obj"), &text).expect("furnace parses")
+}
+
+#[test]
+fn furnace_radiance_is_le_over_one_minus_rho() {
+    for rho in [0.5f32, 0.9] {
+        let scene = furnace(rho);
+        let truth = 1.0 / (1.0 - rho as f64);
+        for kind in backends() {
+            let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+            let settings = RenderSettings {
+                width: 16,
+                height: 16,
+                num_antialias_samples: 256,
+                quiet: true,
+                ..RenderSettings::default()
+            };
+            let (film, stats) = path::render(&scene, accel.as_ref(), &settings);
+            let mean =
+                film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64;
+            println!("furnace ρ = {rho} ({kind}): {mean:.4} against {truth:.4}");
+            assert!(
+                (mean / truth - 1.0).abs() < 0.01,
+                "ρ = {rho} ({kind}): {mean} against {truth}"
+            );
+            assert_eq!(
+                stats
+                    .non_finite_samples
+                    .load(std::sync::atomic::Ordering::Relaxed),
+                0
+            );
+        }
+    }
+}
+
+#[test]
+fn square_light_matches_the_closed_form() {
+    let (le, rho) = (10.0f32, 0.6f32);
+    let scene = Scene::parse_dialect(
+        Path::new("square.obj"),
+        &format!(
+            "material\ndiffuse 0 0 0\nemitted {le} {le} {le}\n\
+             material\ndiffuse {rho} {rho} {rho}\n\
+             m 0\nv -0.5 1 0.5\nv -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nf 1 2 3 4\n\
+             m 1\nv -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\nf 5 6 7 8\n\
+             background_color 0 0 0\n\
+             OrthographicCamera {{\ncamera_position 0 5 0\npoint_of_interest 0 0 0\nup 0 0 -1\nsize 0.0001\n}}\n"
+        ),
+    )
+    .expect("parses");
+    let truth = (rho * le) as f64 * 0.239456;
+    for kind in backends() {
+        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+        let settings = RenderSettings {
+            width: 8,
+            height: 8,
+            num_antialias_samples: 1024,
+            ambient_light: Vec3::ZERO,
+            quiet: true,
+            ..RenderSettings::default()
+        };
+        let film = path::render(&scene, accel.as_ref(), &settings).0;
+        let mean = film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64;
+        println!("square light ({kind}): {mean:.4} against {truth:.4}");
+        assert!(
+            (mean / truth - 1.0).abs() < 0.01,
+            "{kind}: {mean} against {truth}"
+        );
+    }
+}
