@@ -66,6 +66,16 @@ struct Cli {
 enum Command {
     /// Measures the Accel backends: Mrays/s of closest-hit and occlusion queries.
     BenchAccel(BenchArgs),
+    /// Compares an image with a reference: RMSE, relMSE (ε = 1e-2), MAPE, largest error.
+    Compare {
+        /// The image.
+        image: PathBuf,
+        /// The reference.
+        reference: PathBuf,
+        /// Also write a heat map of the per-pixel error.
+        #[arg(long)]
+        heatmap: Option<PathBuf>,
+    },
     /// Writes a height-field terrain of at least N triangles as standard OBJ.
     GenTerrain {
         /// Number of triangles (at least).
@@ -298,6 +308,11 @@ fn main() -> ExitCode {
     let cli = Cli::parse_from(normalize_args(std::env::args()));
     let result = match &cli.command {
         Some(Command::BenchAccel(args)) => bench_accel(args),
+        Some(Command::Compare {
+            image,
+            reference,
+            heatmap,
+        }) => compare(image, reference, heatmap.as_deref()),
         Some(Command::GenTerrain { triangles, output }) => {
             let scene = trilux::generate::terrain(*triangles);
             trilux::generate::write_obj(&scene, output).map_err(|e| e.to_string())
@@ -519,4 +534,20 @@ fn write_ray_tree(
         );
     }
     Ok(())
+}
+
+fn compare(image: &Path, reference: &Path, heatmap: Option<&Path>) -> Result<(), String> {
+    use trilux::film::metrics;
+    let a = metrics::read_image(image)?;
+    let b = metrics::read_image(reference)?;
+    let m = metrics::compare(&a, &b)?;
+    if let Some(path) = heatmap {
+        metrics::heatmap(&a, &b)
+            .write(path)
+            .map_err(|e| e.to_string())?;
+    }
+    emit(&format!(
+        "rmse {:.6e}\nrelmse {:.6e}\nmape {:.6e}\nmax_error {:.6e}\n",
+        m.rmse, m.relmse, m.mape, m.max_error
+    ))
 }

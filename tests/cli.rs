@@ -408,3 +408,46 @@ fn course_ray_tracing_commands_give_identical_images_with_both_backends() {
         );
     }
 }
+
+#[test]
+fn compare_reports_the_errors_of_an_image_against_a_reference() {
+    let dir = temp_dir("compare");
+    let mut reference = trilux::film::Film::new(2, 1);
+    reference.pixels = vec![
+        trilux::geometry::Vec3::splat(1.0),
+        trilux::geometry::Vec3::splat(0.0),
+    ];
+    let mut image = reference.clone();
+    image.pixels[0] = trilux::geometry::Vec3::splat(1.5);
+    reference.write(&dir.join("ref.pfm")).unwrap();
+    image.write(&dir.join("img.pfm")).unwrap();
+    let out = ok(&render(
+        &dir,
+        &["compare", "img.pfm", "ref.pfm", "--heatmap", "heat.png"],
+    ));
+    let value = |name: &str| -> f64 {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&format!("{name} ")))
+            .expect("metric printed");
+        line.split_whitespace().nth(1).unwrap().parse().unwrap()
+    };
+    // Six channel values, three of them off by 0.5 where the reference is 1.
+    assert!(
+        (value("rmse") - (3.0 * 0.25f64 / 6.0).sqrt()).abs() < 1e-6,
+        "{out}"
+    );
+    assert!(
+        (value("relmse") - 3.0 * 0.25 / 1.01 / 6.0).abs() < 1e-6,
+        "{out}"
+    );
+    assert!(
+        (value("mape") - 3.0 * 0.5 / 1.01 / 6.0).abs() < 1e-6,
+        "{out}"
+    );
+    assert!((value("max_error") - 0.5).abs() < 1e-6, "{out}");
+    assert!(dir.join("heat.png").is_file());
+    let same = ok(&render(&dir, &["compare", "ref.pfm", "ref.pfm"]));
+    assert!(same.contains("rmse 0.000000e0"), "{same}");
+    std::fs::remove_dir_all(&dir).ok();
+}

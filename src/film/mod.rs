@@ -2,6 +2,7 @@
 //! (linear float). Files are written atomically: to a temporary file beside the target, then
 //! renamed over it, so an interrupted render never leaves a broken image.
 
+pub mod metrics;
 pub mod ray_tree;
 
 use std::fs::File;
