@@ -71,6 +71,43 @@ pub fn occlusion_rays(scene: &Scene, rays: &[Ray], seed: u64) -> Vec<Ray> {
         .collect()
 }
 
+/// Shadow rays as the ray tracer casts them: from the surface each camera ray sees (on the
+/// side it sees) to a uniformly chosen point of a uniformly chosen light, stopping short of it.
+/// Empty when the scene has no light.
+pub fn shadow_rays(
+    scene: &Scene,
+    camera: &[Ray],
+    seed: u64,
+) -> Result<Vec<Ray>, accel::AccelError> {
+    let lights = crate::engines::lights::Light::collect(scene);
+    if lights.is_empty() {
+        return Ok(Vec::new());
+    }
+    let finder = accel::bvh::Bvh::build(scene)?;
+    let mut rays = Vec::with_capacity(camera.len());
+    for (i, ray) in camera.iter().enumerate() {
+        let Some(s) = accel::closest_surface(&finder, scene, ray) else {
+            continue;
+        };
+        if scene.materials[s.material as usize].is_emissive() {
+            continue;
+        }
+        let mut rng = Rng::new(seed, i as u64, 0);
+        let k = ((rng.next_f32() * lights.len() as f32) as usize).min(lights.len() - 1);
+        let p = lights[k].sample(rng.next_f32(), rng.next_f32());
+        let n = if s.geometric_normal.dot(ray.direction) < 0.0 {
+            s.geometric_normal
+        } else {
+            -s.geometric_normal
+        };
+        if n.dot(p.point - s.point) > 0.0 {
+            let origin = crate::geometry::offset_ray_origin(s.point, n, s.error);
+            rays.push(crate::geometry::shadow_ray(origin, p.point));
+        }
+    }
+    Ok(rays)
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Query {
     Closest,
@@ -156,7 +193,8 @@ pub fn bench_accel(
     let side = (n_rays as f64).sqrt().ceil() as u32;
     let camera = camera_rays(scene, side);
     let incoherent = incoherent_rays(scene, n_rays, 1);
-    let sets = [
+    let shadow = shadow_rays(scene, &camera, 4)?;
+    let mut sets = vec![
         ("camera", camera.clone(), occlusion_rays(scene, &camera, 2)),
         (
             "incoherent",
@@ -164,6 +202,9 @@ pub fn bench_accel(
             occlusion_rays(scene, &incoherent, 3),
         ),
     ];
+    if !shadow.is_empty() {
+        sets.push(("shadow", shadow.clone(), shadow));
+    }
     let mut rows = Vec::new();
     let mut builds = Vec::new();
     for &kind in kinds {
