@@ -255,3 +255,43 @@ fn same_image_for_both_backends_and_any_thread_count() {
         "images differ between backends or thread counts"
     );
 }
+
+/// Depth of field: with a lens, the edge of a quad on the plane in focus stays sharp and the
+/// edge of one off that plane is spread over many pixels.
+#[test]
+fn depth_of_field_blurs_only_what_is_out_of_focus() {
+    // A white emitting quad's right edge at x = 0, seen head-on from z = 10.
+    let scene_at = |z: f32| {
+        load(&format!(
+            "material\ndiffuse 0 0 0\nemitted 1 1 1\nm 0\n\
+             v -5 -5 {z}\nv 0 -5 {z}\nv 0 5 {z}\nv -5 5 {z}\nf 1 2 3 4\n\
+             background_color 0 0 0\n\
+             PerspectiveCamera {{\ncamera_position 0 0 10\npoint_of_interest 0 0 0\nup 0 1 0\nangle 0.2\n}}\n"
+        ))
+    };
+    // Pixels of the middle row that are neither black nor white: the width of the edge.
+    let edge_width = |z: f32| {
+        let scene = scene_at(z);
+        let settings = RenderSettings {
+            num_antialias_samples: 64,
+            aperture: 0.2,
+            focus_distance: Some(10.0),
+            ..quiet(64, 64)
+        };
+        let film = render(&scene, &settings, trilux::accel::AccelKind::Bvh);
+        (0..64)
+            .filter(|&i| (0.05..0.95).contains(&film.get(i, 32).x))
+            .count()
+    };
+    let in_focus = edge_width(0.0);
+    let out_of_focus = edge_width(5.0);
+    println!("edge width: in focus {in_focus} px, out of focus {out_of_focus} px");
+    assert!(
+        in_focus <= 2,
+        "the edge on the focus plane is sharp ({in_focus} px)"
+    );
+    assert!(
+        out_of_focus >= 6,
+        "the edge off the focus plane is blurred ({out_of_focus} px)"
+    );
+}
