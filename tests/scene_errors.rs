@@ -328,3 +328,27 @@ fn own_scenes_match_the_course_scenes() {
         }
     }
 }
+
+#[test]
+fn reflectance_outside_zero_one_is_clamped_with_a_warning() {
+    let dir = std::env::temp_dir().join(format!("trilux-clamp-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("scene.obj");
+    std::fs::write(
+        &path,
+        format!("material\ndiffuse 1.5 0.5 -0.2\nm 0\n{QUAD}f 1 2 3 4\n"),
+    )
+    .expect("write");
+    let scene = Scene::load(&path).expect("loads with a warning");
+    let d = scene.materials[0].diffuse;
+    assert_eq!((d.x, d.y, d.z), (1.0, 0.5, 0.0));
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains(":1: material 0: diffuse") && w.contains("clamped")),
+        "{:?}",
+        scene.warnings
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -292,8 +292,31 @@ impl Scene {
         used
     }
 
+    /// Clamps reflectances to [0, 1] and warns of materials that reflect more than they
+    /// receive: each warning names the file, the material's line and its number.
     fn check_energy(&mut self) {
-        for (i, m) in self.materials.iter().enumerate() {
+        for (i, m) in self.materials.iter_mut().enumerate() {
+            for (name, value) in [
+                ("diffuse", &mut m.diffuse),
+                ("reflective", &mut m.reflective),
+                ("transmitted", &mut m.transmitted),
+            ] {
+                let clamped = value.max(Vec3::ZERO).min(Vec3::ONE);
+                if clamped != *value {
+                    self.warnings.push(format!(
+                        "{}:{}: material {i}: {name} {:.3} {:.3} {:.3} is outside [0, 1]; clamped to {:.3} {:.3} {:.3}",
+                        self.path.display(),
+                        m.line,
+                        value.x,
+                        value.y,
+                        value.z,
+                        clamped.x,
+                        clamped.y,
+                        clamped.z
+                    ));
+                    *value = clamped;
+                }
+            }
             let sum = m.diffuse + m.reflective + m.transmitted;
             if sum.max_elem() > 1.0 + 1e-6 {
                 self.warnings.push(format!(
