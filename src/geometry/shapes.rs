@@ -159,27 +159,26 @@ impl SphereShape {
     /// ray origin loses no digits to cancellation.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
-        let len = ray.direction.length();
-        if len == 0.0 || !len.is_finite() {
+        let d = ray.direction;
+        let a = d.dot(d);
+        if a == 0.0 || !a.is_finite() {
             return None;
         }
-        let d = ray.direction / len;
         let f = ray.origin - self.centre;
         let b = -f.dot(d);
-        let l = f + d * b;
+        // The centre's offset from the ray's line, without squaring a long distance.
+        let l = f + d * (b / a);
         let r2 = self.radius * self.radius;
         let disc = r2 - l.dot(l);
         if disc < 0.0 {
             return None;
         }
         let c = f.dot(f) - r2;
-        let q = b + b.signum() * disc.sqrt();
-        let (mut t0, mut t1) = (c / q, q);
+        let q = b + b.signum() * (a * disc).sqrt();
+        let (mut t0, mut t1) = (c / q, q / a);
         if t0 > t1 {
             std::mem::swap(&mut t0, &mut t1);
         }
-        // Distances along the unit direction; the ray's t is in units of its own direction.
-        let (t0, t1) = (t0 / len, t1 / len);
         nearest_in_range(&[t0, t1], ray.t_min, t_max)
     }
 
