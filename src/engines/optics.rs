@@ -36,6 +36,24 @@ pub fn fresnel_dielectric(cos_i: f32, eta_i: f32, eta_t: f32) -> f32 {
     0.5 * (parallel * parallel + perpendicular * perpendicular)
 }
 
+/// The direction a mirror of the given roughness reflects `d` into about the unit normal
+/// `n`: the mirror direction for roughness 0, else a sample of the Phong lobe of exponent
+/// 2/roughness² − 2 around it (the mirror direction again when the sample falls below the
+/// surface). (u, v) in [0,1)².
+pub fn glossy_reflection(d: Vec3, n: Vec3, roughness: f32, u: f32, v: f32) -> Vec3 {
+    let mirror = reflect(d, n);
+    if roughness <= 0.0 {
+        return mirror;
+    }
+    let exponent = (2.0 / (roughness * roughness) - 2.0).max(0.0);
+    let g = sample_lobe(mirror, exponent, u, v);
+    if g.dot(n) <= 0.0 {
+        mirror
+    } else {
+        g
+    }
+}
+
 /// A direction in the Phong lobe `cosⁿ` around the unit vector `axis`, from (u, v) in [0,1)².
 pub fn sample_lobe(axis: Vec3, exponent: f32, u: f32, v: f32) -> Vec3 {
     let cos_t = u.powf(1.0 / (exponent + 1.0));

@@ -11,7 +11,7 @@
 use std::collections::HashMap;
 
 use super::lights::Light;
-use super::optics::{fresnel_dielectric, orthonormal_basis, reflect, refract, sample_lobe};
+use super::optics::{fresnel_dielectric, glossy_reflection, orthonormal_basis, reflect, refract};
 use super::{render_pixels, Counts, RenderSettings, RenderStats};
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
@@ -189,18 +189,13 @@ impl PathTracer<'_> {
                     bsdf_pdf: Some(cos / std::f32::consts::PI),
                 };
             } else if choice < d + r {
-                let mirror = reflect(ray.direction, n);
-                dir = if m.roughness > 0.0 {
-                    let exponent = (2.0 / (m.roughness * m.roughness) - 2.0).max(0.0);
-                    let g = sample_lobe(mirror, exponent, rng.next_f32(), rng.next_f32());
-                    if g.dot(n) <= 0.0 {
-                        mirror
-                    } else {
-                        g
-                    }
-                } else {
-                    mirror
-                };
+                dir = glossy_reflection(
+                    ray.direction,
+                    n,
+                    m.roughness,
+                    rng.next_f32(),
+                    rng.next_f32(),
+                );
                 throughput = throughput.mul_elem(m.reflective * (total / r));
                 previous.bsdf_pdf = None;
             } else {

@@ -9,7 +9,7 @@
 //! those engines land).
 
 use super::lights::Light;
-use super::optics::{fresnel_dielectric, reflect, refract, sample_lobe};
+use super::optics::{fresnel_dielectric, glossy_reflection, reflect, refract};
 use super::{camera_sample, render_pixels, Counts, RenderSettings, RenderStats};
 use crate::accel::Accel;
 use crate::film::Film;
@@ -86,18 +86,13 @@ impl Tracer<'_> {
             return radiance;
         }
         if m.reflective.max_elem() > 0.0 && weight * m.reflective.max_elem() > MIN_WEIGHT {
-            let mirror = reflect(ray.direction, n);
-            let dir = if m.roughness > 0.0 {
-                let exponent = (2.0 / (m.roughness * m.roughness) - 2.0).max(0.0);
-                let d = sample_lobe(mirror, exponent, rng.next_f32(), rng.next_f32());
-                if d.dot(n) <= 0.0 {
-                    mirror
-                } else {
-                    d
-                }
-            } else {
-                mirror
-            };
+            let dir = glossy_reflection(
+                ray.direction,
+                n,
+                m.roughness,
+                rng.next_f32(),
+                rng.next_f32(),
+            );
             let w = weight * m.reflective.max_elem();
             radiance +=
                 m.reflective
