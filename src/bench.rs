@@ -95,11 +95,7 @@ pub fn shadow_rays(
         let mut rng = Rng::new(seed, i as u64, 0);
         let k = ((rng.next_f32() * lights.len() as f32) as usize).min(lights.len() - 1);
         let p = lights[k].sample(rng.next_f32(), rng.next_f32());
-        let n = if s.geometric_normal.dot(ray.direction) < 0.0 {
-            s.geometric_normal
-        } else {
-            -s.geometric_normal
-        };
+        let n = s.facing(ray.direction).1;
         if n.dot(p.point - s.point) > 0.0 {
             let origin = crate::geometry::offset_ray_origin(s.point, n, s.error);
             rays.push(crate::geometry::shadow_ray(origin, p.point));

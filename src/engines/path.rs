@@ -17,7 +17,7 @@ use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
 use crate::sampling::Rng;
-use crate::scene::{Color, PrimKind, PrimRef, Scene, SurfaceHit};
+use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
 
 /// Vertices after which Russian roulette may end a path.
 const ROULETTE_FROM: u32 = 3;
@@ -146,14 +146,8 @@ impl PathTracer<'_> {
                 break;
             };
             let m = &self.scene.materials[s.material as usize];
-            let front = s.geometric_normal.dot(ray.direction) < 0.0;
-            let n = if front {
-                s.geometric_normal
-            } else {
-                -s.geometric_normal
-            };
-            let closed = matches!(s.prim.kind, PrimKind::Sphere | PrimKind::Ring);
-            if m.is_emissive() && (front || closed || self.scene.two_sided_quads) {
+            let (front, n) = s.facing(ray.direction);
+            if self.scene.sees_emission(&s, ray.direction) {
                 let weight = match (previous.bsdf_pdf, self.light_of.get(&s.prim)) {
                     (Some(bsdf_pdf), Some(&k)) => {
                         let light_pdf = self.light_pdf(k, previous.point, &s);

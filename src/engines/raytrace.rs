@@ -15,7 +15,7 @@ use crate::accel::Accel;
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
 use crate::sampling::{Rng, Strata};
-use crate::scene::{Color, PrimKind, Scene, SurfaceHit};
+use crate::scene::{Color, Scene, SurfaceHit};
 
 /// Branches of the ray tree whose weight falls below this are not traced: their
 /// contribution cannot reach 1e-4 of the pixel.
@@ -65,16 +65,9 @@ impl Tracer<'_> {
             return self.scene.background;
         };
         let m = &self.scene.materials[s.material as usize];
-        // The normal on the side the ray arrived from.
-        let front = s.geometric_normal.dot(ray.direction) < 0.0;
-        let n = if front {
-            s.geometric_normal
-        } else {
-            -s.geometric_normal
-        };
-        let closed = matches!(s.prim.kind, PrimKind::Sphere | PrimKind::Ring);
+        let (front, n) = s.facing(ray.direction);
         let mut radiance = Vec3::ZERO;
-        if front || closed || self.scene.two_sided_quads {
+        if self.scene.sees_emission(&s, ray.direction) {
             radiance += m.emitted;
         }
         let albedo = self.scene.albedo(&s);

@@ -9,6 +9,18 @@ use crate::geometry::{
 };
 
 impl SurfaceHit {
+    /// Whether a ray travelling along `dir` arrives at the front side, and the geometric
+    /// normal turned towards the side it arrives from.
+    pub fn facing(&self, dir: Vec3) -> (bool, Vec3) {
+        let front = self.geometric_normal.dot(dir) < 0.0;
+        let n = if front {
+            self.geometric_normal
+        } else {
+            -self.geometric_normal
+        };
+        (front, n)
+    }
+
     /// A ray leaving this surface point in direction `dir`, offset so it cannot hit the
     /// surface it leaves.
     pub fn spawn_ray(&self, dir: Vec3) -> Ray {
@@ -59,6 +71,14 @@ pub struct SurfaceHit {
 }
 
 impl Scene {
+    /// Whether a ray travelling along `dir` sees the emission of the surface it hit: quads
+    /// emit from their front side only (unless `--two-sided`), closed surfaces from all sides.
+    pub fn sees_emission(&self, s: &SurfaceHit, dir: Vec3) -> bool {
+        let closed = matches!(s.prim.kind, PrimKind::Sphere | PrimKind::Ring);
+        self.materials[s.material as usize].is_emissive()
+            && (closed || self.two_sided_quads || s.facing(dir).0)
+    }
+
     /// The surface at a backend's hit.
     pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> SurfaceHit {
         let i = hit.prim.index as usize;
