@@ -37,30 +37,28 @@ fn every_course_scene_renders_identically_with_both_backends() {
     for scene in course_scenes() {
         let input = scene.to_str().unwrap();
         let stem = scene.file_stem().unwrap().to_string_lossy().into_owned();
-        let mut images = Vec::new();
-        for kind in backends() {
-            let out = format!("{stem}.{kind}.png");
-            ok(&render(
-                &dir,
-                &[
-                    "-input",
-                    input,
-                    "-size",
-                    "160",
-                    "120",
-                    "--accel",
-                    &kind.to_string(),
-                    "-o",
-                    &out,
-                    "--quiet",
-                ],
-            ));
-            images.push(std::fs::read(dir.join(&out)).expect("image written"));
+        // The MATERIALS view, and the default ray tracer with soft shadows and mirrors.
+        for engine in [
+            &["--engine", "raycast"][..],
+            &["-num_shadow_samples", "4", "-num_bounces", "2"],
+        ] {
+            let mut images = Vec::new();
+            for kind in backends() {
+                let out = format!("{stem}.{kind}.png");
+                let mut args = vec![
+                    "-input", input, "-size", "160", "120", "-o", &out, "--quiet",
+                ];
+                let kind = kind.to_string();
+                args.extend(["--accel", &kind]);
+                args.extend(engine);
+                ok(&render(&dir, &args));
+                images.push(std::fs::read(dir.join(&out)).expect("image written"));
+            }
+            assert!(
+                images.windows(2).all(|w| w[0] == w[1]),
+                "{stem} {engine:?}: backends give different images"
+            );
         }
-        assert!(
-            images.windows(2).all(|w| w[0] == w[1]),
-            "{stem}: backends give different images"
-        );
     }
     std::fs::remove_dir_all(&dir).ok();
 }
