@@ -419,6 +419,9 @@ fn render(args: &RenderArgs) -> Result<(), String> {
             stats.secondary_rays.load(Relaxed)
         );
         eprintln!("stats: non-finite samples {non_finite}");
+        if let Some(kib) = peak_memory_kib() {
+            eprintln!("stats: peak memory {:.1} MiB", kib as f64 / 1024.0);
+        }
     }
     if !args.quiet {
         eprintln!("wrote {}", output.display());
@@ -550,4 +553,11 @@ fn compare(image: &Path, reference: &Path, heatmap: Option<&Path>) -> Result<(),
         "rmse {:.6e}\nrelmse {:.6e}\nmape {:.6e}\nmax_error {:.6e}\n",
         m.rmse, m.relmse, m.mape, m.max_error
     ))
+}
+
+/// The process's peak resident memory (Linux: VmHWM of /proc/self/status), in KiB.
+fn peak_memory_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
