@@ -98,6 +98,14 @@ impl fmt::Display for Plan {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "engine: {}", self.engine.name())?;
         writeln!(f, "accel: {}", self.accel)?;
+        #[cfg(feature = "embree")]
+        if self.accel == AccelKind::Embree {
+            writeln!(
+                f,
+                "embree version: {}",
+                crate::accel::embree::embree_major()
+            )?;
+        }
         let sided = if self.one_sided_quads {
             "one-sided"
         } else {

@@ -145,10 +145,6 @@ impl Bvh {
         })
     }
 
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
-    }
-
     /// Checks the tree's invariants: every child box inside its parent's, every primitive's
     /// box inside its leaf's, every primitive in exactly one leaf. Returns what is wrong.
     pub fn validate(&self, scene: &Scene) -> Result<(), String> {

@@ -118,16 +118,7 @@ impl Light {
     /// centre of a planar light, the point of a sphere or ring nearest to `towards`.
     pub fn centre(&self, towards: Vec3) -> LightPoint {
         match self.shape {
-            LightShape::Parallelogram {
-                origin,
-                edge_u,
-                edge_v,
-                normal,
-            } => LightPoint {
-                point: origin + edge_u * 0.5 + edge_v * 0.5,
-                normal,
-                one_sided: true,
-            },
+            LightShape::Parallelogram { .. } => self.sample(0.5, 0.5),
             LightShape::Triangle { v0, e1, e2, normal } => LightPoint {
                 point: v0 + (e1 + e2) * (1.0 / 3.0),
                 normal,

@@ -7,7 +7,7 @@ mod shapes;
 mod vec;
 
 pub use bounds::Bounds3;
-pub use ray::{offset_ray_origin, point_error, shadow_ray, spawn_ray, spawn_ray_to, Ray};
+pub use ray::{offset_ray_origin, point_error, shadow_ray, spawn_ray, Ray};
 pub use shapes::{
     faces_ray, intersect_quad, intersect_quad_sheared, intersect_triangle,
     intersect_triangle_sheared, quad_normal, RayShear, RingPart, RingShape, SphereShape,

@@ -82,13 +82,6 @@ pub fn spawn_ray(p: Vec3, ng: Vec3, error: f32, dir: Vec3) -> Ray {
     Ray::new(offset_ray_origin(p, n, error), dir)
 }
 
-/// A ray from surface point `p` towards `target` that stops just short of it (shadow rays).
-pub fn spawn_ray_to(p: Vec3, ng: Vec3, error: f32, target: Vec3) -> Ray {
-    let d = target - p;
-    let n = if ng.dot(d) < 0.0 { -ng } else { ng };
-    shadow_ray(offset_ray_origin(p, n, error), target)
-}
-
 /// The ray from `origin` (already off its surface) that stops just short of `target`.
 #[inline]
 pub fn shadow_ray(origin: Vec3, target: Vec3) -> Ray {

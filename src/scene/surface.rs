@@ -4,8 +4,7 @@
 
 use super::{PrimKind, PrimRef, Scene};
 use crate::geometry::{
-    faces_ray, intersect_quad, point_error, spawn_ray, spawn_ray_to, vec2, Ray, RingPart, Vec2,
-    Vec3,
+    faces_ray, intersect_quad, point_error, spawn_ray, vec2, Ray, RingPart, Vec2, Vec3,
 };
 
 impl SurfaceHit {
@@ -25,11 +24,6 @@ impl SurfaceHit {
     /// surface it leaves.
     pub fn spawn_ray(&self, dir: Vec3) -> Ray {
         spawn_ray(self.point, self.geometric_normal, self.error, dir)
-    }
-
-    /// A ray from this surface point that stops just short of `target`.
-    pub fn spawn_ray_to(&self, target: Vec3) -> Ray {
-        spawn_ray_to(self.point, self.geometric_normal, self.error, target)
     }
 }
 

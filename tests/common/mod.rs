@@ -16,24 +16,23 @@ pub fn course_dir() -> Option<PathBuf> {
 
 /// Every `.obj` of the course folder, sorted.
 pub fn course_scenes() -> Vec<PathBuf> {
-    let Some(dir) = course_dir() else {
-        eprintln!("../shared/course-scenes not found: course-scene checks skipped");
-        return Vec::new();
-    };
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .expect("readable course folder")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
-        .collect();
-    files.sort();
-    files
+    match course_dir() {
+        Some(dir) => obj_files(&dir),
+        None => {
+            eprintln!("../shared/course-scenes not found: course-scene checks skipped");
+            Vec::new()
+        }
+    }
 }
 
 /// The project's own scenes in `scenes/`.
 pub fn own_scenes() -> Vec<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    obj_files(&PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes"))
+}
+
+fn obj_files(dir: &std::path::Path) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .expect("scenes/ exists")
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|e| e == "obj"))
         .collect();
