@@ -10,7 +10,10 @@ use clap::{Args, Parser, Subcommand};
 use std::sync::atomic::Ordering::Relaxed;
 use trilux::accel::{self, AccelKind, AccelOptions, EmbreeQuality};
 
-use trilux::engines::{path, raycast, raytrace, EngineKind, RenderSettings, RenderStats};
+use trilux::engines::radiosity::{self, RadiositySettings, Visualize};
+use trilux::engines::{
+    path, raycast, raytrace, EngineKind, IndirectKind, RenderSettings, RenderStats,
+};
 use trilux::geometry::vec3;
 use trilux::plan::Plan;
 use trilux::sampling::Pattern;
@@ -135,9 +138,10 @@ struct RenderArgs {
     /// Image size in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [256, 256])]
     size: Vec<u32>,
-    /// Lighting engine.
-    #[arg(long, value_enum, default_value_t = EngineKind::Raytrace)]
-    engine: EngineKind,
+    /// Lighting engine (default: radiosity when a radiosity-only flag is given, else
+    /// raytrace).
+    #[arg(long, value_enum)]
+    engine: Option<EngineKind>,
     /// Visibility backend (default: embree when this build has it).
     #[arg(long, value_enum)]
     accel: Option<AccelKind>,
@@ -210,9 +214,49 @@ struct RenderArgs {
     /// Final gathering for indirect light (photon engine).
     #[arg(long)]
     gather_indirect: bool,
-    /// Smooth radiosity display (radiosity engine).
+    /// Smooth radiosity display: bilinear between values averaged at patch corners.
     #[arg(long)]
     interpolate: bool,
+    /// Split every quad into four this many times, keeping the parents (radiosity) [default: 0].
+    #[arg(long)]
+    subdivide: Option<u32>,
+    /// Stop when undistributed / emitted power falls to this (radiosity).
+    #[arg(long, default_value_t = 1e-3)]
+    radiosity_tolerance: f32,
+    /// Stop after exactly K shots, e.g. 16 for the course's "after the top 16 patches have
+    /// shot" (radiosity).
+    #[arg(long, value_name = "K")]
+    radiosity_iterations: Option<u64>,
+    /// Safety cap: at most this many shots per patch before giving up, reported (radiosity).
+    #[arg(long, default_value_t = 1000)]
+    radiosity_max_shots_per_patch: u64,
+    /// Memory for cached rows of form factors, MiB (radiosity).
+    #[arg(long, default_value_t = 256)]
+    ff_cache_mb: usize,
+    /// Split patches whose radiance differs from a neighbour's by more than this, and solve
+    /// again (radiosity).
+    #[arg(long, value_name = "THRESHOLD")]
+    adaptive_subdivide: Option<f32>,
+    /// Rounds of adaptive subdivision (radiosity).
+    #[arg(long, default_value_t = 3)]
+    adaptive_rounds: u32,
+    /// What the radiosity engine shows [default: radiance].
+    #[arg(long, value_enum)]
+    visualize: Option<Visualize>,
+    /// Draw patch outlines over the radiosity image.
+    #[arg(long)]
+    wireframe: bool,
+    /// The patch whose form factors `--visualize form-factors` shows (default: the one with
+    /// the most undistributed light).
+    #[arg(long, value_name = "PATCH")]
+    ff_source: Option<u32>,
+    /// Write one CSV line per radiosity shot: residual, wall time, rays cast.
+    #[arg(long, value_name = "FILE.csv")]
+    log_convergence: Option<PathBuf>,
+    /// Diffuse indirect light of the ray tracer: the constant -ambient_light, or the
+    /// radiosity solution.
+    #[arg(long, value_enum, default_value_t = IndirectKind::Ambient)]
+    indirect: IndirectKind,
 }
 
 impl RenderArgs {
@@ -228,16 +272,8 @@ impl RenderArgs {
                 .ambient_light
                 .as_ref()
                 .map_or(d.ambient_light, |a| vec3(a[0], a[1], a[2])),
-            num_form_factor_samples: self
-                .num_form_factor_samples
-                .unwrap_or(d.num_form_factor_samples),
-            sphere_rasterization: self
-                .sphere_rasterization
-                .as_ref()
-                .map_or(d.sphere_rasterization, |s| (s[0], s[1])),
-            cylinder_ring_rasterization: self
-                .cylinder_ring_rasterization
-                .unwrap_or(d.cylinder_ring_rasterization),
+            radiosity: self.radiosity_settings(),
+            indirect: self.indirect,
             num_photons_to_shoot: self.num_photons_to_shoot.unwrap_or(0),
             num_photons_to_collect: self
                 .num_photons_to_collect
@@ -251,25 +287,37 @@ impl RenderArgs {
         }
     }
 
-    fn accel_options(&self) -> AccelOptions {
-        AccelOptions {
-            embree_quality: self.embree_quality,
-            embree_robust: self.embree_robust,
+    fn radiosity_settings(&self) -> RadiositySettings {
+        let d = RadiositySettings::default();
+        RadiositySettings {
+            num_form_factor_samples: self
+                .num_form_factor_samples
+                .unwrap_or(d.num_form_factor_samples),
+            sphere_rasterization: self
+                .sphere_rasterization
+                .as_ref()
+                .map_or(d.sphere_rasterization, |s| (s[0], s[1])),
+            cylinder_ring_rasterization: self
+                .cylinder_ring_rasterization
+                .unwrap_or(d.cylinder_ring_rasterization),
+            subdivide: self.subdivide.unwrap_or(d.subdivide),
+            interpolate: self.interpolate,
+            tolerance: self.radiosity_tolerance,
+            iterations: self.radiosity_iterations,
+            max_shots_per_patch: self.radiosity_max_shots_per_patch,
+            ff_cache_mb: self.ff_cache_mb,
+            adaptive_threshold: self.adaptive_subdivide,
+            adaptive_rounds: self.adaptive_rounds,
+            visualize: self.visualize.unwrap_or_default(),
+            wireframe: self.wireframe,
+            ff_source: self.ff_source,
+            log_convergence: self.log_convergence.is_some(),
         }
     }
 
-    /// Flags given that the chosen engine does not read, named so the user knows they had
-    /// no effect.
-    fn unused_flags(&self) -> Vec<&'static str> {
-        let ray_tracing = [
-            ("-num_bounces", self.num_bounces > 0),
-            ("-num_shadow_samples", self.num_shadow_samples > 0),
-            ("-num_antialias_samples", self.num_antialias_samples > 1),
-            ("-ambient_light", self.ambient_light.is_some()),
-            ("--aperture", self.aperture > 0.0),
-        ];
-        // The radiosity and photon engines do not exist yet: their flags are read by nothing.
-        let later_engines = [
+    /// Flags that only the radiosity engine reads: giving one chooses it.
+    fn radiosity_flags(&self) -> [(&'static str, bool); 9] {
+        [
             (
                 "-num_form_factor_samples",
                 self.num_form_factor_samples.is_some(),
@@ -280,6 +328,46 @@ impl RenderArgs {
                 self.cylinder_ring_rasterization.is_some(),
             ),
             ("-interpolate", self.interpolate),
+            ("--subdivide", self.subdivide.is_some()),
+            ("--visualize", self.visualize.is_some()),
+            ("--wireframe", self.wireframe),
+            ("--adaptive-subdivide", self.adaptive_subdivide.is_some()),
+            ("--ff-source", self.ff_source.is_some()),
+        ]
+    }
+
+    /// The engine asked for, or the one the flags given imply.
+    fn engine(&self) -> EngineKind {
+        match self.engine {
+            Some(e) => e,
+            None if self.indirect == IndirectKind::Ambient
+                && self.radiosity_flags().iter().any(|f| f.1) =>
+            {
+                EngineKind::Radiosity
+            }
+            None => EngineKind::Raytrace,
+        }
+    }
+
+    fn accel_options(&self) -> AccelOptions {
+        AccelOptions {
+            embree_quality: self.embree_quality,
+            embree_robust: self.embree_robust,
+        }
+    }
+
+    /// Flags given that the chosen engine does not read, named so the user knows they had
+    /// no effect.
+    fn unused_flags(&self) -> Vec<&'static str> {
+        let engine = self.engine();
+        let ray_tracing = [
+            ("-num_bounces", self.num_bounces > 0),
+            ("-num_antialias_samples", self.num_antialias_samples > 1),
+            ("-ambient_light", self.ambient_light.is_some()),
+            ("--aperture", self.aperture > 0.0),
+        ];
+        // The photon engine does not exist yet: its flags are read by nothing.
+        let photon = [
             ("-num_photons_to_shoot", self.num_photons_to_shoot.is_some()),
             (
                 "-num_photons_to_collect",
@@ -287,17 +375,34 @@ impl RenderArgs {
             ),
             ("-gather_indirect", self.gather_indirect),
         ];
-        let mut unused: Vec<&'static str> =
-            later_engines.iter().filter(|c| c.1).map(|c| c.0).collect();
-        match self.engine {
-            EngineKind::Raycast => unused.extend(ray_tracing.iter().filter(|c| c.1).map(|c| c.0)),
+        let given = |flags: &[(&'static str, bool)]| -> Vec<&'static str> {
+            flags.iter().filter(|c| c.1).map(|c| c.0).collect()
+        };
+        let mut unused = given(&photon);
+        let radiosity_read =
+            engine == EngineKind::Radiosity || self.indirect == IndirectKind::Radiosity;
+        if !radiosity_read {
+            unused.extend(given(&self.radiosity_flags()));
+        }
+        match engine {
+            EngineKind::Raycast => {
+                unused.extend(given(&ray_tracing));
+                if self.num_shadow_samples > 0 {
+                    unused.push("-num_shadow_samples");
+                }
+            }
             // The path tracer follows every bounce and samples the lights itself.
-            EngineKind::Path => unused.extend(
-                ray_tracing[..4]
-                    .iter()
-                    .filter(|c| c.1 && c.0 != "-num_antialias_samples")
-                    .map(|c| c.0),
-            ),
+            EngineKind::Path => {
+                unused.extend(given(&[ray_tracing[0], ray_tracing[2]]));
+                if self.num_shadow_samples > 0 {
+                    unused.push("-num_shadow_samples");
+                }
+            }
+            // The radiosity display reads only the antialiasing of the ray tracing flags
+            // (-num_shadow_samples turns on visibility in its form factors).
+            EngineKind::Radiosity => {
+                unused.extend(given(&[ray_tracing[0], ray_tracing[2], ray_tracing[3]]))
+            }
             _ => {}
         }
         unused
@@ -353,20 +458,21 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     let load_s = load_start.elapsed().as_secs_f64();
     let kind = args.accel.unwrap_or_else(AccelKind::default_available);
     let options = args.accel_options();
-    let plan = Plan::new(&scene, args.engine, kind, &settings);
+    let engine = args.engine();
+    let plan = Plan::new(&scene, engine, kind, &settings);
     if args.plan {
         return emit(&format!("scene: {}\n{plan}", input.display()));
     }
-    if !args.engine.is_implemented() {
+    if !engine.is_implemented() {
         return Err(format!(
-            "the {} engine is not implemented yet; available: --engine raycast",
-            args.engine.name()
+            "the {} engine is not implemented yet; available: raycast, raytrace, radiosity, path",
+            engine.name()
         ));
     }
     for flag in args.unused_flags() {
         eprintln!(
-            "note: {flag} is accepted but has no effect: the {} engine does not read it (the radiosity and photon engines are not implemented yet)",
-            args.engine.name()
+            "note: {flag} is accepted but has no effect: the {} engine does not read it (the photon engine is not implemented yet)",
+            engine.name()
         );
     }
 
@@ -376,18 +482,42 @@ fn render(args: &RenderArgs) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     let build_s = build_start.elapsed().as_secs_f64();
     let render_start = Instant::now();
-    let (film, stats) = pool.install(|| match args.engine {
+    let accel = accel.as_ref();
+    let (film, stats, solution) = pool.install(|| match engine {
         EngineKind::Raycast => {
-            let film = raycast::render(&scene, accel.as_ref(), &settings);
+            let film = raycast::render(&scene, accel, &settings);
             let stats = RenderStats::default();
             stats
                 .camera_rays
                 .store(settings.width as u64 * settings.height as u64, Relaxed);
-            (film, stats)
+            (film, stats, None)
         }
-        EngineKind::Path => path::render(&scene, accel.as_ref(), &settings),
-        _ => raytrace::render(&scene, accel.as_ref(), &settings),
+        EngineKind::Path => {
+            let (film, stats) = path::render(&scene, accel, &settings);
+            (film, stats, None)
+        }
+        EngineKind::Radiosity => {
+            let (film, stats, solution) = radiosity::render(&scene, accel, &settings);
+            (film, stats, Some(solution))
+        }
+        _ if settings.indirect == IndirectKind::Radiosity => {
+            let solution = radiosity::solve_with_progress(&scene, accel, &settings);
+            let indirect = raytrace::Indirect::radiosity(&solution, settings.radiosity.interpolate);
+            let (film, stats) = raytrace::render_with(&scene, accel, &settings, indirect);
+            stats.form_factor_rays.store(solution.rays, Relaxed);
+            (film, stats, Some(solution))
+        }
+        _ => {
+            let (film, stats) = raytrace::render(&scene, accel, &settings);
+            (film, stats, None)
+        }
     });
+    if let Some(solution) = &solution {
+        report_radiosity(solution, &settings);
+        if let Some(path) = &args.log_convergence {
+            write_convergence_log(path, solution)?;
+        }
+    }
     let render_s = render_start.elapsed().as_secs_f64();
     let non_finite = stats.non_finite_samples.load(Relaxed);
     if non_finite > 0 {
@@ -399,24 +529,18 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     let output = args.output.clone().unwrap_or_else(|| default_output(input));
     film.write(&output).map_err(|e| e.to_string())?;
     if let Some(xy) = &args.ray_tree {
-        write_ray_tree(
-            &scene,
-            accel.as_ref(),
-            &settings,
-            &film,
-            &output,
-            (xy[0], xy[1]),
-        )?;
+        write_ray_tree(&scene, accel, &settings, &film, &output, (xy[0], xy[1]))?;
     }
     if args.stats {
         let rays = stats.total_rays();
         eprintln!("stats: scene load {load_s:.3} s, accel build ({kind}) {build_s:.3} s, render {render_s:.3} s");
         eprintln!(
-            "stats: rays cast {rays} ({:.2} Mrays/s): camera {}, shadow {}, secondary {}",
+            "stats: rays cast {rays} ({:.2} Mrays/s): camera {}, shadow {}, secondary {}, form factor {}",
             rays as f64 / render_s / 1e6,
             stats.camera_rays.load(Relaxed),
             stats.shadow_rays.load(Relaxed),
-            stats.secondary_rays.load(Relaxed)
+            stats.secondary_rays.load(Relaxed),
+            stats.form_factor_rays.load(Relaxed)
         );
         eprintln!("stats: non-finite samples {non_finite}");
         if let Some(kib) = peak_memory_kib() {
@@ -427,6 +551,68 @@ fn render(args: &RenderArgs) -> Result<(), String> {
         eprintln!("wrote {}", output.display());
     }
     Ok(())
+}
+
+/// One paragraph on how the radiosity solve went; a solve stopped by the safety cap is a
+/// warning (its image still holds the ambient estimate of the light not yet shot).
+fn report_radiosity(solution: &radiosity::Solution, settings: &RenderSettings) {
+    use radiosity::solver::Stop;
+    let r = &settings.radiosity;
+    let state = &solution.state;
+    let stop = match solution.stop {
+        Stop::Converged => format!("converged to tolerance {:.1e}", r.tolerance),
+        Stop::Iterations => format!("stopped after {} shots as asked", state.shots),
+        Stop::NoLight => "nothing emits".to_string(),
+        Stop::Cap => String::new(),
+    };
+    if solution.stop == Stop::Cap {
+        eprintln!(
+            "warning: radiosity stopped at its cap of {} shots ({} per patch) with residual {:.3e} above the tolerance {:.1e}; the image adds the ambient estimate of the rest (raise --radiosity-max-shots-per-patch to go on)",
+            state.shots, r.max_shots_per_patch, state.residual, r.tolerance
+        );
+    }
+    if settings.quiet {
+        return;
+    }
+    let adaptive = if solution.adaptive_rounds > 0 {
+        format!(", {} adaptive rounds", solution.adaptive_rounds)
+    } else {
+        String::new()
+    };
+    eprintln!(
+        "radiosity: {} patches{adaptive}, {} shots, residual {:.3e}{}{stop}; visibility {}; {} visibility rays; form-factor rows {} computed, {} reused (cache peak {:.1} MiB)",
+        solution.patches.len(),
+        state.shots,
+        state.residual,
+        if stop.is_empty() { "" } else { ", " },
+        solution.visibility_reason,
+        solution.rays,
+        solution.cache_misses,
+        solution.cache_hits,
+        solution.cache_peak_bytes as f64 / (1 << 20) as f64
+    );
+}
+
+/// `--log-convergence`: one CSV line per shot.
+fn write_convergence_log(path: &Path, solution: &radiosity::Solution) -> Result<(), String> {
+    use std::io::Write;
+    trilux::film::write_atomically(path, |w| {
+        let io = |source| trilux::film::FilmError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        writeln!(w, "shot,patch,residual,seconds,rays").map_err(io)?;
+        for r in &solution.state.log {
+            writeln!(
+                w,
+                "{},{},{:.6e},{:.6},{}",
+                r.shot, r.patch, r.residual, r.seconds, r.rays
+            )
+            .map_err(io)?;
+        }
+        Ok(())
+    })
+    .map_err(|e| e.to_string())
 }
 
 fn default_output(input: &Path) -> PathBuf {

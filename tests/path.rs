@@ -5,24 +5,11 @@ mod common;
 
 use std::path::Path;
 
-use common::backends;
+use common::{backends, furnace};
 use trilux::accel::{self, AccelOptions};
 use trilux::engines::{path, RenderSettings};
 use trilux::geometry::Vec3;
 use trilux::scene::Scene;
-
-/// A closed cube of six inward-facing quads, all of albedo ρ and emitting Le = 1, seen from
-/// a camera inside it (every pixel sees a wall; the black background cannot be seen).
-fn furnace(rho: f32) -> Scene {
-    let text = format!(
-        "material\ndiffuse {rho} {rho} {rho}\nemitted 1 1 1\n\
-         v -1 -1 -1\nv 1 -1 -1\nv -1 1 -1\nv 1 1 -1\nv -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\n\
-         m 0\nf 5 7 8 6\nf 1 2 4 3\nf 3 4 8 7\nf 1 5 6 2\nf 1 3 7 5\nf 2 6 8 4\n\
-         background_color 0 0 0\n\
-         PerspectiveCamera {{\ncamera_position 0.1 0.2 0.5\npoint_of_interest 0 0 -1\nup 0 1 0\nangle 1.2\n}}\n"
-    );
-    Scene::parse_dialect(Path::new("furnace.obj"), &text).expect("furnace parses")
-}
 
 #[test]
 fn furnace_radiance_is_le_over_one_minus_rho() {

@@ -4,6 +4,7 @@
 pub mod lights;
 pub mod optics;
 pub mod path;
+pub mod radiosity;
 pub mod raycast;
 pub mod raytrace;
 
@@ -26,7 +27,7 @@ pub enum EngineKind {
     Raycast,
     /// Whitted and distribution ray tracing (not implemented yet).
     Raytrace,
-    /// Radiosity on the quad mesh (not implemented yet).
+    /// Radiosity on the quad mesh.
     Radiosity,
     /// Photon mapping (not implemented yet).
     Photon,
@@ -38,7 +39,7 @@ impl EngineKind {
     pub fn is_implemented(self) -> bool {
         matches!(
             self,
-            EngineKind::Raycast | EngineKind::Raytrace | EngineKind::Path
+            EngineKind::Raycast | EngineKind::Raytrace | EngineKind::Radiosity | EngineKind::Path
         )
     }
     pub fn name(self) -> &'static str {
@@ -52,12 +53,24 @@ impl EngineKind {
     }
 }
 
+/// The ray tracer's source of diffuse indirect light (`--indirect`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum IndirectKind {
+    /// The constant `-ambient_light`, as the course program.
+    #[default]
+    Ambient,
+    /// The radiosity solution of the scene (solved first, with the radiosity settings).
+    Radiosity,
+}
+
 /// Counters of one render, printed by `--stats`.
 #[derive(Debug, Default)]
 pub struct RenderStats {
     pub camera_rays: AtomicU64,
     pub shadow_rays: AtomicU64,
     pub secondary_rays: AtomicU64,
+    /// Visibility rays between patches (radiosity form factors).
+    pub form_factor_rays: AtomicU64,
     /// Samples that came out NaN or infinite: excluded from the image, and counted here.
     pub non_finite_samples: AtomicU64,
 }
@@ -67,6 +80,7 @@ impl RenderStats {
         self.camera_rays.load(Relaxed)
             + self.shadow_rays.load(Relaxed)
             + self.secondary_rays.load(Relaxed)
+            + self.form_factor_rays.load(Relaxed)
     }
 }
 
@@ -85,12 +99,11 @@ pub struct RenderSettings {
     pub num_antialias_samples: u32,
     /// Constant ambient radiance for diffuse indirect light (`-ambient_light`, default 0.1).
     pub ambient_light: Vec3,
-    /// Point pairs per form factor (`-num_form_factor_samples`, default 1).
-    pub num_form_factor_samples: u32,
-    /// Sphere tessellation for radiosity (`-sphere_rasterization H V`, default 8 6).
-    pub sphere_rasterization: (u32, u32),
-    /// Ring tessellation for radiosity (`-cylinder_ring_rasterization`, default 20).
-    pub cylinder_ring_rasterization: u32,
+    /// What the radiosity engine reads (mesh, form factors, solver, display).
+    pub radiosity: radiosity::RadiositySettings,
+    /// Where the ray tracer's diffuse indirect light comes from (`--indirect`, default
+    /// ambient).
+    pub indirect: IndirectKind,
     /// Photons emitted (`-num_photons_to_shoot`, default 0: no photon map).
     pub num_photons_to_shoot: u64,
     /// Photons per density estimate (`-num_photons_to_collect`, default 100).
@@ -119,9 +132,8 @@ impl Default for RenderSettings {
             num_shadow_samples: 0,
             num_antialias_samples: 1,
             ambient_light: Vec3::splat(0.1),
-            num_form_factor_samples: 1,
-            sphere_rasterization: (8, 6),
-            cylinder_ring_rasterization: 20,
+            radiosity: Default::default(),
+            indirect: IndirectKind::Ambient,
             num_photons_to_shoot: 0,
             num_photons_to_collect: 100,
             gather_indirect: false,

@@ -5,11 +5,12 @@
 //! with N shadow rays per light (`-num_shadow_samples`: 0 = the light's centre, unoccluded;
 //! 1 = one shadow ray to the centre; N > 1 = N points placed by `--light-sampling`). Mirrors,
 //! glossy reflection and glass recurse to `-num_bounces`; the diffuse indirect rest is the
-//! constant `-ambient_light` (an indirect source from radiosity or photons replaces it when
-//! those engines land).
+//! constant `-ambient_light`, or the radiosity solution's indirect light (`--indirect
+//! radiosity`).
 
 use super::lights::Light;
 use super::optics::{fresnel_dielectric, glossy_reflection, reflect, refract};
+use super::radiosity::{PatchField, Solution};
 use super::{camera_sample, render_pixels, Counts, RenderSettings, RenderStats};
 use crate::accel::Accel;
 use crate::film::Film;
@@ -40,7 +41,39 @@ pub struct Segment {
     pub kind: SegmentKind,
 }
 
+/// Where diffuse indirect light comes from: what a surface's albedo multiplies besides the
+/// direct light.
+pub enum Indirect<'a> {
+    /// A constant incident radiance (`-ambient_light`).
+    Ambient(Color),
+    /// The indirect incident radiance of a radiosity solution at the patch hit.
+    Radiosity {
+        solution: &'a Solution,
+        field: PatchField,
+    },
+}
+
+impl<'a> Indirect<'a> {
+    /// The radiosity solution's indirect light, flat or interpolated.
+    pub fn radiosity(solution: &'a Solution, interpolate: bool) -> Indirect<'a> {
+        Indirect::Radiosity {
+            solution,
+            field: solution.field(solution.indirect_incident(), interpolate),
+        }
+    }
+
+    fn at(&self, scene: &Scene, s: &SurfaceHit) -> Color {
+        match self {
+            Indirect::Ambient(c) => *c,
+            Indirect::Radiosity { solution, field } => {
+                solution.sample(scene, s, field).unwrap_or(Vec3::ZERO)
+            }
+        }
+    }
+}
+
 struct Tracer<'a> {
+    indirect: Indirect<'a>,
     scene: &'a Scene,
     accel: &'a dyn Accel,
     settings: &'a RenderSettings,
@@ -73,7 +106,8 @@ impl Tracer<'_> {
         let albedo = self.scene.albedo(&s);
         if albedo.max_elem() > 0.0 {
             let irradiance_over_pi = self.direct(&s, n, rng, counts);
-            radiance += albedo.mul_elem(irradiance_over_pi + self.settings.ambient_light);
+            let indirect = self.indirect.at(self.scene, &s);
+            radiance += albedo.mul_elem(irradiance_over_pi + indirect);
         }
         if depth >= self.settings.num_bounces {
             return radiance;
@@ -222,9 +256,26 @@ impl Tracer<'_> {
     }
 }
 
-/// Renders the scene by ray tracing; returns the film and the counters of the render.
+/// Renders the scene by ray tracing with `-ambient_light` as the indirect light.
 pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (Film, RenderStats) {
+    render_with(
+        scene,
+        accel,
+        settings,
+        Indirect::Ambient(settings.ambient_light),
+    )
+}
+
+/// Renders the scene by ray tracing with the given indirect light; returns the film and the
+/// counters of the render.
+pub fn render_with(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+    indirect: Indirect,
+) -> (Film, RenderStats) {
     let tracer = Tracer {
+        indirect,
         scene,
         accel,
         settings,
@@ -251,6 +302,7 @@ pub fn ray_tree(
     y: u32,
 ) -> Vec<Segment> {
     let tracer = Tracer {
+        indirect: Indirect::Ambient(settings.ambient_light),
         scene,
         accel,
         settings,

@@ -2,6 +2,7 @@
 //! routines of the four primitive kinds.
 
 mod bounds;
+pub mod mesh;
 mod ray;
 mod shapes;
 mod vec;

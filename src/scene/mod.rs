@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 pub use camera::{Camera, Projection};
 pub use error::SceneError;
-pub use surface::{PrimHit, QuadNeighbours, SurfaceHit};
+pub use surface::{bilinear, PrimHit, QuadNeighbours, SurfaceHit};
 pub use texture::Texture;
 
 use crate::geometry::{quad_normal, Bounds3, RingShape, SphereShape, Vec2, Vec3};

@@ -326,7 +326,8 @@ fn quad_adjacency(quads: &[super::Quad]) -> Vec<Vec<u32>> {
         .collect()
 }
 
-fn bilinear(tc: &[Vec2; 4], u: f32, v: f32) -> Vec2 {
+/// Bilinear interpolation of four corner values (corners in order (0,0), (1,0), (1,1), (0,1)).
+pub fn bilinear(tc: &[Vec2; 4], u: f32, v: f32) -> Vec2 {
     let w = [(1.0 - u) * (1.0 - v), u * (1.0 - v), u * v, (1.0 - u) * v];
     vec2(
         tc.iter().zip(w).map(|(t, w)| t.x * w).sum(),

@@ -1,0 +1,172 @@
+//! The solved mesh seen from the camera: each camera ray's hit finds its patch, which shows
+//! the value of the chosen visualization mode — flat, or bilinear between corner values with
+//! `-interpolate` — with patch outlines drawn over the image for `--wireframe`.
+
+use std::sync::atomic::AtomicU64;
+
+use rayon::prelude::*;
+
+use super::solver::FormFactorSampler;
+use super::{Solution, Visualize};
+use crate::accel::Accel;
+use crate::engines::{render_pixels, RenderSettings, RenderStats};
+use crate::film::Film;
+use crate::geometry::mesh::NONE;
+use crate::geometry::Vec3;
+use crate::scene::{Camera, Color, Scene};
+
+const WIRE: Color = Vec3::ZERO;
+const SOURCE_OUTLINE: Color = Vec3 {
+    x: 1.0,
+    y: 0.0,
+    z: 0.0,
+};
+
+/// Renders a solution in the mode `settings.radiosity.visualize`.
+pub fn render_solution(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+    solution: &Solution,
+) -> (Film, RenderStats) {
+    let r = &settings.radiosity;
+    let patches = &solution.patches;
+    let source = form_factor_source(solution, r.ff_source);
+    let values: Vec<Color> = match r.visualize {
+        Visualize::Radiance => solution.display_radiance(),
+        Visualize::Materials => patches.iter().map(|p| p.albedo).collect(),
+        Visualize::Lights => patches.iter().map(|p| p.emitted).collect(),
+        Visualize::Undistributed => solution.state.unshot.clone(),
+        Visualize::Absorbed => patches
+            .iter()
+            .zip(&solution.state.incident)
+            .map(|(p, e)| (Vec3::ONE - p.albedo).mul_elem(*e))
+            .collect(),
+        Visualize::FormFactors => form_factor_greys(scene, accel, settings, solution, source),
+    };
+    let field = solution.field(values, r.interpolate);
+    let (mut film, stats) = render_pixels(
+        scene,
+        accel,
+        settings,
+        "display",
+        |_ray, hit, _rng, _counts| {
+            let Some(s) = hit else {
+                return scene.background;
+            };
+            solution.sample(scene, &s, &field).unwrap_or(Vec3::ZERO)
+        },
+    );
+    let outline_source = r.visualize == Visualize::FormFactors;
+    if r.wireframe || outline_source {
+        let ids = patch_ids(scene, accel, settings, solution);
+        let (w, h) = (settings.width as usize, settings.height as usize);
+        let id = |x: usize, y: usize| ids[y * w + x];
+        for y in 0..h {
+            for x in 0..w {
+                let here = id(x, y);
+                let neighbours = [
+                    (x + 1 < w).then(|| id(x + 1, y)),
+                    (y + 1 < h).then(|| id(x, y + 1)),
+                    (x > 0).then(|| id(x - 1, y)),
+                    (y > 0).then(|| id(x, y - 1)),
+                ];
+                let border = neighbours.iter().flatten().any(|&n| n != here);
+                if outline_source && here == source as u32 && border {
+                    film.pixels[y * w + x] = SOURCE_OUTLINE;
+                } else if r.wireframe
+                    && here != NONE
+                    && neighbours[..2].iter().flatten().any(|&n| n != here)
+                {
+                    film.pixels[y * w + x] = WIRE;
+                }
+            }
+        }
+    }
+    (film, stats)
+}
+
+/// The patch `--ff-source` names, or the one with the most undistributed power (the next to
+/// shoot), or the brightest emitter when everything has been shot.
+fn form_factor_source(solution: &Solution, asked: Option<u32>) -> usize {
+    let patches = &solution.patches;
+    if let Some(k) = asked {
+        return (k as usize).min(patches.len().saturating_sub(1));
+    }
+    let power = |c: Color, a: f32| (c.x + c.y + c.z) * a;
+    let best = |values: &[Color]| {
+        (0..patches.len()).max_by(|&a, &b| {
+            power(values[a], patches[a].area).total_cmp(&power(values[b], patches[b].area))
+        })
+    };
+    let unshot = &solution.state.unshot;
+    let emitted: Vec<Color> = patches.iter().map(|p| p.emitted).collect();
+    if unshot.iter().any(|u| u.max_elem() > 0.0) {
+        best(unshot).unwrap_or(0)
+    } else {
+        best(&emitted).unwrap_or(0)
+    }
+}
+
+/// Grey levels F_source→j / max_j F_source→j.
+fn form_factor_greys(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+    solution: &Solution,
+    source: usize,
+) -> Vec<Color> {
+    let patches = &solution.patches;
+    if patches.is_empty() {
+        return Vec::new();
+    }
+    let sampler = FormFactorSampler {
+        scene,
+        accel,
+        patches,
+        samples: settings.radiosity.num_form_factor_samples.max(1),
+        visibility: solution.visibility,
+        seed: settings.seed,
+        rays: AtomicU64::new(0),
+    };
+    // The row holds F_j→source; reciprocity turns it into F_source→j.
+    let a_source = patches[source].area.max(f32::MIN_POSITIVE);
+    let from_source: Vec<f32> = sampler
+        .row(source)
+        .iter()
+        .zip(patches)
+        .map(|(f, p)| f * p.area / a_source)
+        .collect();
+    let max = from_source.iter().copied().fold(0.0f32, f32::max);
+    from_source
+        .iter()
+        .map(|&f| Vec3::splat(if max > 0.0 { f / max } else { 0.0 }))
+        .collect()
+}
+
+/// The patch seen at each pixel centre (`NONE` for the background), rows from the top.
+fn patch_ids(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+    solution: &Solution,
+) -> Vec<u32> {
+    let (w, h) = (settings.width, settings.height);
+    let camera = scene.camera();
+    let mut ids = vec![NONE; w as usize * h as usize];
+    ids.par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(row, out)| {
+            let j = h - 1 - row as u32;
+            for (i, id) in out.iter_mut().enumerate() {
+                let (x, y) = Camera::screen_point(i as u32, j, 0.5, 0.5, w, h);
+                let ray = camera.generate_ray(x, y);
+                if let Some(s) = crate::accel::closest_surface(accel, scene, &ray) {
+                    if let Some((k, _, _)) = solution.locate(scene, &s) {
+                        *id = k as u32;
+                    }
+                }
+            }
+        });
+    ids
+}

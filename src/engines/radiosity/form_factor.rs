@@ -1,0 +1,133 @@
+//! Form factors. The point-to-polygon form factor is exact (Lambert's contour integral over
+//! the polygon clipped to the hemisphere above the point); the patch-to-patch form factor
+//! averages it over points of the receiving patch and tests each point's visibility with one
+//! ray to a point of the shooting patch.
+
+use crate::geometry::Vec3;
+
+/// Form factor from a differential area at `x` with unit normal `n` to the polygon `polygon`
+/// (planar, convex, any orientation): the fraction of the light leaving `x` diffusely that
+/// reaches the polygon, ignoring occlusion. The part of the polygon below `x`'s tangent plane
+/// is clipped away first; a polygon seen from behind counts like one seen from the front
+/// (callers decide which side emits).
+pub fn point_to_polygon(x: Vec3, n: Vec3, polygon: &[Vec3]) -> f32 {
+    let mut clipped = [Vec3::ZERO; 8];
+    let count = clip_above(x, n, polygon, &mut clipped);
+    if count < 3 {
+        return 0.0;
+    }
+    let mut sum = 0.0f64;
+    for k in 0..count {
+        let a = clipped[k] - x;
+        let b = clipped[(k + 1) % count] - x;
+        let c = a.cross(b);
+        let len = c.length();
+        if len == 0.0 || !len.is_finite() {
+            continue;
+        }
+        // The angle between a and b from atan2: accurate for small and large angles alike.
+        let angle = len.atan2(a.dot(b));
+        sum += (n.dot(c) / len * angle) as f64;
+    }
+    (sum.abs() / std::f64::consts::TAU) as f32
+}
+
+/// Sutherland–Hodgman: the part of `polygon` strictly above the plane through `x` with
+/// normal `n`, written into `out`; returns its vertex count.
+fn clip_above(x: Vec3, n: Vec3, polygon: &[Vec3], out: &mut [Vec3; 8]) -> usize {
+    let mut count = 0;
+    let m = polygon.len();
+    for k in 0..m {
+        let (p, q) = (polygon[k], polygon[(k + 1) % m]);
+        let (dp, dq) = ((p - x).dot(n), (q - x).dot(n));
+        if dp > 0.0 && count < out.len() {
+            out[count] = p;
+            count += 1;
+        }
+        if (dp > 0.0) != (dq > 0.0) && dp != dq && count < out.len() {
+            let t = dp / (dp - dq);
+            let crossing = p + (q - p) * t;
+            if (crossing - x).dot(n) >= 0.0 {
+                out[count] = crossing;
+                count += 1;
+            }
+        }
+    }
+    count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::vec3;
+
+    #[test]
+    fn point_under_the_centre_of_a_large_square_sees_nearly_all() {
+        let s = 1e3;
+        let square = [
+            vec3(-s, -s, 1.0),
+            vec3(s, -s, 1.0),
+            vec3(s, s, 1.0),
+            vec3(-s, s, 1.0),
+        ];
+        let f = point_to_polygon(Vec3::ZERO, vec3(0.0, 0.0, 1.0), &square);
+        assert!((f - 1.0).abs() < 2e-3, "{f}");
+    }
+
+    #[test]
+    fn polygon_behind_the_point_contributes_nothing() {
+        let square = [
+            vec3(0.0, 0.0, -1.0),
+            vec3(1.0, 0.0, -1.0),
+            vec3(1.0, 1.0, -1.0),
+            vec3(0.0, 1.0, -1.0),
+        ];
+        assert_eq!(
+            point_to_polygon(Vec3::ZERO, vec3(0.0, 0.0, 1.0), &square),
+            0.0
+        );
+    }
+
+    /// Point to a coaxial disc-like square: the closed form for a point below the corner of
+    /// an a×b rectangle at height c, (1/2π)(X/√(1+X²)·atan(Y/√(1+X²)) + Y/√(1+Y²)·atan(X/√(1+Y²)))
+    /// with X = a/c, Y = b/c.
+    #[test]
+    fn point_below_a_rectangle_corner_matches_the_closed_form() {
+        let (a, b, c) = (2.0f64, 0.5f64, 1.0f64);
+        let (x, y) = (a / c, b / c);
+        let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+        let expected =
+            (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / std::f64::consts::TAU;
+        let rect = [
+            vec3(0.0, 0.0, 1.0),
+            vec3(a as f32, 0.0, 1.0),
+            vec3(a as f32, b as f32, 1.0),
+            vec3(0.0, b as f32, 1.0),
+        ];
+        let f = point_to_polygon(Vec3::ZERO, vec3(0.0, 0.0, 1.0), &rect) as f64;
+        assert!((f - expected).abs() < 1e-6, "{f} vs {expected}");
+    }
+
+    #[test]
+    fn half_of_a_straddling_polygon_is_clipped() {
+        // A vertical square centred on the point's tangent plane: only its upper half counts.
+        let full = [
+            vec3(-1.0, 1.0, -1.0),
+            vec3(1.0, 1.0, -1.0),
+            vec3(1.0, 1.0, 1.0),
+            vec3(-1.0, 1.0, 1.0),
+        ];
+        let upper = [
+            vec3(-1.0, 1.0, 0.0),
+            vec3(1.0, 1.0, 0.0),
+            vec3(1.0, 1.0, 1.0),
+            vec3(-1.0, 1.0, 1.0),
+        ];
+        let n = vec3(0.0, 0.0, 1.0);
+        let (f, g) = (
+            point_to_polygon(Vec3::ZERO, n, &full),
+            point_to_polygon(Vec3::ZERO, n, &upper),
+        );
+        assert!(f > 0.0 && (f - g).abs() < 1e-6, "{f} vs {g}");
+    }
+}

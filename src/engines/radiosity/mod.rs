@@ -1,0 +1,480 @@
+//! Radiosity on a quad mesh: patches from the scene's quads (spheres and rings rasterized),
+//! form factors by exact point-to-patch integration with visibility rays through the `Accel`
+//! against the original geometry, progressive refinement with the ambient term, and the
+//! solved mesh seen from the camera in several visualization modes.
+
+pub mod form_factor;
+pub mod patch;
+pub mod solver;
+
+mod display;
+
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+pub use display::render_solution;
+use patch::Patch;
+use solver::{FormFactorSampler, SolveLimits, SolverState, Stop};
+
+use super::RenderSettings;
+use crate::accel::Accel;
+use crate::film::Film;
+use crate::geometry::mesh::{QuadMesh, Rasterization, NONE};
+use crate::geometry::{RingPart, Vec3};
+use crate::scene::{Color, PrimKind, Scene, SurfaceHit};
+
+/// What the radiosity engine shows (`--visualize`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Visualize {
+    /// The solution: radiance of each patch plus the ambient term for light not yet shot.
+    #[default]
+    Radiance,
+    /// Each patch's albedo.
+    Materials,
+    /// Form factors from one patch (`--ff-source`) to every other, grey by relative size.
+    FormFactors,
+    /// Emitted radiance.
+    Lights,
+    /// Radiance received but not yet shot.
+    Undistributed,
+    /// Radiance absorbed: (1 − ρ) × incident.
+    Absorbed,
+}
+
+/// Settings only the radiosity engine reads. Defaults are the course program's where it has one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RadiositySettings {
+    /// Point pairs per form factor (`-num_form_factor_samples`, default 1: the patch centres).
+    pub num_form_factor_samples: u32,
+    /// Sphere tessellation H V (`-sphere_rasterization`, default 8 6).
+    pub sphere_rasterization: (u32, u32),
+    /// Ring tessellation around the axis (`-cylinder_ring_rasterization`, default 20).
+    pub cylinder_ring_rasterization: u32,
+    /// Split every quad into four this many times (`--subdivide`, default 0).
+    pub subdivide: u32,
+    /// Smooth display: values interpolated from the patches around each vertex
+    /// (`-interpolate`, default off: flat patches).
+    pub interpolate: bool,
+    /// Stop when undistributed power / emitted power falls to this (`--radiosity-tolerance`,
+    /// default 1e-3).
+    pub tolerance: f32,
+    /// Stop after exactly this many shots (`--radiosity-iterations`, default: none).
+    pub iterations: Option<u64>,
+    /// Safety cap on shots per patch when no iteration count is given
+    /// (`--radiosity-max-shots-per-patch`, default 1000); reaching it is reported.
+    pub max_shots_per_patch: u64,
+    /// Memory for cached form-factor rows, MiB (`--ff-cache-mb`, default 256).
+    pub ff_cache_mb: usize,
+    /// Split patches whose radiance differs from a neighbour's by more than this (largest
+    /// channel) and solve again (`--adaptive-subdivide`, default: off).
+    pub adaptive_threshold: Option<f32>,
+    /// Rounds of adaptive splitting (`--adaptive-rounds`, default 3).
+    pub adaptive_rounds: u32,
+    pub visualize: Visualize,
+    /// Patch outlines over the image (`--wireframe`).
+    pub wireframe: bool,
+    /// The patch whose form factors `--visualize form-factors` shows (`--ff-source`,
+    /// default: the patch with the most undistributed light).
+    pub ff_source: Option<u32>,
+    /// Keep a record of every shot (`--log-convergence`).
+    pub log_convergence: bool,
+}
+
+impl Default for RadiositySettings {
+    fn default() -> Self {
+        RadiositySettings {
+            num_form_factor_samples: 1,
+            sphere_rasterization: (8, 6),
+            cylinder_ring_rasterization: 20,
+            subdivide: 0,
+            interpolate: false,
+            tolerance: 1e-3,
+            iterations: None,
+            max_shots_per_patch: 1000,
+            ff_cache_mb: 256,
+            adaptive_threshold: None,
+            adaptive_rounds: 3,
+            visualize: Visualize::Radiance,
+            wireframe: false,
+            ff_source: None,
+            log_convergence: false,
+        }
+    }
+}
+
+/// A solved radiosity mesh.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    pub mesh: QuadMesh,
+    pub patches: Vec<Patch>,
+    /// For each mesh face, its patch (`NONE` for faces that were split).
+    patch_of_face: Vec<u32>,
+    pub state: SolverState,
+    pub stop: Stop,
+    /// Cohen's ambient term for the light not yet shot.
+    pub ambient: Color,
+    /// Whether form factors were tested for visibility, and why (not).
+    pub visibility: bool,
+    pub visibility_reason: &'static str,
+    /// Visibility rays cast, over all rounds.
+    pub rays: u64,
+    pub cache_hits: u64,
+    pub cache_misses: u64,
+    pub cache_peak_bytes: usize,
+    /// Rounds of adaptive subdivision done.
+    pub adaptive_rounds: u32,
+}
+
+/// Values over the patches of a solution, looked up at hits by `Solution::sample`.
+#[derive(Clone, Debug)]
+pub struct PatchField {
+    values: Vec<Color>,
+    corners: Option<Vec<[Color; 4]>>,
+}
+
+/// Whether every quad of the scene lies in front of (or on) every other quad's plane and there
+/// is nothing else: then the scene is the inside of a convex polyhedron and no segment between
+/// two of its points can be blocked. Scenes of more than `LIMIT` quads are not checked.
+pub fn convex_enclosure(scene: &Scene) -> bool {
+    const LIMIT: usize = 4096;
+    if !scene.triangles.is_empty()
+        || !scene.spheres.is_empty()
+        || !scene.rings.is_empty()
+        || scene.quads.is_empty()
+        || scene.quads.len() > LIMIT
+    {
+        return false;
+    }
+    let scale = scene.bounds().extent().length();
+    scene.quads.iter().all(|q| {
+        scene.quads.iter().all(|o| {
+            o.vertices
+                .iter()
+                .all(|&p| (p - q.vertices[0]).dot(q.normal) >= -1e-5 * scale)
+        })
+    })
+}
+
+impl Solution {
+    /// Builds the mesh, solves, and (with `--adaptive-subdivide`) refines and solves again.
+    pub fn solve(
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+        on_progress: impl Fn(f32),
+    ) -> Solution {
+        let r = &settings.radiosity;
+        let mut mesh = QuadMesh::from_scene(
+            scene,
+            Rasterization {
+                sphere: r.sphere_rasterization,
+                ring: r.cylinder_ring_rasterization,
+            },
+        );
+        mesh.subdivide(r.subdivide);
+        let (visibility, visibility_reason) = if settings.num_shadow_samples == 0 {
+            (false, "off (-num_shadow_samples 0)")
+        } else if convex_enclosure(scene) {
+            (false, "skipped: the scene is a convex enclosure")
+        } else {
+            (true, "one occlusion ray per point pair")
+        };
+        let mut rays = 0;
+        let mut round = 0;
+        loop {
+            let patches = patch::patches(scene, &mesh);
+            let sampler = FormFactorSampler {
+                scene,
+                accel,
+                patches: &patches,
+                samples: r.num_form_factor_samples.max(1),
+                visibility,
+                seed: settings.seed,
+                rays: AtomicU64::new(0),
+            };
+            let limits = SolveLimits {
+                tolerance: r.tolerance,
+                iterations: r.iterations,
+                cap: r.max_shots_per_patch.saturating_mul(patches.len() as u64),
+                cache_bytes: r.ff_cache_mb << 20,
+                log: r.log_convergence,
+            };
+            let (state, stop, cache) = solver::solve(&sampler, &limits, &on_progress);
+            rays += sampler.rays.load(Relaxed);
+            let mut patch_of_face = vec![NONE; mesh.faces.len()];
+            for (k, p) in patches.iter().enumerate() {
+                patch_of_face[p.face as usize] = k as u32;
+            }
+            let ambient = solver::ambient(&patches, &state.unshot);
+            let solution = Solution {
+                mesh,
+                patches,
+                patch_of_face,
+                state,
+                stop,
+                ambient,
+                visibility,
+                visibility_reason,
+                rays,
+                cache_hits: cache.hits,
+                cache_misses: cache.misses,
+                cache_peak_bytes: cache.peak_bytes,
+                adaptive_rounds: round,
+            };
+            let Some(threshold) = r.adaptive_threshold else {
+                return solution;
+            };
+            let split = if round < r.adaptive_rounds {
+                solution.patches_to_split(threshold)
+            } else {
+                Vec::new()
+            };
+            if split.is_empty() {
+                return solution;
+            }
+            mesh = solution.mesh;
+            mesh.split_many(&split);
+            round += 1;
+        }
+    }
+
+    /// Faces of patches whose radiance differs from a neighbour's (across an edge or a corner)
+    /// by more than `threshold` in some channel.
+    fn patches_to_split(&self, threshold: f32) -> Vec<u32> {
+        let around = self.mesh.vertex_leaves();
+        let radiance = &self.state.radiance;
+        let differs = |a: usize, b: u32| {
+            let q = self.patch_of_face[b as usize];
+            q != NONE && (radiance[a] - radiance[q as usize]).abs().max_elem() > threshold
+        };
+        self.patches
+            .iter()
+            .enumerate()
+            .filter(|(k, p)| {
+                p.area > 0.0
+                    && (self.mesh.edge_neighbours(p.face).any(|f| differs(*k, f))
+                        || self
+                            .mesh
+                            .face_vertex_ids(p.face)
+                            .iter()
+                            .any(|&v| around[v as usize].iter().any(|&f| differs(*k, f))))
+            })
+            .map(|(_, p)| p.face)
+            .collect()
+    }
+
+    /// The radiance shown for each patch: solved radiance plus the ambient term reflected.
+    pub fn display_radiance(&self) -> Vec<Color> {
+        self.patches
+            .iter()
+            .zip(&self.state.radiance)
+            .map(|(p, l)| *l + p.albedo.mul_elem(self.ambient))
+            .collect()
+    }
+
+    /// Indirect incident radiance (irradiance / π not straight from emitters) for each patch,
+    /// the ambient term included: what a ray tracer adds at diffuse hits instead of
+    /// `-ambient_light` (`--indirect radiosity`).
+    pub fn indirect_incident(&self) -> Vec<Color> {
+        self.state
+            .incident
+            .iter()
+            .zip(&self.state.incident_direct)
+            .map(|(i, d)| (*i - *d).max(Vec3::ZERO) + self.ambient)
+            .collect()
+    }
+
+    /// The patch under a surface hit, and the hit's parameters within that patch.
+    pub fn locate(&self, scene: &Scene, hit: &SurfaceHit) -> Option<(usize, f32, f32)> {
+        let (u, v, part) = match hit.prim.kind {
+            PrimKind::Quad => {
+                let q = &scene.quads[hit.prim.index as usize];
+                let (u, v) = inverse_bilinear(&q.vertices, q.normal, hit.point).unwrap_or(hit.uv);
+                (u, v, None)
+            }
+            PrimKind::Triangle => {
+                let (b1, b2) = hit.uv;
+                let u = if b2 < 1.0 { b1 / (1.0 - b2) } else { 0.0 };
+                (u, b2, None)
+            }
+            PrimKind::Sphere => (hit.uv.0, hit.uv.1, None),
+            PrimKind::Ring => {
+                let r = &scene.rings[hit.prim.index as usize].shape;
+                let n = hit.geometric_normal;
+                let radial = (hit.point - r.base).dot(n);
+                let part = if n.y > 0.5 {
+                    RingPart::Top
+                } else if n.y < -0.5 {
+                    RingPart::Bottom
+                } else if radial > 0.0 {
+                    RingPart::Outer
+                } else {
+                    RingPart::Inner
+                };
+                (hit.uv.0, hit.uv.1, Some(part))
+            }
+        };
+        let (face, s, t) = self.mesh.locate(hit.prim, part, u, v)?;
+        let k = self.patch_of_face[face as usize];
+        (k != NONE).then_some((k as usize, s, t))
+    }
+
+    /// Per-patch values ready for lookups at hits: flat, or with corner values for bilinear
+    /// interpolation.
+    pub fn field(&self, values: Vec<Color>, interpolate: bool) -> PatchField {
+        let corners = interpolate.then(|| self.corner_values(&values));
+        PatchField { values, corners }
+    }
+
+    /// The value of `field` at a surface hit (None where no patch lies, e.g. a triangle of a
+    /// scene whose mesh left it out).
+    pub fn sample(&self, scene: &Scene, hit: &SurfaceHit, field: &PatchField) -> Option<Color> {
+        let (k, u, v) = self.locate(scene, hit)?;
+        Some(match &field.corners {
+            Some(c) => {
+                let c = &c[k];
+                c[0] * ((1.0 - u) * (1.0 - v))
+                    + c[1] * (u * (1.0 - v))
+                    + c[2] * (u * v)
+                    + c[3] * ((1.0 - u) * v)
+            }
+            None => field.values[k],
+        })
+    }
+
+    /// Values at the four corners of every patch for smooth display: each corner takes the
+    /// area-weighted mean of the patches around its vertex that face nearly the same way
+    /// (so a room's corners stay sharp).
+    pub fn corner_values(&self, values: &[Color]) -> Vec<[Color; 4]> {
+        let around = self.mesh.vertex_leaves();
+        self.patches
+            .iter()
+            .map(|p| {
+                self.mesh.face_vertex_ids(p.face).map(|v| {
+                    let (mut sum, mut weight) = (Vec3::ZERO, 0.0f32);
+                    for &f in &around[v as usize] {
+                        let q = self.patch_of_face[f as usize];
+                        if q == NONE {
+                            continue;
+                        }
+                        let other = &self.patches[q as usize];
+                        if other.normal.dot(p.normal) > 0.9 && other.area > 0.0 {
+                            sum += values[q as usize] * other.area;
+                            weight += other.area;
+                        }
+                    }
+                    if weight > 0.0 {
+                        sum / weight
+                    } else {
+                        values[self.patch_of_face[p.face as usize] as usize]
+                    }
+                })
+            })
+            .collect()
+    }
+}
+
+/// Parameters (u, v) of point `p` on the planar quad `q` under its bilinear map
+/// q0 + (q1−q0)u + (q3−q0)v + (q0−q1+q2−q3)uv (Quilez), solved in the plane of the quad's
+/// two largest normal-free axes.
+fn inverse_bilinear(q: &[Vec3; 4], normal: Vec3, p: Vec3) -> Option<(f32, f32)> {
+    let axis = normal.abs().max_axis();
+    let flat = |v: Vec3| {
+        let a = v.to_array();
+        match axis {
+            0 => (a[1], a[2]),
+            1 => (a[2], a[0]),
+            _ => (a[0], a[1]),
+        }
+    };
+    let sub = |a: (f32, f32), b: (f32, f32)| (a.0 - b.0, a.1 - b.1);
+    let cross = |a: (f32, f32), b: (f32, f32)| a.0 * b.1 - a.1 * b.0;
+    let [a, b, c, d] = q.map(flat);
+    let e = sub(b, a);
+    let f = sub(d, a);
+    let g = sub(sub(a, b), sub(d, c));
+    let h = sub(flat(p), a);
+    let k2 = cross(g, f);
+    let k1 = cross(e, f) + cross(h, g);
+    let k0 = cross(h, e);
+    let v = if k2.abs() < 1e-6 * k1.abs().max(f32::MIN_POSITIVE) {
+        -k0 / k1
+    } else {
+        let w = k1 * k1 - 4.0 * k0 * k2;
+        if w < 0.0 {
+            return None;
+        }
+        let w = w.sqrt();
+        let v1 = (-k1 - w) / (2.0 * k2);
+        let v2 = (-k1 + w) / (2.0 * k2);
+        if (-1e-3..=1.0 + 1e-3).contains(&v1) {
+            v1
+        } else {
+            v2
+        }
+    };
+    let den = (e.0 + g.0 * v, e.1 + g.1 * v);
+    let u = if den.0.abs() > den.1.abs() {
+        (h.0 - f.0 * v) / den.0
+    } else {
+        (h.1 - f.1 * v) / den.1
+    };
+    (u.is_finite() && v.is_finite()).then(|| (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0)))
+}
+
+/// Solves and renders with the radiosity engine.
+pub fn render(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+) -> (Film, super::RenderStats, Solution) {
+    let solution = solve_with_progress(scene, accel, settings);
+    let (film, stats) = render_solution(scene, accel, settings, &solution);
+    stats.form_factor_rays.store(solution.rays, Relaxed);
+    (film, stats, solution)
+}
+
+/// Solves with a progress bar: the bar fills as log(residual) approaches log(tolerance).
+pub fn solve_with_progress(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+) -> Solution {
+    const STEPS: u64 = 1000;
+    let bar = crate::progress::bar(STEPS, "radiosity", settings.quiet);
+    let tolerance = settings.radiosity.tolerance.clamp(1e-30, 0.5);
+    let solution = Solution::solve(scene, accel, settings, |residual| {
+        if residual > 0.0 && residual.is_finite() {
+            let done = (residual.ln() / tolerance.ln()).clamp(0.0, 1.0);
+            bar.set_position((done * STEPS as f32) as u64);
+        }
+    });
+    bar.finish_and_clear();
+    solution
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::vec3;
+
+    #[test]
+    fn inverse_bilinear_recovers_parameters_of_a_trapezoid() {
+        let q = [
+            vec3(0.0, 0.0, 0.0),
+            vec3(4.0, 0.0, 0.0),
+            vec3(3.0, 2.0, 0.0),
+            vec3(1.0, 2.0, 0.0),
+        ];
+        for (u, v) in [(0.25f32, 0.5f32), (0.9, 0.1), (0.5, 0.5), (0.0, 1.0)] {
+            let p = q[0]
+                + (q[1] - q[0]) * u
+                + (q[3] - q[0]) * v
+                + (q[0] - q[1] + q[2] - q[3]) * (u * v);
+            let (a, b) = inverse_bilinear(&q, vec3(0.0, 0.0, 1.0), p).unwrap();
+            assert!(
+                (a - u).abs() < 1e-5 && (b - v).abs() < 1e-5,
+                "{u} {v} -> {a} {b}"
+            );
+        }
+    }
+}

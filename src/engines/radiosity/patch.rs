@@ -1,0 +1,141 @@
+//! Patches: the leaves of the radiosity mesh with what the solver needs of each — area,
+//! normal, albedo, emission — and points on them, both on the flat patch (for form factors)
+//! and on the primitive it approximates (for visibility rays against the original geometry).
+
+use crate::geometry::mesh::QuadMesh;
+use crate::geometry::{offset_ray_origin, point_error, vec3, RingPart, Vec3};
+use crate::scene::{Color, PrimKind, PrimRef, Scene};
+
+#[derive(Clone, Debug)]
+pub struct Patch {
+    /// The mesh face this patch is.
+    pub face: u32,
+    pub corners: [Vec3; 4],
+    /// Area-weighted centroid (the point a one-sample form factor uses).
+    pub centre: Vec3,
+    pub normal: Vec3,
+    pub area: f32,
+    /// Share of the area in the triangle (c0, c1, c2); the rest is in (c0, c2, c3).
+    first_share: f32,
+    pub albedo: Color,
+    pub emitted: Color,
+    pub prim: PrimRef,
+    pub ring_part: Option<RingPart>,
+}
+
+impl Patch {
+    /// The point of the patch at (s, t) ∈ [0,1]², uniform in area.
+    pub fn point(&self, s: f32, t: f32) -> Vec3 {
+        let c = &self.corners;
+        let (a, b, d, s) = if s < self.first_share {
+            (c[0], c[1], c[2], s / self.first_share)
+        } else {
+            (
+                c[0],
+                c[2],
+                c[3],
+                (s - self.first_share) / (1.0 - self.first_share),
+            )
+        };
+        let root = s.clamp(0.0, 1.0).sqrt();
+        a * (1.0 - root) + b * (root * (1.0 - t)) + d * (root * t)
+    }
+}
+
+/// The leaves of `mesh` as patches. Albedo is the material's (a texture's colour at the
+/// patch centre when it has one).
+pub fn patches(scene: &Scene, mesh: &QuadMesh) -> Vec<Patch> {
+    mesh.leaves
+        .iter()
+        .map(|&face| {
+            let f = &mesh.faces[face as usize];
+            let corners = mesh.face_vertices(face);
+            let (area, normal) = mesh.area_normal(face);
+            let area0 = 0.5
+                * (corners[1] - corners[0])
+                    .cross(corners[2] - corners[0])
+                    .length();
+            let area1 = 0.5
+                * (corners[2] - corners[0])
+                    .cross(corners[3] - corners[0])
+                    .length();
+            let total = area0 + area1;
+            let first_share = if total > 0.0 { area0 / total } else { 0.5 };
+            let centroid0 = (corners[0] + corners[1] + corners[2]) / 3.0;
+            let centroid1 = (corners[0] + corners[2] + corners[3]) / 3.0;
+            let centre = centroid0 * first_share + centroid1 * (1.0 - first_share);
+            let m = &scene.materials[f.material as usize];
+            let albedo = match m.texture {
+                Some(t) => {
+                    let [u0, v0, u1, v1] = f.param;
+                    let (u, v) = (0.5 * (u0 + u1), 0.5 * (v0 + v1));
+                    let tc = match (f.prim.kind, scene.quads.get(f.prim.index as usize)) {
+                        (PrimKind::Quad, Some(q)) => {
+                            q.tex_coords.map_or(crate::geometry::vec2(u, v), |tc| {
+                                crate::scene::bilinear(&tc, u, v)
+                            })
+                        }
+                        _ => crate::geometry::vec2(u, v),
+                    };
+                    scene.textures[t].lookup(tc)
+                }
+                None => m.diffuse,
+            };
+            Patch {
+                face,
+                corners,
+                centre,
+                normal,
+                area,
+                first_share,
+                albedo,
+                emitted: m.emitted,
+                prim: f.prim,
+                ring_part: f.ring_part,
+            }
+        })
+        .collect()
+}
+
+/// A point of a patch moved onto the surface of the primitive it approximates, with that
+/// surface's outward normal there and the ray origin offset off it (towards `side`, the
+/// direction the ray will leave in).
+pub fn on_primitive(scene: &Scene, patch: &Patch, p: Vec3, side: Vec3) -> Vec3 {
+    let i = patch.prim.index as usize;
+    let (point, normal, magnitude) = match patch.prim.kind {
+        PrimKind::Quad | PrimKind::Triangle => (p, patch.normal, p.abs().max_elem()),
+        PrimKind::Sphere => {
+            let s = &scene.spheres[i].shape;
+            let n = s.normal_at(p);
+            (
+                s.centre + n * s.radius,
+                n,
+                s.centre.abs().max_elem() + s.radius,
+            )
+        }
+        PrimKind::Ring => {
+            let r = &scene.rings[i].shape;
+            let (x, z) = (p.x - r.base.x, p.z - r.base.z);
+            let rho = (x * x + z * z).sqrt().max(f32::MIN_POSITIVE);
+            let part = patch.ring_part.unwrap_or(RingPart::Outer);
+            let radius = match part {
+                RingPart::Outer => r.r_out,
+                RingPart::Inner => r.r_in,
+                RingPart::Bottom | RingPart::Top => rho.clamp(r.r_in, r.r_out),
+            };
+            let q = vec3(
+                r.base.x + x / rho * radius,
+                p.y,
+                r.base.z + z / rho * radius,
+            );
+            let magnitude = r.base.abs().max_elem() + r.r_out + r.height;
+            (q, r.normal_at(q, part), magnitude)
+        }
+    };
+    let n = if normal.dot(side) < 0.0 {
+        -normal
+    } else {
+        normal
+    };
+    offset_ray_origin(point, n, point_error(magnitude))
+}

@@ -1,0 +1,344 @@
+//! Progressive refinement (Cohen, Chen, Wallace & Greenberg 1988): repeatedly shoot the patch
+//! with the most undistributed power to every other patch. The form factors of one shot are
+//! gathered at the receivers (Wallace, Elmquist & Haines 1989): each receiver averages the
+//! exact point-to-patch form factor over its sample points, which keeps every receiver's
+//! form factors to a closed enclosure summing to one. Rows are computed when a patch shoots
+//! and kept in a cache of bounded size, never as an N×N matrix.
+
+use std::collections::HashMap;
+use std::rc::Rc;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::form_factor::point_to_polygon;
+use super::patch::{on_primitive, Patch};
+use crate::accel::Accel;
+use crate::geometry::{shadow_ray, Ray, Vec3};
+use crate::sampling::{Pattern, Rng, Strata};
+use crate::scene::{Color, Scene};
+
+/// Receivers handled by one parallel task (their visibility rays go to the Accel as a batch).
+const RECEIVER_CHUNK: usize = 64;
+
+/// What the form factors of a shot are computed from.
+pub struct FormFactorSampler<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a dyn Accel,
+    pub patches: &'a [Patch],
+    /// Point pairs per form factor (1: the centres).
+    pub samples: u32,
+    /// Test each pair with an occlusion ray.
+    pub visibility: bool,
+    pub seed: u64,
+    /// Visibility rays cast so far.
+    pub rays: AtomicU64,
+}
+
+impl FormFactorSampler<'_> {
+    /// Point `k` of receiver `j`: the same points whichever patch shoots, so that a receiver's
+    /// form factors to a closed enclosure sum to exactly one.
+    fn receiver_point(&self, j: usize, k: u32) -> Vec3 {
+        let p = &self.patches[j];
+        if self.samples <= 1 {
+            return p.centre;
+        }
+        let mut rng = Rng::new(self.seed, j as u64, k as u64);
+        let (s, t) = Strata::new(Pattern::Jittered, self.samples).sample(k, &mut rng);
+        p.point(s, t)
+    }
+
+    /// Point `k` of shooter `i` paired with receiver `j`: its stratum is shifted by a random
+    /// offset per pair, so every pair of strata is equally likely.
+    fn shooter_point(&self, i: usize, j: usize, k: u32) -> Vec3 {
+        let p = &self.patches[i];
+        let n = self.samples;
+        if n <= 1 {
+            return p.centre;
+        }
+        let pair = (i as u64) << 32 | j as u64;
+        let mut rng = Rng::new(self.seed ^ 0x5eed_5eed, pair, 0);
+        let shift = (rng.next_u64() % n as u64) as u32;
+        let mut rng = Rng::new(self.seed ^ 0x5eed_5eed, pair, k as u64 + 1);
+        let (s, t) = Strata::new(Pattern::Jittered, n).sample((k + shift) % n, &mut rng);
+        p.point(s, t)
+    }
+
+    /// F_ji for every receiver j with shooter i: the fraction of the light leaving j that
+    /// arrives at i (0 for i itself).
+    pub fn row(&self, i: usize) -> Vec<f32> {
+        let n = self.patches.len();
+        let mut out = vec![0.0f32; n];
+        let shooter = &self.patches[i];
+        if shooter.area <= 0.0 {
+            return out;
+        }
+        out.par_chunks_mut(RECEIVER_CHUNK)
+            .enumerate()
+            .for_each(|(c, out)| {
+                let mut rays: Vec<Ray> = Vec::new();
+                let mut owners: Vec<(usize, f32)> = Vec::new();
+                for (o, slot) in out.iter_mut().enumerate() {
+                    let j = c * RECEIVER_CHUNK + o;
+                    let r = &self.patches[j];
+                    if j == i || r.area <= 0.0 || !may_see(r, shooter) {
+                        continue;
+                    }
+                    for k in 0..self.samples.max(1) {
+                        let x = self.receiver_point(j, k);
+                        // Light leaves the shooter from its front side only.
+                        if (x - shooter.centre).dot(shooter.normal) <= 0.0 {
+                            continue;
+                        }
+                        let f = point_to_polygon(x, r.normal, &shooter.corners);
+                        if f <= 0.0 {
+                            continue;
+                        }
+                        if !self.visibility {
+                            *slot += f;
+                            continue;
+                        }
+                        let y = self.shooter_point(i, j, k);
+                        let from = on_primitive(self.scene, r, x, y - x);
+                        let to = on_primitive(self.scene, shooter, y, x - y);
+                        rays.push(shadow_ray(from, to));
+                        owners.push((o, f));
+                    }
+                }
+                if !rays.is_empty() {
+                    let mut blocked = vec![false; rays.len()];
+                    self.accel.occluded_batch(&rays, &mut blocked);
+                    self.rays.fetch_add(rays.len() as u64, Relaxed);
+                    for (&(o, f), b) in owners.iter().zip(blocked) {
+                        if !b {
+                            out[o] += f;
+                        }
+                    }
+                }
+                let scale = 1.0 / self.samples.max(1) as f32;
+                out.iter_mut().for_each(|f| *f *= scale);
+            });
+        out
+    }
+}
+
+/// Whether any point of `r` could receive light from the front of `s`: some corner of each
+/// is strictly in front of the other's plane.
+fn may_see(r: &Patch, s: &Patch) -> bool {
+    let in_front = |a: &Patch, b: &Patch| {
+        b.corners
+            .iter()
+            .any(|&p| (p - a.centre).dot(a.normal) > 0.0)
+    };
+    in_front(r, s) && in_front(s, r)
+}
+
+/// Rows of form factors kept between shots, least recently used evicted beyond a budget.
+pub struct RowCache {
+    rows: HashMap<usize, (Rc<[f32]>, u64)>,
+    budget_bytes: usize,
+    bytes: usize,
+    clock: u64,
+    pub hits: u64,
+    pub misses: u64,
+    pub peak_bytes: usize,
+}
+
+impl RowCache {
+    pub fn new(budget_bytes: usize) -> RowCache {
+        RowCache {
+            rows: HashMap::new(),
+            budget_bytes,
+            bytes: 0,
+            clock: 0,
+            hits: 0,
+            misses: 0,
+            peak_bytes: 0,
+        }
+    }
+
+    pub fn get_or_insert(&mut self, i: usize, compute: impl FnOnce() -> Vec<f32>) -> Rc<[f32]> {
+        self.clock += 1;
+        if let Some((row, used)) = self.rows.get_mut(&i) {
+            *used = self.clock;
+            self.hits += 1;
+            return row.clone();
+        }
+        self.misses += 1;
+        let row: Rc<[f32]> = compute().into();
+        let size = std::mem::size_of_val(&*row);
+        if size > self.budget_bytes {
+            return row;
+        }
+        while self.bytes + size > self.budget_bytes {
+            let Some((&oldest, _)) = self.rows.iter().min_by_key(|(_, (_, used))| *used) else {
+                break;
+            };
+            if let Some((r, _)) = self.rows.remove(&oldest) {
+                self.bytes -= std::mem::size_of_val(&*r);
+            }
+        }
+        self.bytes += size;
+        self.peak_bytes = self.peak_bytes.max(self.bytes);
+        self.rows.insert(i, (row.clone(), self.clock));
+        row
+    }
+}
+
+/// Why the solver stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// Undistributed power fell below the tolerance.
+    Converged,
+    /// The number of shots asked for (`--radiosity-iterations`) was reached.
+    Iterations,
+    /// The safety cap on shots was reached before the tolerance: the solution is incomplete.
+    Cap,
+    /// Nothing emits: the solution is dark.
+    NoLight,
+}
+
+/// One line of `--log-convergence`.
+#[derive(Clone, Copy, Debug)]
+pub struct ShotRecord {
+    pub shot: u64,
+    pub patch: u32,
+    pub residual: f32,
+    pub seconds: f64,
+    pub rays: u64,
+}
+
+/// The state of a progressive solve: radiance per patch and what is left to shoot.
+#[derive(Clone, Debug, Default)]
+pub struct SolverState {
+    /// Outgoing radiance L_i = Le_i + ρ_i · incident_i.
+    pub radiance: Vec<Color>,
+    /// Radiance received but not yet shot.
+    pub unshot: Vec<Color>,
+    /// Part of `unshot` that is emission (shot once, at the emitter's first shot).
+    unshot_emission: Vec<Color>,
+    /// Incident radiance averaged over the hemisphere (irradiance / π) gathered so far.
+    pub incident: Vec<Color>,
+    /// The part of `incident` that came straight from emitters.
+    pub incident_direct: Vec<Color>,
+    pub shots: u64,
+    /// Undistributed power over emitted power.
+    pub residual: f32,
+    pub log: Vec<ShotRecord>,
+}
+
+pub struct SolveLimits {
+    pub tolerance: f32,
+    /// Stop after exactly this many shots (as the course's "after the top 16 patches have shot").
+    pub iterations: Option<u64>,
+    /// Safety cap when no iteration count is given.
+    pub cap: u64,
+    pub cache_bytes: usize,
+    pub log: bool,
+}
+
+fn power(c: Color, area: f32) -> f32 {
+    (c.x + c.y + c.z) * area
+}
+
+/// Solves by progressive refinement until the limits stop it.
+pub fn solve(
+    sampler: &FormFactorSampler,
+    limits: &SolveLimits,
+    on_shot: impl Fn(f32),
+) -> (SolverState, Stop, RowCache) {
+    let patches = sampler.patches;
+    let emitted: Vec<Color> = patches.iter().map(|p| p.emitted).collect();
+    let mut s = SolverState {
+        radiance: emitted.clone(),
+        unshot: emitted.clone(),
+        unshot_emission: emitted,
+        incident: vec![Vec3::ZERO; patches.len()],
+        incident_direct: vec![Vec3::ZERO; patches.len()],
+        ..Default::default()
+    };
+    let mut cache = RowCache::new(limits.cache_bytes);
+    let total_emitted: f64 = patches
+        .iter()
+        .map(|p| power(p.emitted, p.area) as f64)
+        .sum();
+    if total_emitted <= 0.0 {
+        return (s, Stop::NoLight, cache);
+    }
+    let start = Instant::now();
+    let stop = loop {
+        let (mut best, mut best_power, mut undistributed) = (0usize, -1.0f32, 0.0f64);
+        for (i, (u, p)) in s.unshot.iter().zip(patches).enumerate() {
+            let pw = power(*u, p.area);
+            undistributed += pw as f64;
+            if pw > best_power {
+                best = i;
+                best_power = pw;
+            }
+        }
+        s.residual = (undistributed / total_emitted) as f32;
+        on_shot(s.residual);
+        match limits.iterations {
+            Some(k) if s.shots >= k => break Stop::Iterations,
+            None if s.residual <= limits.tolerance => break Stop::Converged,
+            None if s.shots >= limits.cap => break Stop::Cap,
+            _ => {}
+        }
+        if best_power <= 0.0 {
+            break Stop::Converged;
+        }
+        let row = cache.get_or_insert(best, || sampler.row(best));
+        let (shot, shot_emission) = (s.unshot[best], s.unshot_emission[best]);
+        s.unshot[best] = Vec3::ZERO;
+        s.unshot_emission[best] = Vec3::ZERO;
+        for (j, &f) in row.iter().enumerate() {
+            if f <= 0.0 {
+                continue;
+            }
+            let arriving = shot * f;
+            s.incident[j] += arriving;
+            s.incident_direct[j] += shot_emission * f;
+            let reflected = patches[j].albedo.mul_elem(arriving);
+            s.radiance[j] += reflected;
+            s.unshot[j] += reflected;
+        }
+        s.shots += 1;
+        if limits.log {
+            s.log.push(ShotRecord {
+                shot: s.shots,
+                patch: best as u32,
+                residual: s.residual,
+                seconds: start.elapsed().as_secs_f64(),
+                rays: sampler.rays.load(Relaxed),
+            });
+        }
+    };
+    (s, stop, cache)
+}
+
+/// The ambient term of Cohen et al. 1988 for display: the light not yet shot, spread evenly
+/// and reflected by the average albedo, ambient = Σ ΔL_j A_j / Σ A_j / (1 − ρ_avg).
+pub fn ambient(patches: &[Patch], unshot: &[Color]) -> Color {
+    let area: f32 = patches.iter().map(|p| p.area).sum();
+    if area <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let rho_avg = patches
+        .iter()
+        .map(|p| p.albedo * p.area)
+        .fold(Vec3::ZERO, |a, b| a + b)
+        / area;
+    let undistributed = patches
+        .iter()
+        .zip(unshot)
+        .map(|(p, u)| *u * p.area)
+        .fold(Vec3::ZERO, |a, b| a + b)
+        / area;
+    let r = |rho: f32, u: f32| if rho < 1.0 { u / (1.0 - rho) } else { 0.0 };
+    crate::geometry::vec3(
+        r(rho_avg.x, undistributed.x),
+        r(rho_avg.y, undistributed.y),
+        r(rho_avg.z, undistributed.z),
+    )
+}
