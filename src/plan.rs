@@ -5,7 +5,7 @@
 use std::fmt;
 
 use crate::accel::AccelKind;
-use crate::engines::{EngineKind, RenderSettings};
+use crate::engines::{EngineKind, IndirectKind, RenderSettings};
 use crate::scene::Scene;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -23,6 +23,10 @@ pub struct Plan {
     pub photon_map: bool,
     pub caustic_map: bool,
     pub radiosity_mesh: bool,
+    /// Patches of the radiosity mesh before adaptive subdivision (0 without a mesh).
+    pub radiosity_patches: u64,
+    /// Whether form factors cast visibility rays, and why (not).
+    pub radiosity_visibility: &'static str,
     /// Why a stage the settings ask for is not run.
     pub notes: Vec<String>,
 }
@@ -50,6 +54,8 @@ impl Plan {
             .zip(&used)
             .any(|(m, &u)| u && m.is_specular());
         let photon_engine = engine == EngineKind::Photon;
+        let radiosity_mesh = engine == EngineKind::Radiosity
+            || (engine == EngineKind::Raytrace && settings.indirect == IndirectKind::Radiosity);
         let mut notes = Vec::new();
         if settings.num_photons_to_shoot > 0 && !photon_engine {
             notes.push(format!(
@@ -76,10 +82,35 @@ impl Plan {
             emitters,
             photon_map: photon_engine && settings.num_photons_to_shoot > 0,
             caustic_map: photon_engine && settings.num_photons_to_shoot > 0 && any_specular,
-            radiosity_mesh: engine == EngineKind::Radiosity,
+            radiosity_mesh,
+            radiosity_patches: if radiosity_mesh {
+                radiosity_patches(scene, settings)
+            } else {
+                0
+            },
+            radiosity_visibility: if !radiosity_mesh {
+                "none"
+            } else if settings.num_shadow_samples == 0 {
+                "off (-num_shadow_samples 0)"
+            } else if crate::engines::radiosity::convex_enclosure(scene) {
+                "skipped: the scene is a convex enclosure"
+            } else {
+                "one occlusion ray per point pair"
+            },
             notes,
         }
     }
+}
+
+/// Patches of the radiosity mesh: every primitive's top-level faces, times 4 per subdivision.
+fn radiosity_patches(scene: &Scene, settings: &RenderSettings) -> u64 {
+    let r = &settings.radiosity;
+    let (h, v) = r.sphere_rasterization;
+    let top = scene.quads.len() as u64
+        + scene.triangles.len() as u64
+        + scene.spheres.len() as u64 * h.max(3) as u64 * v.max(2) as u64
+        + scene.rings.len() as u64 * 4 * r.cylinder_ring_rasterization.max(3) as u64;
+    top.saturating_mul(4u64.saturating_pow(r.subdivide))
 }
 
 fn yes_no(b: bool) -> &'static str {
@@ -145,7 +176,15 @@ impl fmt::Display for Plan {
         writeln!(f, "emitters: {}", self.emitters)?;
         writeln!(f, "photon map: {}", yes_no(self.photon_map))?;
         writeln!(f, "caustic map: {}", yes_no(self.caustic_map))?;
-        writeln!(f, "radiosity mesh: {}", yes_no(self.radiosity_mesh))?;
+        if self.radiosity_mesh {
+            writeln!(
+                f,
+                "radiosity mesh: yes ({} patches; visibility: {})",
+                self.radiosity_patches, self.radiosity_visibility
+            )?;
+        } else {
+            writeln!(f, "radiosity mesh: no")?;
+        }
         for note in &self.notes {
             writeln!(f, "note: {note}")?;
         }

@@ -175,6 +175,24 @@ fn plan_reports_what_the_scene_needs() {
     assert!(spheres.contains("user geometry: 2 spheres"), "{spheres}");
     assert!(spheres.contains("photon map: no"), "{spheres}");
     assert!(spheres.contains("radiosity mesh: no"), "{spheres}");
+    let l = ok(&render(
+        &dir,
+        &[
+            "--plan",
+            "-input",
+            course.join("l.obj").to_str().unwrap(),
+            "--subdivide",
+            "2",
+            "-num_shadow_samples",
+            "1",
+        ],
+    ));
+    assert!(
+        l.contains(
+            "radiosity mesh: yes (224 patches; visibility: one occlusion ray per point pair)"
+        ),
+        "{l}"
+    );
     let cornell = ok(&render(
         &dir,
         &[
@@ -447,5 +465,157 @@ fn compare_reports_the_errors_of_an_image_against_a_reference() {
     assert!(dir.join("heat.png").is_file());
     let same = ok(&render(&dir, &["compare", "ref.pfm", "ref.pfm"]));
     assert!(same.contains("rmse 0.000000e0"), "{same}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The radiosity issue's course command lines, verbatim: each writes `<stem>.png`, and those
+/// with a radiosity-only flag run the radiosity engine.
+#[test]
+fn course_radiosity_command_lines_run_verbatim() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let dir = temp_dir("radiosity-verbatim");
+    let lines = [
+        "-input cornell_box.obj",
+        "-size 300 150 -input l.obj",
+        "-size 300 150 -input l.obj -num_form_factor_samples 100",
+        "-size 300 150 -input l.obj -num_shadow_samples 1",
+        "-size 300 150 -input l.obj -num_form_factor_samples 10 -num_shadow_samples 1",
+        "-input cornell_box_diffuse_sphere.obj -sphere_rasterization 16 12",
+        "-input cornell_box_diffuse_sphere.obj -sphere_rasterization 16 12 -num_shadow_samples 1",
+    ];
+    for line in lines {
+        let args: Vec<String> = line
+            .split(' ')
+            .map(|a| {
+                if a.ends_with(".obj") {
+                    course.join(a).to_string_lossy().into_owned()
+                } else {
+                    a.to_string()
+                }
+            })
+            .collect();
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = render(&dir, &args);
+        ok(&out);
+        let stem = line.split(' ').find(|a| a.ends_with(".obj")).unwrap();
+        let png = dir.join(stem.replace(".obj", ".png"));
+        assert!(png.is_file(), "{line}: no image");
+        let radiosity = String::from_utf8_lossy(&out.stderr).contains("radiosity:");
+        let expected = line.contains("form_factor") || line.contains("rasterization");
+        assert_eq!(
+            radiosity, expected,
+            "{line}: radiosity engine chosen? {radiosity}"
+        );
+        std::fs::remove_file(&png).ok();
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Every visualization mode, the wireframe, the convergence log, adaptive subdivision and the
+/// hybrid ray tracer write their files; radiosity images are identical with both backends.
+#[test]
+fn radiosity_modes_write_their_outputs_identically_with_both_backends() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let dir = temp_dir("radiosity-modes");
+    let l = course.join("l.obj").to_string_lossy().into_owned();
+    let sphere = course
+        .join("cornell_box_diffuse_sphere.obj")
+        .to_string_lossy()
+        .into_owned();
+    let runs: Vec<Vec<&str>> = vec![
+        vec![
+            "-input",
+            &l,
+            "-num_shadow_samples",
+            "1",
+            "--subdivide",
+            "2",
+            "-interpolate",
+        ],
+        vec![
+            "-input",
+            &sphere,
+            "-num_shadow_samples",
+            "1",
+            "--visualize",
+            "form-factors",
+            "--wireframe",
+        ],
+        vec![
+            "-input",
+            &sphere,
+            "--visualize",
+            "materials",
+            "--subdivide",
+            "1",
+        ],
+        vec![
+            "-input",
+            &sphere,
+            "--visualize",
+            "lights",
+            "--subdivide",
+            "1",
+        ],
+        vec![
+            "-input",
+            &sphere,
+            "--visualize",
+            "undistributed",
+            "--radiosity-iterations",
+            "16",
+        ],
+        vec![
+            "-input",
+            &sphere,
+            "--visualize",
+            "absorbed",
+            "--subdivide",
+            "1",
+        ],
+        vec![
+            "-input",
+            &l,
+            "-num_shadow_samples",
+            "1",
+            "--adaptive-subdivide",
+            "0.05",
+            "--wireframe",
+        ],
+        vec![
+            "-input",
+            &sphere,
+            "-num_shadow_samples",
+            "4",
+            "--indirect",
+            "radiosity",
+            "--subdivide",
+            "1",
+        ],
+    ];
+    for (k, run) in runs.iter().enumerate() {
+        let mut images = Vec::new();
+        for kind in backends() {
+            let out = format!("mode{k}.{kind}.png");
+            let log = format!("mode{k}.{kind}.csv");
+            let kind = kind.to_string();
+            let mut args = run.clone();
+            args.extend(["-size", "64", "48", "-o", &out, "--accel", &kind]);
+            args.extend(["--log-convergence", &log]);
+            ok(&render(&dir, &args));
+            images.push(std::fs::read(dir.join(&out)).expect("image written"));
+            let csv = std::fs::read_to_string(dir.join(&log)).expect("log written");
+            assert!(csv.starts_with("shot,patch,residual,seconds,rays"));
+            assert!(csv.lines().count() > 1, "{run:?}: empty log");
+        }
+        assert!(
+            images.windows(2).all(|w| w[0] == w[1]),
+            "{run:?}: backends give different images"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -307,3 +307,55 @@ fn both_accels_give_identical_solutions() {
         );
     }
 }
+
+/// Every form factor of every shooter, with visibility, from both Accels: identical, on the
+/// L-shaped room (whose inner corner lines up with rays between patch centres) and the Cornell
+/// box with a rasterized sphere.
+#[test]
+fn every_form_factor_is_identical_with_both_accels() {
+    let Some(dir) = course_dir() else {
+        return;
+    };
+    if backends().len() < 2 {
+        return;
+    }
+    for (file, subdivide, samples) in [
+        ("l.obj", 3, 1),
+        ("l.obj", 1, 9),
+        ("cornell_box_diffuse_sphere.obj", 1, 1),
+    ] {
+        let scene = Scene::load(&dir.join(file)).expect("scene loads");
+        let mut mesh = QuadMesh::from_scene(&scene, raster());
+        mesh.subdivide(subdivide);
+        let patches = patches(&scene, &mesh);
+        let accels: Vec<Box<dyn Accel>> = backends()
+            .into_iter()
+            .map(|k| accel::build(&scene, k, &AccelOptions::default()).expect("builds"))
+            .collect();
+        let samplers: Vec<FormFactorSampler> = accels
+            .iter()
+            .map(|a| FormFactorSampler {
+                scene: &scene,
+                accel: a.as_ref(),
+                patches: &patches,
+                samples,
+                visibility: true,
+                seed: 0,
+                rays: AtomicU64::new(0),
+            })
+            .collect();
+        let mut differing = 0;
+        for i in 0..patches.len() {
+            let (a, b) = (samplers[0].row(i), samplers[1].row(i));
+            for (j, (x, y)) in a.iter().zip(&b).enumerate() {
+                if x != y {
+                    println!("  shooter {i} {:?} n {:?} receiver {j} {:?} n {:?}: {x} vs {y}", patches[i].centre, patches[i].normal, patches[j].centre, patches[j].normal);
+                    differing += 1;
+                }
+            }
+        }
+        let rays = samplers[0].rays.load(std::sync::atomic::Ordering::Relaxed);
+        println!("{file} subdivided {subdivide}, {samples} samples: {rays} rays, {differing} form factors differ");
+        assert_eq!(differing, 0, "{file}");
+    }
+}
