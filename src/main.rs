@@ -86,6 +86,14 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Writes a room of about N quads (walls and boxes, one light) in the course dialect: a
+    /// radiosity scene where visibility matters, for scaling runs.
+    GenRoom {
+        /// Number of quads (about).
+        patches: usize,
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Writes a procedural texture as PPM (P6).
     GenTexture {
         #[arg(value_enum)]
@@ -231,7 +239,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 1000)]
     radiosity_max_shots_per_patch: u64,
     /// Memory for cached rows of form factors, MiB (radiosity).
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 1024)]
     ff_cache_mb: usize,
     /// Split patches whose radiance differs from a neighbour's by more than this, and solve
     /// again (radiosity).
@@ -421,6 +429,10 @@ fn main() -> ExitCode {
         Some(Command::GenTerrain { triangles, output }) => {
             let scene = trilux::generate::terrain(*triangles);
             trilux::generate::write_obj(&scene, output).map_err(|e| e.to_string())
+        }
+        Some(Command::GenRoom { patches, output }) => {
+            let scene = trilux::generate::room(*patches);
+            trilux::generate::write_dialect(&scene, output).map_err(|e| e.to_string())
         }
         Some(Command::GenTexture { kind, size, output }) => {
             let rgb = trilux::generate::texture(*kind, *size);

@@ -6,7 +6,6 @@
 mod common;
 
 use std::path::Path;
-use std::sync::atomic::AtomicU64;
 
 use common::{backends, course_dir, furnace};
 use trilux::accel::{self, Accel, AccelOptions};
@@ -39,15 +38,7 @@ fn form_factor(
 ) -> f64 {
     let mesh = QuadMesh::from_scene(scene, raster());
     let patches = patches(scene, &mesh);
-    let sampler = FormFactorSampler {
-        scene,
-        accel,
-        patches: &patches,
-        samples,
-        visibility: true,
-        seed,
-        rays: AtomicU64::new(0),
-    };
+    let sampler = FormFactorSampler::new(scene, accel, &patches, samples, true, seed);
     // A row holds, for each receiver j, F_j→shooter.
     sampler.row(to)[from] as f64
 }
@@ -142,15 +133,7 @@ fn rows_of_a_closed_cube_sum_to_one() {
     let mut mesh = QuadMesh::from_scene(&cube, raster());
     mesh.subdivide(2);
     let patches = patches(&cube, &mesh);
-    let sampler = FormFactorSampler {
-        scene: &cube,
-        accel: accel.as_ref(),
-        patches: &patches,
-        samples: 256,
-        visibility: true,
-        seed: 0,
-        rays: AtomicU64::new(0),
-    };
+    let sampler = FormFactorSampler::new(&cube, accel.as_ref(), &patches, 256, true, 0);
     let n = patches.len();
     let rows: Vec<Vec<f32>> = (0..n).map(|i| sampler.row(i)).collect();
     for j in 0..n {
@@ -334,22 +317,17 @@ fn every_form_factor_is_identical_with_both_accels() {
             .collect();
         let samplers: Vec<FormFactorSampler> = accels
             .iter()
-            .map(|a| FormFactorSampler {
-                scene: &scene,
-                accel: a.as_ref(),
-                patches: &patches,
-                samples,
-                visibility: true,
-                seed: 0,
-                rays: AtomicU64::new(0),
-            })
+            .map(|a| FormFactorSampler::new(&scene, a.as_ref(), &patches, samples, true, 0))
             .collect();
         let mut differing = 0;
         for i in 0..patches.len() {
             let (a, b) = (samplers[0].row(i), samplers[1].row(i));
             for (j, (x, y)) in a.iter().zip(&b).enumerate() {
                 if x != y {
-                    println!("  shooter {i} {:?} n {:?} receiver {j} {:?} n {:?}: {x} vs {y}", patches[i].centre, patches[i].normal, patches[j].centre, patches[j].normal);
+                    println!(
+                        "  shooter {i} {:?} n {:?} receiver {j} {:?} n {:?}: {x} vs {y}",
+                        patches[i].centre, patches[i].normal, patches[j].centre, patches[j].normal
+                    );
                     differing += 1;
                 }
             }

@@ -2,8 +2,6 @@
 //! the value of the chosen visualization mode — flat, or bilinear between corner values with
 //! `-interpolate` — with patch outlines drawn over the image for `--wireframe`.
 
-use std::sync::atomic::AtomicU64;
-
 use rayon::prelude::*;
 
 use super::solver::FormFactorSampler;
@@ -120,15 +118,14 @@ fn form_factor_greys(
     if patches.is_empty() {
         return Vec::new();
     }
-    let sampler = FormFactorSampler {
+    let sampler = FormFactorSampler::new(
         scene,
         accel,
         patches,
-        samples: settings.radiosity.num_form_factor_samples.max(1),
-        visibility: solution.visibility,
-        seed: settings.seed,
-        rays: AtomicU64::new(0),
-    };
+        settings.radiosity.num_form_factor_samples.max(1),
+        solution.visibility,
+        settings.seed,
+    );
     // The row holds F_j→source; reciprocity turns it into F_source→j.
     let a_source = patches[source].area.max(f32::MIN_POSITIVE);
     let from_source: Vec<f32> = sampler

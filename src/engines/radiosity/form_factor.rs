@@ -26,10 +26,41 @@ pub fn point_to_polygon(x: Vec3, n: Vec3, polygon: &[Vec3]) -> f32 {
             continue;
         }
         // The angle between a and b from atan2: accurate for small and large angles alike.
-        let angle = len.atan2(a.dot(b));
+        let angle = angle_atan2(len, a.dot(b));
         sum += (n.dot(c) / len * angle) as f64;
     }
     (sum.abs() / std::f64::consts::TAU) as f32
+}
+
+/// atan2(y, x) for y ≥ 0, in [0, π]: the polynomial of Abramowitz & Stegun 4.4.49 (error
+/// below 2e-8 on [0, 1], under f32's own rounding) after reducing to that interval. libm's
+/// atan2f was a fifth of the time of a radiosity solve; this is a few multiply-adds.
+#[inline]
+fn angle_atan2(y: f32, x: f32) -> f32 {
+    use std::f32::consts::{FRAC_PI_2, PI};
+    let ax = x.abs();
+    let (num, den) = if ax >= y { (y, ax) } else { (ax, y) };
+    if den == 0.0 {
+        return 0.0;
+    }
+    let t = num / den;
+    let t2 = t * t;
+    let poly = 0.002_866_225_7f32
+        .mul_add(t2, -0.016_165_737)
+        .mul_add(t2, 0.042_909_614)
+        .mul_add(t2, -0.075_289_64)
+        .mul_add(t2, 0.106_562_64)
+        .mul_add(t2, -0.142_088_99)
+        .mul_add(t2, 0.199_935_51)
+        .mul_add(t2, -0.333_331_45)
+        .mul_add(t2, 1.0);
+    let a = t * poly;
+    let a = if ax >= y { a } else { FRAC_PI_2 - a };
+    if x < 0.0 {
+        PI - a
+    } else {
+        a
+    }
 }
 
 /// Sutherland–Hodgman: the part of `polygon` strictly above the plane through `x` with
@@ -72,6 +103,19 @@ mod tests {
         ];
         let f = point_to_polygon(Vec3::ZERO, vec3(0.0, 0.0, 1.0), &square);
         assert!((f - 1.0).abs() < 2e-3, "{f}");
+    }
+
+    #[test]
+    fn fast_angle_matches_atan2() {
+        let mut worst = 0.0f32;
+        for i in 0..=2000 {
+            let phi = std::f32::consts::PI * i as f32 / 2000.0;
+            for r in [1e-6f32, 1.0, 1e6] {
+                let (y, x) = (r * phi.sin(), r * phi.cos());
+                worst = worst.max((angle_atan2(y.abs(), x) - y.abs().atan2(x)).abs());
+            }
+        }
+        assert!(worst < 1e-6, "{worst}");
     }
 
     #[test]

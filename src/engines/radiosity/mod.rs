@@ -9,7 +9,7 @@ pub mod solver;
 
 mod display;
 
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::atomic::Ordering::Relaxed;
 
 pub use display::render_solution;
 use patch::Patch;
@@ -62,7 +62,7 @@ pub struct RadiositySettings {
     /// Safety cap on shots per patch when no iteration count is given
     /// (`--radiosity-max-shots-per-patch`, default 1000); reaching it is reported.
     pub max_shots_per_patch: u64,
-    /// Memory for cached form-factor rows, MiB (`--ff-cache-mb`, default 256).
+    /// Memory for cached form-factor rows, MiB (`--ff-cache-mb`, default 1024).
     pub ff_cache_mb: usize,
     /// Split patches whose radiance differs from a neighbour's by more than this (largest
     /// channel) and solve again (`--adaptive-subdivide`, default: off).
@@ -90,7 +90,7 @@ impl Default for RadiositySettings {
             tolerance: 1e-3,
             iterations: None,
             max_shots_per_patch: 1000,
-            ff_cache_mb: 256,
+            ff_cache_mb: 1024,
             adaptive_threshold: None,
             adaptive_rounds: 3,
             visualize: Visualize::Radiance,
@@ -182,15 +182,14 @@ impl Solution {
         let mut round = 0;
         loop {
             let patches = patch::patches(scene, &mesh);
-            let sampler = FormFactorSampler {
+            let sampler = FormFactorSampler::new(
                 scene,
                 accel,
-                patches: &patches,
-                samples: r.num_form_factor_samples.max(1),
+                &patches,
+                r.num_form_factor_samples.max(1),
                 visibility,
-                seed: settings.seed,
-                rays: AtomicU64::new(0),
-            };
+                settings.seed,
+            );
             let limits = SolveLimits {
                 tolerance: r.tolerance,
                 iterations: r.iterations,
