@@ -238,6 +238,9 @@ struct RenderArgs {
     /// Safety cap: at most this many shots per patch before giving up, reported (radiosity).
     #[arg(long, default_value_t = 1000)]
     radiosity_max_shots_per_patch: u64,
+    /// Over-relaxation of each radiosity shot, in [1, 2): 1 is plain progressive refinement.
+    #[arg(long, default_value_t = 1.0)]
+    radiosity_relaxation: f32,
     /// Memory for cached rows of form factors, MiB (radiosity).
     #[arg(long, default_value_t = 1024)]
     ff_cache_mb: usize,
@@ -313,6 +316,7 @@ impl RenderArgs {
             tolerance: self.radiosity_tolerance,
             iterations: self.radiosity_iterations,
             max_shots_per_patch: self.radiosity_max_shots_per_patch,
+            relaxation: self.radiosity_relaxation,
             ff_cache_mb: self.ff_cache_mb,
             adaptive_threshold: self.adaptive_subdivide,
             adaptive_rounds: self.adaptive_rounds,

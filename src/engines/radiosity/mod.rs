@@ -62,6 +62,9 @@ pub struct RadiositySettings {
     /// Safety cap on shots per patch when no iteration count is given
     /// (`--radiosity-max-shots-per-patch`, default 1000); reaching it is reported.
     pub max_shots_per_patch: u64,
+    /// Over-relaxation of each shot (`--radiosity-relaxation ω`, in [1, 2), default 1: plain
+    /// progressive refinement).
+    pub relaxation: f32,
     /// Memory for cached form-factor rows, MiB (`--ff-cache-mb`, default 1024).
     pub ff_cache_mb: usize,
     /// Split patches whose radiance differs from a neighbour's by more than this (largest
@@ -90,6 +93,7 @@ impl Default for RadiositySettings {
             tolerance: 1e-3,
             iterations: None,
             max_shots_per_patch: 1000,
+            relaxation: 1.0,
             ff_cache_mb: 1024,
             adaptive_threshold: None,
             adaptive_rounds: 3,
@@ -196,6 +200,7 @@ impl Solution {
                 cap: r.max_shots_per_patch.saturating_mul(patches.len() as u64),
                 cache_bytes: r.ff_cache_mb << 20,
                 log: r.log_convergence,
+                relaxation: r.relaxation,
             };
             let (state, stop, cache) = solver::solve(&sampler, &limits, &on_progress);
             rays += sampler.rays.load(Relaxed);

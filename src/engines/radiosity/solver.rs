@@ -159,16 +159,18 @@ impl<'a> FormFactorSampler<'a> {
     }
 }
 
-/// The centre of patch `k` moved a hundredth of the way towards a random point of the patch:
-/// where its visibility rays start and end when form factors take one sample. Rays between
-/// the centres of a symmetric mesh pass exactly through edges and corners of the scene (in
-/// the course's L-shaped room, through its inner corner), where Embree's and our BVH's edge
-/// rules decide differently (Embree lets such a ray pass, ours blocks it); moved this
-/// little, a ray passes within rounding error of an edge only by coincidence.
+/// The centre of patch `k` moved a tenth of the way towards a random point of the patch:
+/// where its visibility rays start and end when form factors take one sample. Patch centres
+/// of regular scenes lie exactly on the planes and edges of other geometry (in the course's
+/// L-shaped room, rays between centres pass through its inner corner; in a room of boxes on
+/// a grid, floor centres lie on the boxes' side faces), where Embree's and our BVH's edge
+/// rules decide differently. Moved a thousandth of a patch, 5 of 9.7 million rays of l.obj
+/// (subdivided 4 times) and 18 of 12.7 million of a 4,820-patch room still disagreed; moved
+/// a tenth, none did.
 fn nudge(seed: u64, k: usize, p: &Patch) -> Vec3 {
     let mut rng = Rng::new(seed ^ 0x00d6_e000, k as u64, 0);
     let towards = p.point(rng.next_f32(), rng.next_f32());
-    p.centre + (towards - p.centre) * 1e-2
+    p.centre + (towards - p.centre) * 0.1
 }
 
 /// Whether any point of `r` could receive light from the front of `s`: some corner of each
@@ -293,10 +295,13 @@ pub struct SolveLimits {
     pub cap: u64,
     pub cache_bytes: usize,
     pub log: bool,
+    /// Over-relaxation factor ω of each shot (1: plain progressive refinement).
+    pub relaxation: f32,
 }
 
+/// Power of a (possibly negative, when over-relaxing) radiance over an area, all channels.
 fn power(c: Color, area: f32) -> f32 {
-    (c.x + c.y + c.z) * area
+    (c.x.abs() + c.y.abs() + c.z.abs()) * area
 }
 
 /// Solves by progressive refinement until the limits stop it.
@@ -346,9 +351,13 @@ pub fn solve(
             break Stop::Converged;
         }
         let row = cache.get_or_insert(best, || sampler.row(best));
-        let (shot, shot_emission) = (s.unshot[best], s.unshot_emission[best]);
-        s.unshot[best] = Vec3::ZERO;
-        s.unshot_emission[best] = Vec3::ZERO;
+        // Over-relaxation (ω > 1) shoots more than the patch holds; what it shot too much
+        // stays behind as negative unshot radiance, shot back later. The patch's own
+        // radiance is what it received, unchanged by shooting.
+        let omega = limits.relaxation;
+        let (shot, shot_emission) = (s.unshot[best] * omega, s.unshot_emission[best] * omega);
+        s.unshot[best] = s.unshot[best] * (1.0 - omega);
+        s.unshot_emission[best] = s.unshot_emission[best] * (1.0 - omega);
         for (j, &f) in row.iter().enumerate() {
             if f <= 0.0 {
                 continue;
