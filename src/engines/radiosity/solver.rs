@@ -356,8 +356,8 @@ pub fn solve(
         // radiance is what it received, unchanged by shooting.
         let omega = limits.relaxation;
         let (shot, shot_emission) = (s.unshot[best] * omega, s.unshot_emission[best] * omega);
-        s.unshot[best] = s.unshot[best] * (1.0 - omega);
-        s.unshot_emission[best] = s.unshot_emission[best] * (1.0 - omega);
+        s.unshot[best] *= 1.0 - omega;
+        s.unshot_emission[best] *= 1.0 - omega;
         for (j, &f) in row.iter().enumerate() {
             if f <= 0.0 {
                 continue;
