@@ -241,6 +241,7 @@ struct RenderArgs {
     /// Over-relaxation of each radiosity shot, in [1, 2): 1 is plain progressive refinement.
     #[arg(long, default_value_t = 1.0)]
     radiosity_relaxation: f32,
+
     /// Memory for cached rows of form factors, MiB (radiosity).
     #[arg(long, default_value_t = 1024)]
     ff_cache_mb: usize,

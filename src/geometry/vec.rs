@@ -1,6 +1,6 @@
 //! Small vector types: `Vec3` for points, directions and normals, `Vec2` for texture coordinates.
 
-use std::ops::{Add, AddAssign, Div, Index, Mul, MulAssign, Neg, Sub};
+use std::ops::{Add, AddAssign, Div, Index, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// Three `f32`s, laid out as C's `float[3]` (the Embree shim reads rays of these directly).
 #[repr(C)]
@@ -118,6 +118,12 @@ impl AddAssign for Vec3 {
     #[inline]
     fn add_assign(&mut self, o: Vec3) {
         *self = *self + o;
+    }
+}
+impl SubAssign for Vec3 {
+    #[inline]
+    fn sub_assign(&mut self, o: Vec3) {
+        *self = *self - o;
     }
 }
 impl Sub for Vec3 {

@@ -355,8 +355,9 @@ pub fn solve(
         // stays behind as negative unshot radiance, shot back later. The patch's own
         // radiance is what it received, unchanged by shooting.
         let omega = limits.relaxation;
-        let (shot, shot_emission) = (s.unshot[best] * omega, s.unshot_emission[best] * omega);
-        s.unshot[best] *= 1.0 - omega;
+        let shot = s.unshot[best] * omega;
+        let shot_emission = s.unshot_emission[best] * omega;
+        s.unshot[best] -= shot;
         s.unshot_emission[best] *= 1.0 - omega;
         for (j, &f) in row.iter().enumerate() {
             if f <= 0.0 {
