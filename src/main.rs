@@ -10,6 +10,7 @@ use clap::{Args, Parser, Subcommand};
 use std::sync::atomic::Ordering::Relaxed;
 use trilux::accel::{self, AccelKind, AccelOptions, EmbreeQuality};
 
+use trilux::engines::photon::{self, PhotonSettings};
 use trilux::engines::radiosity::{self, RadiositySettings, Visualize};
 use trilux::engines::{
     path, raycast, raytrace, EngineKind, IndirectKind, RenderSettings, RenderStats,
@@ -222,6 +223,21 @@ struct RenderArgs {
     /// Final gathering for indirect light (photon engine).
     #[arg(long)]
     gather_indirect: bool,
+    /// Bounces a photon may make (photon engine).
+    #[arg(long, default_value_t = 10)]
+    max_photon_depth: u32,
+    /// Largest radius of a photon density estimate, as a fraction of the scene's diagonal.
+    #[arg(long, default_value_t = 0.1)]
+    photon_max_radius: f32,
+    /// Hemisphere rays per final gather (-gather_indirect).
+    #[arg(long, default_value_t = 128)]
+    final_gather_rays: u32,
+    /// Ward's irradiance-cache error a: records are used where their weight exceeds 1/a.
+    #[arg(long, default_value_t = 0.15)]
+    irradiance_cache_error: f32,
+    /// Irradiance-cache records are gathered at every n-th pixel in x and y.
+    #[arg(long, default_value_t = 4)]
+    irradiance_cache_spacing: u32,
     /// Smooth radiosity display: bilinear between values averaged at patch corners.
     #[arg(long)]
     interpolate: bool,
@@ -286,11 +302,7 @@ impl RenderArgs {
                 .map_or(d.ambient_light, |a| vec3(a[0], a[1], a[2])),
             radiosity: self.radiosity_settings(),
             indirect: self.indirect,
-            num_photons_to_shoot: self.num_photons_to_shoot.unwrap_or(0),
-            num_photons_to_collect: self
-                .num_photons_to_collect
-                .unwrap_or(d.num_photons_to_collect),
-            gather_indirect: self.gather_indirect,
+            photon: self.photon_settings(),
             light_sampling: self.light_sampling,
             aperture: self.aperture,
             focus_distance: self.focus_distance,
@@ -328,6 +340,34 @@ impl RenderArgs {
         }
     }
 
+    fn photon_settings(&self) -> PhotonSettings {
+        let d = PhotonSettings::default();
+        PhotonSettings {
+            num_photons_to_shoot: self.num_photons_to_shoot.unwrap_or(0),
+            num_photons_to_collect: self
+                .num_photons_to_collect
+                .unwrap_or(d.num_photons_to_collect),
+            max_photon_depth: self.max_photon_depth,
+            max_radius: self.photon_max_radius,
+            gather_indirect: self.gather_indirect,
+            final_gather_rays: self.final_gather_rays,
+            irradiance_cache_error: self.irradiance_cache_error,
+            irradiance_cache_spacing: self.irradiance_cache_spacing,
+        }
+    }
+
+    /// Flags that only the photon engine reads: giving one chooses it.
+    fn photon_flags(&self) -> [(&'static str, bool); 3] {
+        [
+            ("-num_photons_to_shoot", self.num_photons_to_shoot.is_some()),
+            (
+                "-num_photons_to_collect",
+                self.num_photons_to_collect.is_some(),
+            ),
+            ("-gather_indirect", self.gather_indirect),
+        ]
+    }
+
     /// Flags that only the radiosity engine reads: giving one chooses it.
     fn radiosity_flags(&self) -> [(&'static str, bool); 9] {
         [
@@ -342,7 +382,10 @@ impl RenderArgs {
             ),
             ("-interpolate", self.interpolate),
             ("--subdivide", self.subdivide.is_some()),
-            ("--visualize", self.visualize.is_some()),
+            (
+                "--visualize",
+                self.visualize.is_some_and(|v| v != Visualize::Photons),
+            ),
             ("--wireframe", self.wireframe),
             ("--adaptive-subdivide", self.adaptive_subdivide.is_some()),
             ("--ff-source", self.ff_source.is_some()),
@@ -353,6 +396,11 @@ impl RenderArgs {
     fn engine(&self) -> EngineKind {
         match self.engine {
             Some(e) => e,
+            None if self.photon_flags().iter().any(|f| f.1)
+                || self.visualize == Some(Visualize::Photons) =>
+            {
+                EngineKind::Photon
+            }
             None if self.indirect == IndirectKind::Ambient
                 && self.radiosity_flags().iter().any(|f| f.1) =>
             {
@@ -379,19 +427,13 @@ impl RenderArgs {
             ("-ambient_light", self.ambient_light.is_some()),
             ("--aperture", self.aperture > 0.0),
         ];
-        // The photon engine does not exist yet: its flags are read by nothing.
-        let photon = [
-            ("-num_photons_to_shoot", self.num_photons_to_shoot.is_some()),
-            (
-                "-num_photons_to_collect",
-                self.num_photons_to_collect.is_some(),
-            ),
-            ("-gather_indirect", self.gather_indirect),
-        ];
         let given = |flags: &[(&'static str, bool)]| -> Vec<&'static str> {
             flags.iter().filter(|c| c.1).map(|c| c.0).collect()
         };
-        let mut unused = given(&photon);
+        let mut unused = Vec::new();
+        if engine != EngineKind::Photon {
+            unused.extend(given(&self.photon_flags()));
+        }
         let radiosity_read =
             engine == EngineKind::Radiosity || self.indirect == IndirectKind::Radiosity;
         if !radiosity_read {
@@ -416,6 +458,8 @@ impl RenderArgs {
             EngineKind::Radiosity => {
                 unused.extend(given(&[ray_tracing[0], ray_tracing[2], ray_tracing[3]]))
             }
+            // The photon maps replace the ambient term.
+            EngineKind::Photon => unused.extend(given(&[ray_tracing[2]])),
             _ => {}
         }
         unused
@@ -488,7 +532,7 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     }
     for flag in args.unused_flags() {
         eprintln!(
-            "note: {flag} is accepted but has no effect: the {} engine does not read it (the photon engine is not implemented yet)",
+            "note: {flag} is accepted but has no effect: the {} engine does not read it",
             engine.name()
         );
     }
@@ -516,6 +560,27 @@ fn render(args: &RenderArgs) -> Result<(), String> {
         EngineKind::Radiosity => {
             let (film, stats, solution) = radiosity::render(&scene, accel, &settings);
             (film, stats, Some(solution))
+        }
+        EngineKind::Photon => {
+            let (film, stats, maps) = photon::render(&scene, accel, &settings);
+            if maps.truncated * 1000 > maps.emitted {
+                eprintln!(
+                    "warning: {} of {} photons were still carrying light when --max-photon-depth {} stopped them; their light is missing from the image (raise the depth: Russian roulette alone keeps paths finite)",
+                    maps.truncated, maps.emitted, settings.photon.max_photon_depth
+                );
+            }
+            if !settings.quiet {
+                eprintln!(
+                    "photons: {} emitted, {} photon rays; global map {} photons, caustic map {}; {} per estimate within {:.3}",
+                    maps.emitted,
+                    maps.rays,
+                    maps.global.len(),
+                    maps.caustic.len(),
+                    maps.collect,
+                    maps.max_radius
+                );
+            }
+            (film, stats, None)
         }
         _ if settings.indirect == IndirectKind::Radiosity => {
             let solution = radiosity::solve_with_progress(&scene, accel, &settings);
@@ -552,12 +617,13 @@ fn render(args: &RenderArgs) -> Result<(), String> {
         let rays = stats.total_rays();
         eprintln!("stats: scene load {load_s:.3} s, accel build ({kind}) {build_s:.3} s, render {render_s:.3} s");
         eprintln!(
-            "stats: rays cast {rays} ({:.2} Mrays/s): camera {}, shadow {}, secondary {}, form factor {}",
+            "stats: rays cast {rays} ({:.2} Mrays/s): camera {}, shadow {}, secondary {}, form factor {}, photon {}",
             rays as f64 / render_s / 1e6,
             stats.camera_rays.load(Relaxed),
             stats.shadow_rays.load(Relaxed),
             stats.secondary_rays.load(Relaxed),
-            stats.form_factor_rays.load(Relaxed)
+            stats.form_factor_rays.load(Relaxed),
+            stats.photon_rays.load(Relaxed)
         );
         eprintln!("stats: non-finite samples {non_finite}");
         if let Some(kib) = peak_memory_kib() {

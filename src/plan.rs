@@ -57,10 +57,10 @@ impl Plan {
         let radiosity_mesh = engine == EngineKind::Radiosity
             || (engine == EngineKind::Raytrace && settings.indirect == IndirectKind::Radiosity);
         let mut notes = Vec::new();
-        if settings.num_photons_to_shoot > 0 && !photon_engine {
+        if settings.photon.num_photons_to_shoot > 0 && !photon_engine {
             notes.push(format!(
                 "-num_photons_to_shoot {} is ignored: the {} engine reads no photon map",
-                settings.num_photons_to_shoot,
+                settings.photon.num_photons_to_shoot,
                 engine.name()
             ));
         }
@@ -80,8 +80,8 @@ impl Plan {
             rings: scene.rings.len(),
             textures: scene.textures.len(),
             emitters,
-            photon_map: photon_engine && settings.num_photons_to_shoot > 0,
-            caustic_map: photon_engine && settings.num_photons_to_shoot > 0 && any_specular,
+            photon_map: photon_engine && settings.photon.num_photons_to_shoot > 0,
+            caustic_map: photon_engine && settings.photon.num_photons_to_shoot > 0 && any_specular,
             radiosity_mesh,
             radiosity_patches: if radiosity_mesh {
                 radiosity_patches(scene, settings)

@@ -139,12 +139,14 @@ fn course_command_lines_run_verbatim() {
             "default output <stem>.png for {line:?}"
         );
     }
-    // Flags of engines that do not exist yet are accepted and say so.
+    // Flags the chosen engine does not read are accepted and say so.
     let out = render(
         &dir,
         &[
             "-input",
             &scene("l.obj"),
+            "--engine",
+            "raytrace",
             "-num_photons_to_shoot",
             "10",
             "-size",
@@ -616,6 +618,48 @@ fn radiosity_modes_write_their_outputs_identically_with_both_backends() {
             images.windows(2).all(|w| w[0] == w[1]),
             "{run:?}: backends give different images"
         );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The photon issue's course command lines, verbatim but for a smaller image: each writes
+/// `<stem>.png` with the photon engine.
+#[test]
+fn course_photon_command_lines_run_verbatim() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let dir = temp_dir("photon-verbatim");
+    let lines = [
+        "-input reflective_ring.obj -num_photons_to_shoot 10000 -num_bounces 2 -num_shadow_samples 10",
+        "-input reflective_ring.obj -num_photons_to_shoot 500000 -num_bounces 2 -num_shadow_samples 10 -num_antialias_samples 4",
+        "-input cornell_box_diffuse_sphere.obj -num_photons_to_shoot 500000 -num_shadow_samples 500 -num_photons_to_collect 500",
+        "-input cornell_box_reflective_sphere.obj -num_photons_to_shoot 500000 -num_shadow_samples 500 -num_photons_to_collect 500 -num_bounces 1",
+    ];
+    for line in lines {
+        let mut args: Vec<String> = line
+            .split(' ')
+            .map(|a| {
+                if a.ends_with(".obj") {
+                    course.join(a).to_string_lossy().into_owned()
+                } else {
+                    a.to_string()
+                }
+            })
+            .collect();
+        args.extend(["-size", "48", "48"].map(String::from));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = render(&dir, &args);
+        ok(&out);
+        let stem = line.split(' ').find(|a| a.ends_with(".obj")).unwrap();
+        let png = dir.join(stem.replace(".obj", ".png"));
+        assert!(png.is_file(), "{line}: no image");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains("photons:"),
+            "{line}: photon engine not chosen: {stderr}"
+        );
+        std::fs::remove_file(&png).ok();
     }
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -4,6 +4,7 @@
 pub mod lights;
 pub mod optics;
 pub mod path;
+pub mod photon;
 pub mod radiosity;
 pub mod raycast;
 pub mod raytrace;
@@ -29,7 +30,7 @@ pub enum EngineKind {
     Raytrace,
     /// Radiosity on the quad mesh.
     Radiosity,
-    /// Photon mapping (not implemented yet).
+    /// Photon mapping: ray tracing with global and caustic photon maps as indirect light.
     Photon,
     /// The unbiased reference path tracer.
     Path,
@@ -39,7 +40,11 @@ impl EngineKind {
     pub fn is_implemented(self) -> bool {
         matches!(
             self,
-            EngineKind::Raycast | EngineKind::Raytrace | EngineKind::Radiosity | EngineKind::Path
+            EngineKind::Raycast
+                | EngineKind::Raytrace
+                | EngineKind::Radiosity
+                | EngineKind::Photon
+                | EngineKind::Path
         )
     }
     pub fn name(self) -> &'static str {
@@ -71,6 +76,8 @@ pub struct RenderStats {
     pub secondary_rays: AtomicU64,
     /// Visibility rays between patches (radiosity form factors).
     pub form_factor_rays: AtomicU64,
+    /// Rays cast by photons.
+    pub photon_rays: AtomicU64,
     /// Samples that came out NaN or infinite: excluded from the image, and counted here.
     pub non_finite_samples: AtomicU64,
 }
@@ -81,6 +88,7 @@ impl RenderStats {
             + self.shadow_rays.load(Relaxed)
             + self.secondary_rays.load(Relaxed)
             + self.form_factor_rays.load(Relaxed)
+            + self.photon_rays.load(Relaxed)
     }
 }
 
@@ -104,12 +112,8 @@ pub struct RenderSettings {
     /// Where the ray tracer's diffuse indirect light comes from (`--indirect`, default
     /// ambient).
     pub indirect: IndirectKind,
-    /// Photons emitted (`-num_photons_to_shoot`, default 0: no photon map).
-    pub num_photons_to_shoot: u64,
-    /// Photons per density estimate (`-num_photons_to_collect`, default 100).
-    pub num_photons_to_collect: u32,
-    /// Final gathering for indirect light (`-gather_indirect`, default off).
-    pub gather_indirect: bool,
+    /// What the photon engine reads (photon count, density estimates, final gathering).
+    pub photon: photon::PhotonSettings,
     /// Placement of points on lights (`--light-sampling`, default jittered).
     pub light_sampling: crate::sampling::Pattern,
     /// Thin-lens radius (`--aperture`, default 0: a pinhole camera).
@@ -134,9 +138,7 @@ impl Default for RenderSettings {
             ambient_light: Vec3::splat(0.1),
             radiosity: Default::default(),
             indirect: IndirectKind::Ambient,
-            num_photons_to_shoot: 0,
-            num_photons_to_collect: 100,
-            gather_indirect: false,
+            photon: Default::default(),
             light_sampling: crate::sampling::Pattern::Jittered,
             aperture: 0.0,
             focus_distance: None,

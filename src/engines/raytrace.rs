@@ -10,6 +10,7 @@
 
 use super::lights::Light;
 use super::optics::{fresnel_dielectric, glossy_reflection, reflect, refract};
+use super::photon::{IrradianceCache, PhotonMaps};
 use super::radiosity::{PatchField, Solution};
 use super::{camera_sample, render_pixels, Counts, RenderSettings, RenderStats};
 use crate::accel::Accel;
@@ -51,6 +52,12 @@ pub enum Indirect<'a> {
         solution: &'a Solution,
         field: PatchField,
     },
+    /// Photon maps: the global map's density estimate (or, with a cache, final gathers at
+    /// the surfaces the camera sees) plus the caustic map's.
+    Photons {
+        maps: &'a PhotonMaps,
+        cache: Option<&'a IrradianceCache>,
+    },
 }
 
 impl<'a> Indirect<'a> {
@@ -62,11 +69,27 @@ impl<'a> Indirect<'a> {
         }
     }
 
-    fn at(&self, scene: &Scene, s: &SurfaceHit) -> Color {
+    /// Incident radiance averaged over the hemisphere at `s` (unit normal `n` on the lit
+    /// side), `depth` specular bounces from the camera.
+    fn at(&self, tracer: &Tracer, s: &SurfaceHit, n: Vec3, depth: u32, rng: &mut Rng) -> Color {
         match self {
             Indirect::Ambient(c) => *c,
-            Indirect::Radiosity { solution, field } => {
-                solution.sample(scene, s, field).unwrap_or(Vec3::ZERO)
+            Indirect::Radiosity { solution, field } => solution
+                .sample(tracer.scene, s, field)
+                .unwrap_or(Vec3::ZERO),
+            Indirect::Photons { maps, cache } => {
+                let global = match cache {
+                    // Final gathering where the camera looks; behind mirrors, the map itself.
+                    Some(c) if depth == 0 => c.irradiance_over_pi(
+                        tracer.scene,
+                        tracer.accel,
+                        maps,
+                        (s.point, n, s.error),
+                        rng,
+                    ),
+                    _ => maps.global_at(s.point, n),
+                };
+                global + maps.caustic_at(s.point, n)
             }
         }
     }
@@ -106,7 +129,7 @@ impl Tracer<'_> {
         let albedo = self.scene.albedo(&s);
         if albedo.max_elem() > 0.0 {
             let irradiance_over_pi = self.direct(&s, n, rng, counts);
-            let indirect = self.indirect.at(self.scene, &s);
+            let indirect = self.indirect.at(self, &s, n, depth, rng);
             radiance += albedo.mul_elem(irradiance_over_pi + indirect);
         }
         if depth >= self.settings.num_bounces {

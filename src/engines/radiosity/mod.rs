@@ -38,6 +38,8 @@ pub enum Visualize {
     Undistributed,
     /// Radiance absorbed: (1 − ρ) × incident.
     Absorbed,
+    /// The photon engine's photons projected through the camera, coloured by power.
+    Photons,
 }
 
 /// Settings only the radiosity engine reads. Defaults are the course program's where it has one.

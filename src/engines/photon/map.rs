@@ -1,0 +1,99 @@
+//! A photon map: photons in a kd-tree (kiddo's `ImmutableKdTree`, which — unlike its mutable
+//! `KdTree` — accepts any number of photons sharing a coordinate, as all photons on an
+//! axis-aligned wall do) and the k-nearest radiance estimate with a cone filter.
+
+use std::num::NonZero;
+
+use kiddo::immutable::float::kdtree::ImmutableKdTree;
+use kiddo::SquaredEuclidean;
+
+use super::trace::Photon;
+use crate::geometry::Vec3;
+use crate::scene::Color;
+
+/// Cone filter constant k (Jensen): weights 1 − d/(k·r).
+const CONE_K: f32 = 1.1;
+/// Photons whose surface normal differs more than this (cosine) from the query's are left
+/// out: they lie on another surface, e.g. the other side of a thin wall.
+const NORMAL_COS: f32 = 0.9;
+
+pub struct PhotonMap {
+    pub photons: Vec<Photon>,
+    tree: ImmutableKdTree<f32, u32, 3, 32>,
+}
+
+/// Counters of the lookups of one map.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Lookup {
+    /// Photons that passed the normal and side checks and were filtered in.
+    pub used: usize,
+    /// Radius of the estimate.
+    pub radius: f32,
+}
+
+impl PhotonMap {
+    pub fn new(photons: Vec<Photon>) -> PhotonMap {
+        let points: Vec<[f32; 3]> = photons.iter().map(|p| p.position.to_array()).collect();
+        let tree = ImmutableKdTree::new_from_slice(&points);
+        PhotonMap { photons, tree }
+    }
+
+    pub fn len(&self) -> usize {
+        self.photons.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.photons.is_empty()
+    }
+
+    /// Irradiance over π (the incident radiance averaged over the hemisphere, what a
+    /// Lambertian albedo multiplies) at `x` on a surface with unit normal `n` (turned to the
+    /// side being lit), from the `k` nearest photons within `max_radius`: the cone-filtered
+    /// sum Σ Φ_p·w_p / ((1 − 2/(3k))·π·r²) / π.
+    pub fn irradiance_over_pi(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        k: usize,
+        max_radius: f32,
+    ) -> (Color, Lookup) {
+        let Some(k) = NonZero::new(k) else {
+            return (Vec3::ZERO, Lookup::default());
+        };
+        if self.photons.is_empty() {
+            return (Vec3::ZERO, Lookup::default());
+        }
+        let found = self.tree.nearest_n_within::<SquaredEuclidean>(
+            &x.to_array(),
+            max_radius * max_radius,
+            k,
+            true,
+        );
+        // With fewer than k photons in reach, the estimate covers the whole reach.
+        let r2 = if found.len() == k.get() {
+            found.last().map_or(0.0, |f| f.distance)
+        } else {
+            max_radius * max_radius
+        };
+        if r2 <= 0.0 {
+            return (Vec3::ZERO, Lookup::default());
+        }
+        let r = r2.sqrt();
+        let mut sum = Vec3::ZERO;
+        let mut used = 0;
+        for f in &found {
+            let p = &self.photons[f.item as usize];
+            if p.normal.dot(n) < NORMAL_COS || p.direction.dot(n) >= 0.0 {
+                continue;
+            }
+            let w = 1.0 - f.distance.sqrt() / (CONE_K * r);
+            sum += p.power * w;
+            used += 1;
+        }
+        let norm = (1.0 - 2.0 / (3.0 * CONE_K)) * std::f32::consts::PI * r2;
+        (
+            sum / (norm * std::f32::consts::PI),
+            Lookup { used, radius: r },
+        )
+    }
+}

@@ -1,0 +1,191 @@
+//! Photon mapping (Jensen): photons traced from the lights into a global map (indirect
+//! diffuse light) and a caustic map (light that reached a diffuse surface through mirrors or
+//! glass only), looked up by k-nearest density estimation. The ray tracer computes direct light
+//! and mirrors itself and takes its diffuse indirect light from the maps — by direct lookup, or
+//! by final gathering accelerated by an irradiance cache (`-gather_indirect`).
+
+pub mod gather;
+pub mod map;
+pub mod trace;
+
+use std::sync::atomic::Ordering::Relaxed;
+
+pub use gather::IrradianceCache;
+pub use map::PhotonMap;
+pub use trace::{PathKind, Photon};
+
+use super::RenderSettings;
+use crate::accel::Accel;
+use crate::film::Film;
+use crate::scene::{Color, Scene};
+
+/// Settings only the photon engine reads.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhotonSettings {
+    /// Photons emitted (`-num_photons_to_shoot`, default 0: no photon map).
+    pub num_photons_to_shoot: u64,
+    /// Photons per density estimate (`-num_photons_to_collect`, default 100).
+    pub num_photons_to_collect: u32,
+    /// Bounces a photon may make (`--max-photon-depth`, default 10).
+    pub max_photon_depth: u32,
+    /// Largest radius of a density estimate, as a fraction of the scene's diagonal
+    /// (`--photon-max-radius`, default 0.1).
+    pub max_radius: f32,
+    /// Final gathering for indirect light (`-gather_indirect`, default off: direct lookup).
+    pub gather_indirect: bool,
+    /// Hemisphere rays per final gather (`--final-gather-rays`, default 128).
+    pub final_gather_rays: u32,
+    /// Ward's irradiance cache error a (`--irradiance-cache-error`, default 0.15).
+    pub irradiance_cache_error: f32,
+    /// Cache records are computed at every n-th pixel in x and y (`--irradiance-cache-spacing`,
+    /// default 4); the rest interpolate, or gather afresh where no record is close enough.
+    pub irradiance_cache_spacing: u32,
+}
+
+impl Default for PhotonSettings {
+    fn default() -> Self {
+        PhotonSettings {
+            num_photons_to_shoot: 0,
+            num_photons_to_collect: 100,
+            max_photon_depth: 10,
+            max_radius: 0.1,
+            gather_indirect: false,
+            final_gather_rays: 128,
+            irradiance_cache_error: 0.15,
+            irradiance_cache_spacing: 4,
+        }
+    }
+}
+
+/// The two photon maps of a scene and what the lookups need.
+pub struct PhotonMaps {
+    /// Indirect photons (all photons when final gathering: gather rays look up the full
+    /// light at the surfaces they reach).
+    pub global: PhotonMap,
+    pub caustic: PhotonMap,
+    /// Photons emitted and photon rays cast.
+    pub emitted: u64,
+    pub rays: u64,
+    /// Photons stopped by `--max-photon-depth` while still carrying power.
+    pub truncated: u64,
+    /// Photons per estimate and the largest radius (absolute).
+    pub collect: usize,
+    pub max_radius: f32,
+}
+
+impl PhotonMaps {
+    /// Traces the photons and builds both maps.
+    pub fn build(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> PhotonMaps {
+        let p = &settings.photon;
+        let blocks = p.num_photons_to_shoot.div_ceil(4096);
+        let bar = crate::progress::bar(blocks, "photons", settings.quiet);
+        let traced = trace::trace_photons(
+            scene,
+            accel,
+            p.num_photons_to_shoot,
+            p.max_photon_depth,
+            settings.seed,
+            || bar.inc(1),
+        );
+        bar.finish_and_clear();
+        let (mut global, mut caustic) = (Vec::new(), Vec::new());
+        for ph in traced.photons {
+            match ph.kind {
+                PathKind::Caustic => {
+                    caustic.push(ph);
+                    if p.gather_indirect {
+                        global.push(ph);
+                    }
+                }
+                PathKind::Indirect => global.push(ph),
+                PathKind::Direct if p.gather_indirect => global.push(ph),
+                PathKind::Direct => {}
+            }
+        }
+        PhotonMaps {
+            global: PhotonMap::new(global),
+            caustic: PhotonMap::new(caustic),
+            emitted: p.num_photons_to_shoot,
+            rays: traced.rays,
+            truncated: traced.truncated,
+            collect: p.num_photons_to_collect.max(1) as usize,
+            max_radius: p.max_radius * scene.bounds().extent().length(),
+        }
+    }
+
+    /// Irradiance / π at a surface point from the global map.
+    pub fn global_at(&self, x: crate::geometry::Vec3, n: crate::geometry::Vec3) -> Color {
+        self.global
+            .irradiance_over_pi(x, n, self.collect, self.max_radius)
+            .0
+    }
+
+    /// Irradiance / π at a surface point from the caustic map.
+    pub fn caustic_at(&self, x: crate::geometry::Vec3, n: crate::geometry::Vec3) -> Color {
+        self.caustic
+            .irradiance_over_pi(x, n, self.collect, self.max_radius)
+            .0
+    }
+}
+
+/// The photons of a map seen from the camera (`--visualize photons`): each photon's power
+/// splatted into the pixel it projects to, scaled so the brightest pixel is 1.
+pub fn visualize(scene: &Scene, maps: &PhotonMaps, settings: &RenderSettings) -> Film {
+    let (w, h) = (settings.width, settings.height);
+    let camera = scene.camera();
+    let mut film = Film::new(w, h);
+    let m = w.max(h) as f32;
+    for p in maps.global.photons.iter().chain(&maps.caustic.photons) {
+        let Some((x, y)) = camera.project(p.position) else {
+            continue;
+        };
+        // Inverse of Camera::screen_point.
+        let i = ((x - 0.5) * m + w as f32 / 2.0).floor();
+        let j = ((y - 0.5) * m + h as f32 / 2.0).floor();
+        if i < 0.0 || j < 0.0 || i >= w as f32 || j >= h as f32 {
+            continue;
+        }
+        let row = h as usize - 1 - j as usize;
+        film.pixels[row * w as usize + i as usize] += p.power;
+    }
+    let brightest = film
+        .pixels
+        .iter()
+        .map(|c| c.max_elem())
+        .fold(0.0f32, f32::max);
+    if brightest > 0.0 {
+        film.pixels.iter_mut().for_each(|c| *c = *c / brightest);
+    }
+    film
+}
+
+/// Renders with the photon engine: traces the maps, then ray traces with them as the indirect
+/// light (and, with `-gather_indirect`, an irradiance cache of final gathers).
+pub fn render(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+) -> (Film, super::RenderStats, PhotonMaps) {
+    let maps = PhotonMaps::build(scene, accel, settings);
+    if settings.radiosity.visualize == super::radiosity::Visualize::Photons {
+        let stats = super::RenderStats::default();
+        stats.photon_rays.store(maps.rays, Relaxed);
+        return (visualize(scene, &maps, settings), stats, maps);
+    }
+    let cache = settings
+        .photon
+        .gather_indirect
+        .then(|| IrradianceCache::build(scene, accel, settings, &maps));
+    let indirect = super::raytrace::Indirect::Photons {
+        maps: &maps,
+        cache: cache.as_ref(),
+    };
+    let (film, stats) = super::raytrace::render_with(scene, accel, settings, indirect);
+    stats.photon_rays.store(maps.rays, Relaxed);
+    if let Some(c) = &cache {
+        stats
+            .secondary_rays
+            .fetch_add(c.rays.load(Relaxed), Relaxed);
+    }
+    (film, stats, maps)
+}

@@ -1,0 +1,218 @@
+//! Photon tracing: photons leave the emitters with probability proportional to emitted
+//! power, from uniform points, in cosine-weighted directions, all with equal power; at each
+//! surface a photon on a diffuse surface is stored, then Russian roulette on the albedos
+//! (diffuse, mirror, transmitted) decides whether it goes on, with its power rescaled so the
+//! estimate stays unbiased.
+
+use rayon::prelude::*;
+
+use crate::accel::{closest_surface, Accel};
+use crate::engines::lights::Light;
+use crate::engines::optics::{
+    fresnel_dielectric, glossy_reflection, reflect, refract, sample_lobe,
+};
+use crate::geometry::{offset_ray_origin, point_error, Ray, Vec3};
+use crate::sampling::Rng;
+use crate::scene::{Color, Scene};
+
+/// How a stored photon got where it is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum PathKind {
+    /// Straight from a light (L D): the ray tracer computes this light itself.
+    Direct = 0,
+    /// Through one or more mirrors or glass only (L S+ D): a caustic.
+    Caustic = 1,
+    /// After at least one diffuse bounce (L .* D .* D).
+    Indirect = 2,
+}
+
+/// A photon stored on a diffuse surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Photon {
+    pub position: Vec3,
+    /// Direction of travel (unit).
+    pub direction: Vec3,
+    /// Power (flux, W) per channel.
+    pub power: Color,
+    /// Geometric normal of the surface, turned towards the side the photon came from.
+    pub normal: Vec3,
+    pub kind: PathKind,
+}
+
+/// Photons emitted per parallel task.
+const BLOCK: u64 = 4096;
+
+/// Mean of the three channels: the probability Russian roulette gives an albedo.
+fn mean(c: Color) -> f32 {
+    (c.x + c.y + c.z) / 3.0
+}
+
+/// What tracing the photons gave: those stored, in a fixed order, and counters.
+pub struct Traced {
+    pub photons: Vec<Photon>,
+    pub rays: u64,
+    /// Photons still carrying power when `--max-photon-depth` stopped them: their light is
+    /// lost (a bias the furnace shows at high albedo), so it is reported.
+    pub truncated: u64,
+}
+
+/// Traces `count` photons. Photon k draws from hash(seed, k): the result does not depend on
+/// threads.
+pub fn trace_photons(
+    scene: &Scene,
+    accel: &dyn Accel,
+    count: u64,
+    max_depth: u32,
+    seed: u64,
+    on_block: impl Fn() + Sync,
+) -> Traced {
+    let lights = Light::collect(scene);
+    // Flux of each light: π·Le·A for a one-sided Lambertian emitter, twice that for two sides.
+    let flux: Vec<Color> = lights
+        .iter()
+        .map(|l| {
+            let sides = if l.sample(0.5, 0.5).one_sided {
+                1.0
+            } else {
+                2.0
+            };
+            l.emitted * (std::f32::consts::PI * l.area * sides)
+        })
+        .collect();
+    let weights: Vec<f64> = flux.iter().map(|f| mean(*f) as f64).collect();
+    let total: f64 = weights.iter().sum();
+    if count == 0 || total <= 0.0 {
+        return Traced {
+            photons: Vec::new(),
+            rays: 0,
+            truncated: 0,
+        };
+    }
+    let cdf: Vec<f64> = weights
+        .iter()
+        .scan(0.0, |acc, w| {
+            *acc += w / total;
+            Some(*acc)
+        })
+        .collect();
+    let blocks = count.div_ceil(BLOCK);
+    let results: Vec<Traced> = (0..blocks)
+        .into_par_iter()
+        .map(|b| {
+            let mut stored = Vec::new();
+            let (mut rays, mut truncated) = (0, 0);
+            for k in b * BLOCK..((b + 1) * BLOCK).min(count) {
+                let mut rng = Rng::new(seed, k, 0x9407);
+                let pick = rng.next_f32() as f64;
+                let l = cdf
+                    .iter()
+                    .position(|&c| pick < c)
+                    .unwrap_or(lights.len() - 1);
+                let probability = (weights[l] / total) as f32;
+                let power = flux[l] / (probability * count as f32);
+                let (r, cut) = trace_one(
+                    scene,
+                    accel,
+                    &lights[l],
+                    power,
+                    max_depth,
+                    &mut rng,
+                    &mut stored,
+                );
+                rays += r;
+                truncated += cut as u64;
+            }
+            on_block();
+            Traced {
+                photons: stored,
+                rays,
+                truncated,
+            }
+        })
+        .collect();
+    Traced {
+        rays: results.iter().map(|r| r.rays).sum(),
+        truncated: results.iter().map(|r| r.truncated).sum(),
+        photons: results.into_iter().flat_map(|r| r.photons).collect(),
+    }
+}
+
+/// Follows one photon from a light until it is absorbed; returns the rays it cast and whether
+/// the depth limit stopped it.
+fn trace_one(
+    scene: &Scene,
+    accel: &dyn Accel,
+    light: &Light,
+    mut power: Color,
+    max_depth: u32,
+    rng: &mut Rng,
+    stored: &mut Vec<Photon>,
+) -> (u64, bool) {
+    let p = light.sample(rng.next_f32(), rng.next_f32());
+    let mut normal = p.normal;
+    if !p.one_sided && rng.next_f32() < 0.5 {
+        normal = -normal;
+    }
+    let dir = sample_lobe(normal, 1.0, rng.next_f32(), rng.next_f32());
+    let origin = offset_ray_origin(p.point, normal, point_error(p.point.abs().max_elem()));
+    let mut ray = Ray::new(origin, dir);
+    let mut any_diffuse = false;
+    let mut rays = 0;
+    for depth in 0..=max_depth {
+        rays += 1;
+        let Some(s) = closest_surface(accel, scene, &ray) else {
+            break;
+        };
+        let m = &scene.materials[s.material as usize];
+        let (front, n) = s.facing(ray.direction);
+        let albedo = scene.albedo(&s);
+        if albedo.max_elem() > 0.0 {
+            let kind = if depth == 0 {
+                PathKind::Direct
+            } else if any_diffuse {
+                PathKind::Indirect
+            } else {
+                PathKind::Caustic
+            };
+            stored.push(Photon {
+                position: s.point,
+                direction: ray.direction,
+                power,
+                normal: n,
+                kind,
+            });
+        }
+        if depth == max_depth {
+            return (rays, true);
+        }
+        let (pd, pr, pt) = (mean(albedo), mean(m.reflective), mean(m.transmitted));
+        let xi = rng.next_f32();
+        let dir = if xi < pd {
+            power = power.mul_elem(albedo) / pd;
+            any_diffuse = true;
+            sample_lobe(n, 1.0, rng.next_f32(), rng.next_f32())
+        } else if xi < pd + pr {
+            power = power.mul_elem(m.reflective) / pr;
+            glossy_reflection(
+                ray.direction,
+                n,
+                m.roughness,
+                rng.next_f32(),
+                rng.next_f32(),
+            )
+        } else if xi < pd + pr + pt {
+            power = power.mul_elem(m.transmitted) / pt;
+            let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
+            let f = fresnel_dielectric(-ray.direction.dot(n), eta_i, eta_t);
+            match refract(ray.direction, n, eta_i, eta_t) {
+                Some(t) if rng.next_f32() >= f => t.normalized(),
+                _ => reflect(ray.direction, n),
+            }
+        } else {
+            break;
+        };
+        ray = s.spawn_ray(dir);
+    }
+    (rays, false)
+}
