@@ -121,3 +121,28 @@ fn both_accels_give_identical_photon_images() {
         assert_eq!(images[0], images[1], "{file}");
     }
 }
+
+/// trilux's glass-sphere scene: the sphere focuses the light into a caustic on the floor below
+/// it, brighter than the light itself would make that point unshadowed, while the caustic map
+/// holds nothing far from the sphere.
+#[test]
+fn glass_sphere_focuses_a_refraction_caustic() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/glass_sphere_caustic.obj");
+    let scene = Scene::load(&path).expect("loads");
+    let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
+    let mut s = settings(300_000);
+    s.photon.num_photons_to_collect = 200;
+    let maps = PhotonMaps::build(&scene, accel.as_ref(), &s);
+    let up = trilux::geometry::vec3(0.0, 1.0, 0.0);
+    let below = maps.caustic_at(trilux::geometry::vec3(0.0, 0.0, 0.0), up);
+    let far = maps.caustic_at(trilux::geometry::vec3(3.0, 0.0, 3.0), up);
+    // Unshadowed direct light at the point below: Le·A·cos·cos/(π r²) / π·π = Le·A/(π r²).
+    let unshadowed = 60.0 * 0.25 / (std::f32::consts::PI * 16.0);
+    println!(
+        "caustic below the sphere {:.3}, far away {:.3}, unshadowed direct {unshadowed:.3} (irradiance/π)",
+        below.x, far.x
+    );
+    assert!(below.x > 2.0 * unshadowed);
+    assert!(far.x < 0.01 * below.x);
+}
