@@ -571,11 +571,13 @@ fn render(args: &RenderArgs) -> Result<(), String> {
             }
             if !settings.quiet {
                 eprintln!(
-                    "photons: {} emitted, {} photon rays; global map {} photons, caustic map {}; {} per estimate within {:.3}",
+                    "photons: {} emitted, {} photon rays in {:.3} s; global map {} photons, caustic map {} (kd-trees built in {:.3} s); {} per estimate within {:.3}",
                     maps.emitted,
                     maps.rays,
+                    maps.trace_seconds,
                     maps.global.len(),
                     maps.caustic.len(),
+                    maps.build_seconds,
                     maps.collect,
                     maps.max_radius
                 );

@@ -68,6 +68,9 @@ pub struct PhotonMaps {
     pub rays: u64,
     /// Photons stopped by `--max-photon-depth` while still carrying power.
     pub truncated: u64,
+    /// Wall time of photon tracing and of building the two kd-trees.
+    pub trace_seconds: f64,
+    pub build_seconds: f64,
     /// Photons per estimate and the largest radius (absolute).
     pub collect: usize,
     pub max_radius: f32,
@@ -77,6 +80,7 @@ impl PhotonMaps {
     /// Traces the photons and builds both maps.
     pub fn build(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> PhotonMaps {
         let p = &settings.photon;
+        let clock = std::time::Instant::now();
         let blocks = p.num_photons_to_shoot.div_ceil(4096);
         let bar = crate::progress::bar(blocks, "photons", settings.quiet);
         let traced = trace::trace_photons(
@@ -88,6 +92,8 @@ impl PhotonMaps {
             || bar.inc(1),
         );
         bar.finish_and_clear();
+        let trace_seconds = clock.elapsed().as_secs_f64();
+        let clock = std::time::Instant::now();
         let (mut global, mut caustic) = (Vec::new(), Vec::new());
         for ph in traced.photons {
             match ph.kind {
@@ -102,9 +108,12 @@ impl PhotonMaps {
                 PathKind::Direct => {}
             }
         }
+        let (global, caustic) = (PhotonMap::new(global), PhotonMap::new(caustic));
         PhotonMaps {
-            global: PhotonMap::new(global),
-            caustic: PhotonMap::new(caustic),
+            global,
+            caustic,
+            trace_seconds,
+            build_seconds: clock.elapsed().as_secs_f64(),
             emitted: p.num_photons_to_shoot,
             rays: traced.rays,
             truncated: traced.truncated,
