@@ -238,6 +238,13 @@ struct RenderArgs {
     /// Irradiance-cache records are gathered at every n-th pixel in x and y.
     #[arg(long, default_value_t = 4)]
     irradiance_cache_spacing: u32,
+    /// Write both photon maps to FILE (versioned, with a fingerprint of scene and settings).
+    #[arg(long, value_name = "FILE")]
+    save_photons: Option<PathBuf>,
+    /// Read the photon maps from FILE instead of tracing them; refused if made for another
+    /// scene or other settings.
+    #[arg(long, value_name = "FILE")]
+    load_photons: Option<PathBuf>,
     /// Smooth radiosity display: bilinear between values averaged at patch corners.
     #[arg(long)]
     interpolate: bool,
@@ -353,12 +360,16 @@ impl RenderArgs {
             final_gather_rays: self.final_gather_rays,
             irradiance_cache_error: self.irradiance_cache_error,
             irradiance_cache_spacing: self.irradiance_cache_spacing,
+            save: self.save_photons.clone(),
+            load: self.load_photons.clone(),
         }
     }
 
     /// Flags that only the photon engine reads: giving one chooses it.
-    fn photon_flags(&self) -> [(&'static str, bool); 3] {
+    fn photon_flags(&self) -> [(&'static str, bool); 5] {
         [
+            ("--save-photons", self.save_photons.is_some()),
+            ("--load-photons", self.load_photons.is_some()),
             ("-num_photons_to_shoot", self.num_photons_to_shoot.is_some()),
             (
                 "-num_photons_to_collect",
@@ -544,7 +555,8 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     let build_s = build_start.elapsed().as_secs_f64();
     let render_start = Instant::now();
     let accel = accel.as_ref();
-    let (film, stats, solution) = pool.install(|| match engine {
+    let (film, stats, solution) = pool.install(|| -> Result<_, String> {
+        Ok(match engine {
         EngineKind::Raycast => {
             let film = raycast::render(&scene, accel, &settings);
             let stats = RenderStats::default();
@@ -562,7 +574,7 @@ fn render(args: &RenderArgs) -> Result<(), String> {
             (film, stats, Some(solution))
         }
         EngineKind::Photon => {
-            let (film, stats, maps) = photon::render(&scene, accel, &settings);
+            let (film, stats, maps) = photon::render(&scene, accel, &settings)?;
             if maps.truncated * 1000 > maps.emitted {
                 eprintln!(
                     "warning: {} of {} photons were still carrying light when --max-photon-depth {} stopped them; their light is missing from the image (raise the depth: Russian roulette alone keeps paths finite)",
@@ -595,7 +607,8 @@ fn render(args: &RenderArgs) -> Result<(), String> {
             let (film, stats) = raytrace::render(&scene, accel, &settings);
             (film, stats, None)
         }
-    });
+    })
+    })?;
     if let Some(solution) = &solution {
         report_radiosity(solution, &settings);
         if let Some(path) = &args.log_convergence {

@@ -663,3 +663,71 @@ fn course_photon_command_lines_run_verbatim() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `--save-photons` writes both maps; `--load-photons` renders the same image from them
+/// without tracing; a file made for another scene, or not a photon file, is a clear error.
+#[test]
+fn photon_maps_are_saved_and_loaded_and_checked() {
+    let Some(course) = common::course_dir() else {
+        return;
+    };
+    let dir = temp_dir("photon-file");
+    let cornell = course
+        .join("cornell_box_diffuse_sphere.obj")
+        .to_string_lossy()
+        .into_owned();
+    let ring = course
+        .join("reflective_ring.obj")
+        .to_string_lossy()
+        .into_owned();
+    let base = [
+        "-num_photons_to_shoot",
+        "20000",
+        "-num_shadow_samples",
+        "4",
+        "-size",
+        "32",
+        "32",
+    ];
+    let mut save = vec![
+        "-input",
+        &cornell,
+        "--save-photons",
+        "maps.photons",
+        "-o",
+        "traced.pfm",
+    ];
+    save.extend(base);
+    ok(&render(&dir, &save));
+    let mut load = vec![
+        "-input",
+        &cornell,
+        "--load-photons",
+        "maps.photons",
+        "-o",
+        "loaded.pfm",
+    ];
+    load.extend(base);
+    ok(&render(&dir, &load));
+    assert_eq!(
+        std::fs::read(dir.join("traced.pfm")).unwrap(),
+        std::fs::read(dir.join("loaded.pfm")).unwrap(),
+        "the loaded maps give the same image"
+    );
+    let mut other = vec!["-input", &ring, "--load-photons", "maps.photons"];
+    other.extend(base);
+    let out = render(&dir, &other);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("maps.photons") && err.contains("made for another scene"),
+        "{err}"
+    );
+    std::fs::write(dir.join("junk.photons"), b"not photons at all").unwrap();
+    let mut junk = vec!["-input", &cornell, "--load-photons", "junk.photons"];
+    junk.extend(base);
+    let out = render(&dir, &junk);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a trilux photon file"));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -122,6 +122,7 @@ fn radiosity_photon_and_path_images_agree_on_flat_regions() {
             ..base.clone()
         },
     )
+    .expect("renders")
     .0;
     println!("photon: {:.1} s", clock.elapsed().as_secs_f64());
     // The quads of the file: 0 light (front), 1 back wall, 2 ceiling, 3 floor.

@@ -41,7 +41,7 @@ fn furnace_radiance_is_le_over_one_minus_rho() {
             // Russian roulette alone ends the paths; a depth limit of 10 would lose
             // ρ¹¹/(1−ρ) = 3.1 of the 10 at ρ = 0.9 (measured: −29%).
             s.photon.max_photon_depth = 100_000;
-            let (film, _, maps) = photon::render(&scene, accel.as_ref(), &s);
+            let (film, _, maps) = photon::render(&scene, accel.as_ref(), &s).expect("renders");
             let mean: f64 =
                 film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64;
             println!(
@@ -114,7 +114,7 @@ fn both_accels_give_identical_photon_images() {
             .into_iter()
             .map(|kind| {
                 let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
-                let (film, _, _) = photon::render(&scene, accel.as_ref(), &s);
+                let (film, _, _) = photon::render(&scene, accel.as_ref(), &s).expect("renders");
                 film.pixels.iter().flat_map(|p| p.to_array()).collect()
             })
             .collect();

@@ -4,6 +4,7 @@
 //! and mirrors itself and takes its diffuse indirect light from the maps — by direct lookup, or
 //! by final gathering accelerated by an irradiance cache (`-gather_indirect`).
 
+pub mod file;
 pub mod gather;
 pub mod map;
 pub mod trace;
@@ -37,6 +38,10 @@ pub struct PhotonSettings {
     pub final_gather_rays: u32,
     /// Ward's irradiance cache error a (`--irradiance-cache-error`, default 0.15).
     pub irradiance_cache_error: f32,
+    /// Write the maps to this file after tracing (`--save-photons`).
+    pub save: Option<std::path::PathBuf>,
+    /// Read the maps from this file instead of tracing (`--load-photons`).
+    pub load: Option<std::path::PathBuf>,
     /// Cache records are computed at every n-th pixel in x and y (`--irradiance-cache-spacing`,
     /// default 4); the rest interpolate, or gather afresh where no record is close enough.
     pub irradiance_cache_spacing: u32,
@@ -53,6 +58,8 @@ impl Default for PhotonSettings {
             final_gather_rays: 128,
             irradiance_cache_error: 0.15,
             irradiance_cache_spacing: 4,
+            save: None,
+            load: None,
         }
     }
 }
@@ -168,18 +175,26 @@ pub fn visualize(scene: &Scene, maps: &PhotonMaps, settings: &RenderSettings) ->
     film
 }
 
-/// Renders with the photon engine: traces the maps, then ray traces with them as the indirect
+/// Renders with the photon engine: traces the maps (or loads them), then ray traces with them as the indirect
 /// light (and, with `-gather_indirect`, an irradiance cache of final gathers).
 pub fn render(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
-) -> (Film, super::RenderStats, PhotonMaps) {
-    let maps = PhotonMaps::build(scene, accel, settings);
+) -> Result<(Film, super::RenderStats, PhotonMaps), String> {
+    let p = &settings.photon;
+    let maps = match &p.load {
+        Some(path) => PhotonMaps::load(path, scene, settings)?,
+        None => PhotonMaps::build(scene, accel, settings),
+    };
+    if let Some(path) = &p.save {
+        maps.save(path, file::fingerprint(scene, settings))
+            .map_err(|e| e.to_string())?;
+    }
     if settings.radiosity.visualize == super::radiosity::Visualize::Photons {
         let stats = super::RenderStats::default();
         stats.photon_rays.store(maps.rays, Relaxed);
-        return (visualize(scene, &maps, settings), stats, maps);
+        return Ok((visualize(scene, &maps, settings), stats, maps));
     }
     let cache = settings
         .photon
@@ -196,5 +211,5 @@ pub fn render(
             .secondary_rays
             .fetch_add(c.rays.load(Relaxed), Relaxed);
     }
-    (film, stats, maps)
+    Ok((film, stats, maps))
 }

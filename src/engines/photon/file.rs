@@ -1,0 +1,152 @@
+//! `--save-photons` / `--load-photons`: both maps in a versioned binary file (little-endian)
+//! with a fingerprint of the scene file and the settings that shaped the photons, so that a file
+//! made for another scene or other settings is refused with a clear error.
+//!
+//! Layout: magic `TRILUXPM`, version (u32), fingerprint (u64), photons emitted, photon rays,
+//! photons cut by the depth limit (u64 each), global and caustic counts (u64 each), then each
+//! photon: position, direction, power, normal (3 × f32 each) and its path kind (u8).
+
+use std::io::{Read, Write};
+use std::path::Path;
+
+use super::{PathKind, Photon, PhotonMap, PhotonMaps};
+use crate::engines::RenderSettings;
+use crate::film::{write_atomically, FilmError};
+use crate::geometry::vec3;
+use crate::sampling::mix64;
+use crate::scene::Scene;
+
+const MAGIC: &[u8; 8] = b"TRILUXPM";
+const VERSION: u32 = 1;
+const PHOTON_BYTES: usize = 12 * 4 + 1;
+
+/// A hash of the scene file's bytes and of every setting that changes which photons are
+/// stored: their number, the depth limit, the seed, and whether the global map keeps all
+/// photons (final gathering).
+pub fn fingerprint(scene: &Scene, settings: &RenderSettings) -> u64 {
+    let p = &settings.photon;
+    let bytes = std::fs::read(&scene.path).unwrap_or_default();
+    let mut h = mix64(bytes.len() as u64);
+    for chunk in bytes.chunks(8) {
+        let mut word = [0u8; 8];
+        word[..chunk.len()].copy_from_slice(chunk);
+        h = mix64(h ^ u64::from_le_bytes(word));
+    }
+    for v in [
+        p.num_photons_to_shoot,
+        p.max_photon_depth as u64,
+        settings.seed,
+        p.gather_indirect as u64,
+    ] {
+        h = mix64(h ^ v);
+    }
+    h
+}
+
+impl PhotonMaps {
+    pub fn save(&self, path: &Path, fingerprint: u64) -> Result<(), FilmError> {
+        write_atomically(path, |w| {
+            let io = |source| FilmError::Io {
+                path: path.to_path_buf(),
+                source,
+            };
+            w.write_all(MAGIC).map_err(io)?;
+            w.write_all(&VERSION.to_le_bytes()).map_err(io)?;
+            for v in [
+                fingerprint,
+                self.emitted,
+                self.rays,
+                self.truncated,
+                self.global.len() as u64,
+                self.caustic.len() as u64,
+            ] {
+                w.write_all(&v.to_le_bytes()).map_err(io)?;
+            }
+            for p in self.global.photons.iter().chain(&self.caustic.photons) {
+                for v in [p.position, p.direction, p.power, p.normal] {
+                    for c in v.to_array() {
+                        w.write_all(&c.to_le_bytes()).map_err(io)?;
+                    }
+                }
+                w.write_all(&[p.kind as u8]).map_err(io)?;
+            }
+            Ok(())
+        })
+    }
+
+    /// Reads maps saved for this scene and these settings; lookups use the current settings.
+    pub fn load(
+        path: &Path,
+        scene: &Scene,
+        settings: &RenderSettings,
+    ) -> Result<PhotonMaps, String> {
+        let name = path.display();
+        let mut data = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|mut f| f.read_to_end(&mut data))
+            .map_err(|e| format!("{name}: cannot read photon file: {e}"))?;
+        if data.len() < 60 || &data[..8] != MAGIC {
+            return Err(format!("{name}: not a trilux photon file"));
+        }
+        let u32_at = |o: usize| u32::from_le_bytes(data[o..o + 4].try_into().unwrap_or_default());
+        let u64_at = |o: usize| u64::from_le_bytes(data[o..o + 8].try_into().unwrap_or_default());
+        let version = u32_at(8);
+        if version != VERSION {
+            return Err(format!(
+                "{name}: photon file version {version}; this trilux reads version {VERSION}"
+            ));
+        }
+        let expected = fingerprint(scene, settings);
+        if u64_at(12) != expected {
+            return Err(format!(
+                "{name}: these photons were made for another scene or other settings (scene file, -num_photons_to_shoot, --max-photon-depth, --seed and -gather_indirect must match {})",
+                scene.path.display()
+            ));
+        }
+        let (emitted, rays, truncated) = (u64_at(20), u64_at(28), u64_at(36));
+        let (n_global, n_caustic) = (u64_at(44), u64_at(52));
+        let count = n_global
+            .checked_add(n_caustic)
+            .and_then(|n| usize::try_from(n).ok())
+            .filter(|&n| n.checked_mul(PHOTON_BYTES) == Some(data.len() - 60))
+            .ok_or_else(|| {
+                format!("{name}: the file is truncated or damaged ({n_global} + {n_caustic} photons announced, {} bytes of photons)", data.len() - 60)
+            })?;
+        let f32_at = |o: usize| f32::from_le_bytes(data[o..o + 4].try_into().unwrap_or_default());
+        let vec_at = |o: usize| vec3(f32_at(o), f32_at(o + 4), f32_at(o + 8));
+        let mut photons: Vec<Photon> = Vec::with_capacity(count);
+        for k in 0..count {
+            let o = 60 + k * PHOTON_BYTES;
+            let kind = match data[o + 48] {
+                0 => PathKind::Direct,
+                1 => PathKind::Caustic,
+                2 => PathKind::Indirect,
+                other => return Err(format!("{name}: photon {k} has unknown kind {other}")),
+            };
+            let photon = Photon {
+                position: vec_at(o),
+                direction: vec_at(o + 12),
+                power: vec_at(o + 24),
+                normal: vec_at(o + 36),
+                kind,
+            };
+            if !(photon.position.is_finite() && photon.power.is_finite()) {
+                return Err(format!("{name}: photon {k} is not finite"));
+            }
+            photons.push(photon);
+        }
+        let caustic = photons.split_off(n_global as usize);
+        let p = &settings.photon;
+        Ok(PhotonMaps {
+            global: PhotonMap::new(photons),
+            caustic: PhotonMap::new(caustic),
+            emitted,
+            rays,
+            truncated,
+            trace_seconds: 0.0,
+            build_seconds: 0.0,
+            collect: p.num_photons_to_collect.max(1) as usize,
+            max_radius: p.max_radius * scene.bounds().extent().length(),
+        })
+    }
+}
