@@ -395,7 +395,8 @@ impl RenderArgs {
             ("--subdivide", self.subdivide.is_some()),
             (
                 "--visualize",
-                self.visualize.is_some_and(|v| v != Visualize::Photons),
+                self.visualize
+                    .is_some_and(|v| !matches!(v, Visualize::Photons | Visualize::Kdtree)),
             ),
             ("--wireframe", self.wireframe),
             ("--adaptive-subdivide", self.adaptive_subdivide.is_some()),
@@ -408,7 +409,7 @@ impl RenderArgs {
         match self.engine {
             Some(e) => e,
             None if self.photon_flags().iter().any(|f| f.1)
-                || self.visualize == Some(Visualize::Photons) =>
+                || matches!(self.visualize, Some(Visualize::Photons | Visualize::Kdtree)) =>
             {
                 EngineKind::Photon
             }

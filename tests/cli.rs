@@ -723,6 +723,20 @@ fn photon_maps_are_saved_and_loaded_and_checked() {
         err.contains("maps.photons") && err.contains("made for another scene"),
         "{err}"
     );
+    // The photons and the kd-tree's cells over them.
+    let mut view = vec![
+        "-input",
+        &cornell,
+        "--load-photons",
+        "maps.photons",
+        "--visualize",
+        "kdtree",
+        "-o",
+        "cells.png",
+    ];
+    view.extend(base);
+    ok(&render(&dir, &view));
+    assert!(dir.join("cells.png").is_file());
     std::fs::write(dir.join("junk.photons"), b"not photons at all").unwrap();
     let mut junk = vec!["-input", &cornell, "--load-photons", "junk.photons"];
     junk.extend(base);

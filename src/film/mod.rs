@@ -226,3 +226,31 @@ pub fn read_pfm(path: &Path) -> Result<Film, String> {
     }
     Ok(film)
 }
+
+/// Draws 3D line segments, projected through the camera, over the film (one pixel wide;
+/// the parts behind the camera are left out).
+pub fn draw_lines(
+    film: &mut Film,
+    camera: &crate::scene::Camera,
+    lines: impl Iterator<Item = (crate::geometry::Vec3, crate::geometry::Vec3, Color)>,
+) {
+    let (w, h) = (film.width as f32, film.height as f32);
+    let m = w.max(h);
+    // Inverse of Camera::screen_point: screen (x, y) to pixel coordinates, row 0 at the top.
+    let to_pixel = |(x, y): (f32, f32)| ((x - 0.5) * m + w / 2.0, h - ((y - 0.5) * m + h / 2.0));
+    for (from, to, colour) in lines {
+        // Clip to the part in front of the camera by sampling along the segment.
+        let steps = 2048;
+        for k in 0..=steps {
+            let p = from + (to - from) * (k as f32 / steps as f32);
+            let Some(screen) = camera.project(p) else {
+                continue;
+            };
+            let (px, py) = to_pixel(screen);
+            if px >= 0.0 && py >= 0.0 && px < w && py < h {
+                let idx = py as usize * film.width as usize + px as usize;
+                film.pixels[idx] = colour;
+            }
+        }
+    }
+}

@@ -20,25 +20,11 @@ fn colour(kind: SegmentKind) -> Color {
 /// Draws the segments, projected through the camera, over a copy of the film.
 pub fn overlay(film: &Film, camera: &Camera, segments: &[Segment]) -> Film {
     let mut out = film.clone();
-    let (w, h) = (film.width as f32, film.height as f32);
-    let m = w.max(h);
-    // Inverse of Camera::screen_point: screen (x, y) to pixel coordinates, row 0 at the top.
-    let to_pixel = |(x, y): (f32, f32)| ((x - 0.5) * m + w / 2.0, h - ((y - 0.5) * m + h / 2.0));
-    for s in segments {
-        // Clip the segment to the part in front of the camera by sampling along it.
-        let steps = 2048;
-        for k in 0..=steps {
-            let p = s.from + (s.to - s.from) * (k as f32 / steps as f32);
-            let Some(screen) = camera.project(p) else {
-                continue;
-            };
-            let (px, py) = to_pixel(screen);
-            if px >= 0.0 && py >= 0.0 && px < w && py < h {
-                let idx = py as usize * film.width as usize + px as usize;
-                out.pixels[idx] = colour(s.kind);
-            }
-        }
-    }
+    super::draw_lines(
+        &mut out,
+        camera,
+        segments.iter().map(|s| (s.from, s.to, colour(s.kind))),
+    );
     out
 }
 

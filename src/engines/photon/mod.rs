@@ -15,9 +15,11 @@ pub use gather::IrradianceCache;
 pub use map::PhotonMap;
 pub use trace::{PathKind, Photon};
 
+use super::radiosity::Visualize;
 use super::RenderSettings;
 use crate::accel::Accel;
 use crate::film::Film;
+use crate::geometry::{Bounds3, Vec3};
 use crate::scene::{Color, Scene};
 
 /// Settings only the photon engine reads.
@@ -175,6 +177,66 @@ pub fn visualize(scene: &Scene, maps: &PhotonMaps, settings: &RenderSettings) ->
     film
 }
 
+/// Levels of the kd-tree drawn by `--visualize kdtree` (2⁶ = 64 cells).
+const KD_VIEW_DEPTH: u32 = 6;
+
+/// The cells of a balanced kd-tree over all photons, `depth` levels deep: each cell split at
+/// the median photon along its longest axis, as kiddo's `ImmutableKdTree` balances its own
+/// (whose nodes it does not expose). Cells are the photons' bounding boxes.
+fn kd_cells(maps: &PhotonMaps, depth: u32) -> Vec<Bounds3> {
+    fn split(points: &mut [Vec3], depth: u32, out: &mut Vec<Bounds3>) {
+        let bounds = Bounds3::from_points(points);
+        if depth == 0 || points.len() < 2 {
+            out.push(bounds);
+            return;
+        }
+        let axis = bounds.extent().max_axis();
+        let middle = points.len() / 2;
+        points.select_nth_unstable_by(middle, |a, b| a[axis].total_cmp(&b[axis]));
+        let (low, high) = points.split_at_mut(middle);
+        split(low, depth - 1, out);
+        split(high, depth - 1, out);
+    }
+    let mut points: Vec<Vec3> = maps
+        .global
+        .photons
+        .iter()
+        .chain(&maps.caustic.photons)
+        .map(|p| p.position)
+        .collect();
+    let mut out = Vec::new();
+    if !points.is_empty() {
+        split(&mut points, depth, &mut out);
+    }
+    out
+}
+
+/// The twelve edges of a box.
+fn box_edges(b: &Bounds3) -> [(Vec3, Vec3); 12] {
+    let corner = |i: u32| {
+        crate::geometry::vec3(
+            if i & 1 == 0 { b.min.x } else { b.max.x },
+            if i & 2 == 0 { b.min.y } else { b.max.y },
+            if i & 4 == 0 { b.min.z } else { b.max.z },
+        )
+    };
+    let pairs = [
+        (0, 1),
+        (2, 3),
+        (4, 5),
+        (6, 7),
+        (0, 2),
+        (1, 3),
+        (4, 6),
+        (5, 7),
+        (0, 4),
+        (1, 5),
+        (2, 6),
+        (3, 7),
+    ];
+    pairs.map(|(a, c)| (corner(a), corner(c)))
+}
+
 /// Renders with the photon engine: traces the maps (or loads them), then ray traces with them as the indirect
 /// light (and, with `-gather_indirect`, an irradiance cache of final gathers).
 pub fn render(
@@ -191,10 +253,24 @@ pub fn render(
         maps.save(path, file::fingerprint(scene, settings))
             .map_err(|e| e.to_string())?;
     }
-    if settings.radiosity.visualize == super::radiosity::Visualize::Photons {
+    let mode = settings.radiosity.visualize;
+    if matches!(mode, Visualize::Photons | Visualize::Kdtree) {
         let stats = super::RenderStats::default();
         stats.photon_rays.store(maps.rays, Relaxed);
-        return Ok((visualize(scene, &maps, settings), stats, maps));
+        let mut film = visualize(scene, &maps, settings);
+        if mode == Visualize::Kdtree {
+            let camera = scene.camera();
+            let green = crate::geometry::vec3(0.0, 1.0, 0.0);
+            let cells = kd_cells(&maps, KD_VIEW_DEPTH);
+            crate::film::draw_lines(
+                &mut film,
+                &camera,
+                cells
+                    .iter()
+                    .flat_map(|b| box_edges(b).map(|(a, c)| (a, c, green))),
+            );
+        }
+        return Ok((film, stats, maps));
     }
     let cache = settings
         .photon

@@ -31,7 +31,7 @@ pub fn render_solution(
     let patches = &solution.patches;
     let source = form_factor_source(solution, r.ff_source);
     let values: Vec<Color> = match r.visualize {
-        Visualize::Radiance | Visualize::Photons => solution.display_radiance(),
+        Visualize::Radiance | Visualize::Photons | Visualize::Kdtree => solution.display_radiance(),
         Visualize::Materials => patches.iter().map(|p| p.albedo).collect(),
         Visualize::Lights => patches.iter().map(|p| p.emitted).collect(),
         Visualize::Undistributed => solution.state.unshot.clone(),

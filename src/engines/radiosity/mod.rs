@@ -40,6 +40,8 @@ pub enum Visualize {
     Absorbed,
     /// The photon engine's photons projected through the camera, coloured by power.
     Photons,
+    /// The photons with the cells of a balanced kd-tree over them drawn in green.
+    Kdtree,
 }
 
 /// Settings only the radiosity engine reads. Defaults are the course program's where it has one.
