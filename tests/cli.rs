@@ -25,6 +25,19 @@ fn ok(out: &Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
+/// A course command line's arguments, its scene file found in the course folder.
+fn course_args(course: &Path, line: &str) -> Vec<String> {
+    line.split(' ')
+        .map(|a| {
+            if a.ends_with(".obj") {
+                course.join(a).to_string_lossy().into_owned()
+            } else {
+                a.to_string()
+            }
+        })
+        .collect()
+}
+
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("trilux-cli-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
@@ -488,16 +501,7 @@ fn course_radiosity_command_lines_run_verbatim() {
         "-input cornell_box_diffuse_sphere.obj -sphere_rasterization 16 12 -num_shadow_samples 1",
     ];
     for line in lines {
-        let args: Vec<String> = line
-            .split(' ')
-            .map(|a| {
-                if a.ends_with(".obj") {
-                    course.join(a).to_string_lossy().into_owned()
-                } else {
-                    a.to_string()
-                }
-            })
-            .collect();
+        let args = course_args(&course, line);
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let out = render(&dir, &args);
         ok(&out);
@@ -637,16 +641,7 @@ fn course_photon_command_lines_run_verbatim() {
         "-input cornell_box_reflective_sphere.obj -num_photons_to_shoot 500000 -num_shadow_samples 500 -num_photons_to_collect 500 -num_bounces 1",
     ];
     for line in lines {
-        let mut args: Vec<String> = line
-            .split(' ')
-            .map(|a| {
-                if a.ends_with(".obj") {
-                    course.join(a).to_string_lossy().into_owned()
-                } else {
-                    a.to_string()
-                }
-            })
-            .collect();
+        let mut args = course_args(&course, line);
         args.extend(["-size", "48", "48"].map(String::from));
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let out = render(&dir, &args);
