@@ -146,3 +146,114 @@ fn glass_sphere_focuses_a_refraction_caustic() {
     assert!(below.x > 2.0 * unshadowed);
     assert!(far.x < 0.01 * below.x);
 }
+
+/// Mean of a film's pixels over those selected, per channel.
+fn mean_over(film: &trilux::film::Film, pixels: &[usize]) -> trilux::geometry::Vec3 {
+    let sum = pixels
+        .iter()
+        .fold(trilux::geometry::Vec3::ZERO, |a, &k| a + film.pixels[k]);
+    sum / pixels.len().max(1) as f32
+}
+
+/// For each pixel (film order, rows from the top), the floor point its centre ray hits.
+fn floor_points(
+    scene: &Scene,
+    accel: &dyn trilux::accel::Accel,
+    w: u32,
+    h: u32,
+    floor_y: f32,
+) -> Vec<Option<trilux::geometry::Vec3>> {
+    let camera = scene.camera();
+    let mut out = vec![None; (w * h) as usize];
+    for j in 0..h {
+        for i in 0..w {
+            let (x, y) = trilux::scene::Camera::screen_point(i, j, 0.5, 0.5, w, h);
+            let hit = trilux::accel::closest_surface(accel, scene, &camera.generate_ray(x, y));
+            if let Some(s) = hit.filter(|s| (s.point.y - floor_y).abs() < 1e-3) {
+                out[((h - 1 - j) * w + i) as usize] = Some(s.point);
+            }
+        }
+    }
+    out
+}
+
+/// Every photon stored on a diffuse surface, first hits included, carries in all the emitted
+/// power times 1/(1−ρ) in the furnace: each unit of light is stored once per bounce.
+#[test]
+fn stored_power_is_emitted_power_over_one_minus_rho() {
+    let scene = furnace(0.5);
+    let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
+    let mut s = settings(400_000);
+    s.photon.gather_indirect = true; // the global map then keeps every photon
+    s.photon.max_photon_depth = 100_000;
+    let maps = PhotonMaps::build(&scene, accel.as_ref(), &s);
+    let stored: f64 = maps.global.photons.iter().map(|p| p.power.x as f64).sum();
+    let emitted = std::f64::consts::PI * 24.0; // π·Le·A over the six faces of side 2
+    let expected = emitted / (1.0 - 0.5);
+    println!(
+        "stored {stored:.3}, expected {expected:.3} ({:+.3}%)",
+        100.0 * (stored / expected - 1.0)
+    );
+    assert!((stored / expected - 1.0).abs() < 0.01);
+}
+
+/// Colour bleeding: the floor by the red wall is redder (R/B) than the floor by the blue
+/// wall, and by more than in the ray tracer with its grey ambient light.
+#[test]
+fn floor_bleeds_the_colour_of_the_nearest_wall() {
+    let Some(dir) = course_dir() else {
+        return;
+    };
+    let scene = Scene::load(&dir.join("cornell_box_diffuse_sphere.obj")).expect("loads");
+    let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
+    let (w, h) = (48u32, 48u32);
+    let floor = floor_points(&scene, accel.as_ref(), w, h, -1.0);
+    let near = |red: bool| -> Vec<usize> {
+        (0..floor.len())
+            .filter(|&k| floor[k].is_some_and(|p| if red { p.x < -0.6 } else { p.x > 0.6 }))
+            .collect()
+    };
+    let (by_red, by_blue) = (near(true), near(false));
+    let r_over_b = |film: &trilux::film::Film, pixels: &[usize]| {
+        let m = mean_over(film, pixels);
+        m.x / m.z
+    };
+    let mut s = settings(500_000);
+    s.width = w;
+    s.height = h;
+    let (photons, _, _) = photon::render(&scene, accel.as_ref(), &s).expect("renders");
+    let traced = trilux::engines::raytrace::render(&scene, accel.as_ref(), &s).0;
+    let bleed_photons = r_over_b(&photons, &by_red) / r_over_b(&photons, &by_blue);
+    let bleed_traced = r_over_b(&traced, &by_red) / r_over_b(&traced, &by_blue);
+    println!(
+        "R/B by the red wall over R/B by the blue wall: photons {bleed_photons:.3}, ray tracer with ambient {bleed_traced:.3} ({} and {} pixels)",
+        by_red.len(),
+        by_blue.len()
+    );
+    assert!(by_red.len() > 20 && by_blue.len() > 20);
+    assert!(bleed_photons > 1.05 && bleed_photons > bleed_traced);
+}
+
+/// Both Accels store the same photons, bit for bit, for the same seed.
+#[test]
+fn both_accels_give_identical_photon_maps() {
+    let Some(dir) = course_dir() else {
+        return;
+    };
+    if backends().len() < 2 {
+        return;
+    }
+    for file in ["cornell_box_reflective_sphere.obj", "reflective_ring.obj"] {
+        let scene = Scene::load(&dir.join(file)).expect("loads");
+        let maps: Vec<PhotonMaps> = backends()
+            .into_iter()
+            .map(|kind| {
+                let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+                PhotonMaps::build(&scene, accel.as_ref(), &settings(200_000))
+            })
+            .collect();
+        assert!(!maps[0].global.photons.is_empty() || !maps[0].caustic.photons.is_empty());
+        assert_eq!(maps[0].global.photons, maps[1].global.photons, "{file}");
+        assert_eq!(maps[0].caustic.photons, maps[1].caustic.photons, "{file}");
+    }
+}

@@ -24,7 +24,7 @@ use crate::scene::{Camera, Color, Scene};
 const NEIGHBOURS: usize = 16;
 
 #[derive(Clone, Copy, Debug)]
-struct Record {
+pub struct Record {
     position: Vec3,
     normal: Vec3,
     /// Irradiance / π gathered there.
@@ -34,12 +34,14 @@ struct Record {
 }
 
 pub struct IrradianceCache {
-    records: Vec<Record>,
+    pub records: Vec<Record>,
     tree: ImmutableKdTree<f32, u32, 3, 32>,
     error: f32,
     gather_rays: u32,
     /// Rays cast by gathers (records and fresh ones).
     pub rays: AtomicU64,
+    /// Wall time of making the records.
+    pub build_seconds: f64,
     /// Lookups answered by interpolation, and by a fresh gather.
     pub interpolated: AtomicU64,
     pub fresh: AtomicU64,
@@ -93,6 +95,7 @@ impl IrradianceCache {
         settings: &RenderSettings,
         maps: &PhotonMaps,
     ) -> IrradianceCache {
+        let clock = std::time::Instant::now();
         let p = &settings.photon;
         let spacing = p.irradiance_cache_spacing.max(1);
         let (w, h) = (settings.width, settings.height);
@@ -138,6 +141,7 @@ impl IrradianceCache {
         let points: Vec<[f32; 3]> = records.iter().map(|r| r.position.to_array()).collect();
         IrradianceCache {
             tree: ImmutableKdTree::new_from_slice(&points),
+            build_seconds: clock.elapsed().as_secs_f64(),
             records,
             error: p.irradiance_cache_error,
             gather_rays: p.final_gather_rays,

@@ -286,6 +286,15 @@ pub fn render(
         stats
             .secondary_rays
             .fetch_add(c.rays.load(Relaxed), Relaxed);
+        if !settings.quiet {
+            eprintln!(
+                "irradiance cache: {} records in {:.3} s; lookups interpolated {}, gathered afresh {}",
+                c.records.len(),
+                c.build_seconds,
+                c.interpolated.load(Relaxed),
+                c.fresh.load(Relaxed)
+            );
+        }
     }
     Ok((film, stats, maps))
 }
