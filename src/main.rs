@@ -11,9 +11,9 @@ use std::sync::atomic::Ordering::Relaxed;
 use trilux::accel::{self, AccelKind, AccelOptions, EmbreeQuality};
 
 use trilux::engines::photon::{self, PhotonSettings};
-use trilux::engines::radiosity::{self, RadiositySettings, Visualize};
+use trilux::engines::radiosity::{self, RadiositySettings};
 use trilux::engines::{
-    path, raycast, raytrace, EngineKind, IndirectKind, RenderSettings, RenderStats,
+    path, raycast, raytrace, EngineKind, IndirectKind, RenderSettings, RenderStats, Visualize,
 };
 use trilux::geometry::vec3;
 use trilux::plan::Plan;
@@ -307,6 +307,7 @@ impl RenderArgs {
                 .ambient_light
                 .as_ref()
                 .map_or(d.ambient_light, |a| vec3(a[0], a[1], a[2])),
+            visualize: self.visualize.unwrap_or_default(),
             radiosity: self.radiosity_settings(),
             indirect: self.indirect,
             photon: self.photon_settings(),
@@ -340,7 +341,6 @@ impl RenderArgs {
             ff_cache_mb: self.ff_cache_mb,
             adaptive_threshold: self.adaptive_subdivide,
             adaptive_rounds: self.adaptive_rounds,
-            visualize: self.visualize.unwrap_or_default(),
             wireframe: self.wireframe,
             ff_source: self.ff_source,
             log_convergence: self.log_convergence.is_some(),

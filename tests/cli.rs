@@ -38,6 +38,22 @@ fn course_args(course: &Path, line: &str) -> Vec<String> {
         .collect()
 }
 
+/// Runs `render` once per backend with `args` plus `--accel KIND` (a "{kind}" in `args` or
+/// `output` stands for the backend's name) and returns the bytes each run wrote to `output`.
+fn render_per_backend(dir: &Path, args: &[&str], output: &str) -> Vec<Vec<u8>> {
+    backends()
+        .into_iter()
+        .map(|kind| {
+            let kind = kind.to_string();
+            let mut argv: Vec<String> = args.iter().map(|a| a.replace("{kind}", &kind)).collect();
+            argv.extend(["--accel".into(), kind.clone()]);
+            let argv: Vec<&str> = argv.iter().map(String::as_str).collect();
+            ok(&render(dir, &argv));
+            std::fs::read(dir.join(output.replace("{kind}", &kind))).expect("image written")
+        })
+        .collect()
+}
+
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("trilux-cli-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
@@ -55,18 +71,12 @@ fn every_course_scene_renders_identically_with_both_backends() {
             &["--engine", "raycast"][..],
             &["-num_shadow_samples", "4", "-num_bounces", "2"],
         ] {
-            let mut images = Vec::new();
-            for kind in backends() {
-                let out = format!("{stem}.{kind}.png");
-                let mut args = vec![
-                    "-input", input, "-size", "160", "120", "-o", &out, "--quiet",
-                ];
-                let kind = kind.to_string();
-                args.extend(["--accel", &kind]);
-                args.extend(engine);
-                ok(&render(&dir, &args));
-                images.push(std::fs::read(dir.join(&out)).expect("image written"));
-            }
+            let out = format!("{stem}.{{kind}}.png");
+            let mut args = vec![
+                "-input", input, "-size", "160", "120", "-o", &out, "--quiet",
+            ];
+            args.extend(engine);
+            let images = render_per_backend(&dir, &args, &out);
             assert!(
                 images.windows(2).all(|w| w[0] == w[1]),
                 "{stem} {engine:?}: backends give different images"
@@ -417,22 +427,14 @@ fn course_ray_tracing_commands_give_identical_images_with_both_backends() {
         "-input cornell_box_diffuse_sphere.obj -ambient_light 0.2 0.2 0.2 -num_shadow_samples 100",
     ];
     for (k, command) in commands.iter().enumerate() {
-        let mut images = Vec::new();
-        for kind in backends() {
-            // Run from the course folder, as the course does: `-input NAME.obj`.
-            let dir = temp_dir(&format!("course-{k}-{kind}"));
-            let mut args: Vec<String> = command.split_whitespace().map(String::from).collect();
-            let input = course.join(&args[1]);
-            args[1] = input.to_string_lossy().into_owned();
-            args.extend(["--accel".into(), kind.to_string(), "--quiet".into()]);
-            let argv: Vec<&str> = args.iter().map(String::as_str).collect();
-            ok(&render(&dir, &argv));
-            let stem = input.file_stem().unwrap().to_string_lossy().into_owned();
-            images.push(
-                std::fs::read(dir.join(format!("{stem}.png"))).expect("default output written"),
-            );
-            std::fs::remove_dir_all(&dir).ok();
-        }
+        let dir = temp_dir(&format!("course-{k}"));
+        let mut args = course_args(&course, command);
+        args.push("--quiet".into());
+        let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+        // Each run writes the default output, <stem>.png, read before the next run.
+        let stem = command.split(' ').find(|a| a.ends_with(".obj")).unwrap();
+        let images = render_per_backend(&dir, &argv, &stem.replace(".obj", ".png"));
+        std::fs::remove_dir_all(&dir).ok();
         assert!(
             images.windows(2).all(|w| w[0] == w[1]),
             "`{command}`: the backends' images differ"
@@ -604,16 +606,15 @@ fn radiosity_modes_write_their_outputs_identically_with_both_backends() {
         ],
     ];
     for (k, run) in runs.iter().enumerate() {
-        let mut images = Vec::new();
+        let (out, log) = (
+            format!("mode{k}.{{kind}}.png"),
+            format!("mode{k}.{{kind}}.csv"),
+        );
+        let mut args = run.clone();
+        args.extend(["-size", "64", "48", "-o", &out, "--log-convergence", &log]);
+        let images = render_per_backend(&dir, &args, &out);
         for kind in backends() {
-            let out = format!("mode{k}.{kind}.png");
-            let log = format!("mode{k}.{kind}.csv");
-            let kind = kind.to_string();
-            let mut args = run.clone();
-            args.extend(["-size", "64", "48", "-o", &out, "--accel", &kind]);
-            args.extend(["--log-convergence", &log]);
-            ok(&render(&dir, &args));
-            images.push(std::fs::read(dir.join(&out)).expect("image written"));
+            let log = log.replace("{kind}", &kind.to_string());
             let csv = std::fs::read_to_string(dir.join(&log)).expect("log written");
             assert!(csv.starts_with("shot,patch,residual,seconds,rays"));
             assert!(csv.lines().count() > 1, "{run:?}: empty log");

@@ -58,6 +58,29 @@ impl EngineKind {
     }
 }
 
+/// What an engine shows instead of the rendered image (`--visualize`): the radiosity
+/// engine's modes, and the photon engine's `photons` and `kdtree`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Visualize {
+    /// The solution: radiance of each patch plus the ambient term for light not yet shot.
+    #[default]
+    Radiance,
+    /// Each patch's albedo.
+    Materials,
+    /// Form factors from one patch (`--ff-source`) to every other, grey by relative size.
+    FormFactors,
+    /// Emitted radiance.
+    Lights,
+    /// Radiance received but not yet shot.
+    Undistributed,
+    /// Radiance absorbed: (1 − ρ) × incident.
+    Absorbed,
+    /// The photon engine's photons projected through the camera, coloured by power.
+    Photons,
+    /// The photons with the cells of a balanced kd-tree over them drawn in green.
+    Kdtree,
+}
+
 /// The ray tracer's source of diffuse indirect light (`--indirect`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum IndirectKind {
@@ -107,6 +130,9 @@ pub struct RenderSettings {
     pub num_antialias_samples: u32,
     /// Constant ambient radiance for diffuse indirect light (`-ambient_light`, default 0.1).
     pub ambient_light: Vec3,
+    /// What to show instead of the rendered image (`--visualize`, default radiance: the
+    /// image itself).
+    pub visualize: Visualize,
     /// What the radiosity engine reads (mesh, form factors, solver, display).
     pub radiosity: radiosity::RadiositySettings,
     /// Where the ray tracer's diffuse indirect light comes from (`--indirect`, default
@@ -136,6 +162,7 @@ impl Default for RenderSettings {
             num_shadow_samples: 0,
             num_antialias_samples: 1,
             ambient_light: Vec3::splat(0.1),
+            visualize: Visualize::Radiance,
             radiosity: Default::default(),
             indirect: IndirectKind::Ambient,
             photon: Default::default(),

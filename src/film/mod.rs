@@ -63,6 +63,21 @@ impl Film {
     }
 
     /// The pixel in column `i` and row `row` counted from the top.
+    /// The pixel (index into `pixels`, rows from the top) that a world point projects to
+    /// through the camera, if it lands on the film: the inverse of `Camera::screen_point`.
+    pub fn pixel_of(
+        &self,
+        camera: &crate::scene::Camera,
+        p: crate::geometry::Vec3,
+    ) -> Option<usize> {
+        let (x, y) = camera.project(p)?;
+        let (w, h) = (self.width as f32, self.height as f32);
+        let m = w.max(h);
+        let (px, py) = ((x - 0.5) * m + w / 2.0, h - ((y - 0.5) * m + h / 2.0));
+        (px >= 0.0 && py >= 0.0 && px < w && py < h)
+            .then(|| py as usize * self.width as usize + px as usize)
+    }
+
     pub fn get(&self, i: u32, row: u32) -> Color {
         self.pixels[row as usize * self.width as usize + i as usize]
     }
@@ -234,21 +249,12 @@ pub fn draw_lines(
     camera: &crate::scene::Camera,
     lines: impl Iterator<Item = (crate::geometry::Vec3, crate::geometry::Vec3, Color)>,
 ) {
-    let (w, h) = (film.width as f32, film.height as f32);
-    let m = w.max(h);
-    // Inverse of Camera::screen_point: screen (x, y) to pixel coordinates, row 0 at the top.
-    let to_pixel = |(x, y): (f32, f32)| ((x - 0.5) * m + w / 2.0, h - ((y - 0.5) * m + h / 2.0));
     for (from, to, colour) in lines {
         // Clip to the part in front of the camera by sampling along the segment.
         let steps = 2048;
         for k in 0..=steps {
             let p = from + (to - from) * (k as f32 / steps as f32);
-            let Some(screen) = camera.project(p) else {
-                continue;
-            };
-            let (px, py) = to_pixel(screen);
-            if px >= 0.0 && py >= 0.0 && px < w && py < h {
-                let idx = py as usize * film.width as usize + px as usize;
+            if let Some(idx) = film.pixel_of(camera, p) {
                 film.pixels[idx] = colour;
             }
         }

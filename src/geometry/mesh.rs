@@ -49,15 +49,23 @@ pub struct QuadMesh {
     pub faces: Vec<Face>,
     /// The faces that are not split, in creation order: the patches.
     pub leaves: Vec<u32>,
-    /// For each primitive kind and index, its top-level faces: quads and triangles have one,
-    /// spheres H×V (row by row from the bottom), rings 4×N (outer, inner, bottom, top).
-    roots: HashMap<PrimRef, (u32, u32)>,
-    /// Grid size (columns, rows) of the top-level faces of each primitive.
-    grids: HashMap<PrimRef, (u32, u32)>,
+    /// For each primitive, its top-level faces: quads and triangles have one, spheres H×V
+    /// (row by row from the bottom), rings 4×N (outer, inner, bottom, top).
+    roots: HashMap<PrimRef, Roots>,
     /// Vertex positions seen so far (bit patterns), so equal positions share one vertex.
     welded: HashMap<[u32; 3], u32>,
     /// Midpoints already made, keyed by their edge's two vertices (smaller first).
     midpoints: HashMap<(u32, u32), u32>,
+}
+
+/// The top-level faces of one primitive: `count` consecutive faces from `first`, a grid of
+/// `cols` × `rows` cells of its parameter space.
+#[derive(Clone, Copy, Debug)]
+struct Roots {
+    first: u32,
+    count: u32,
+    cols: u32,
+    rows: u32,
 }
 
 /// How finely curved primitives are rasterized.
@@ -137,8 +145,16 @@ impl QuadMesh {
         grid: (u32, u32),
     ) {
         let face = self.faces.len() as u32;
-        self.roots.entry(prim).or_insert((face, 0)).1 += 1;
-        self.grids.insert(prim, grid);
+        let (cols, rows) = grid;
+        self.roots
+            .entry(prim)
+            .or_insert(Roots {
+                first: face,
+                count: 0,
+                cols,
+                rows,
+            })
+            .count += 1;
         let ids = corners.map(|p| self.weld(p));
         self.push_face_ids(prim, material, ring_part, ids, param, NONE, 0);
     }
@@ -326,8 +342,12 @@ impl QuadMesh {
         u: f32,
         v: f32,
     ) -> Option<(u32, f32, f32)> {
-        let &(first, count) = self.roots.get(&prim)?;
-        let &(cols, rows) = self.grids.get(&prim)?;
+        let &Roots {
+            first,
+            count,
+            cols,
+            rows,
+        } = self.roots.get(&prim)?;
         let col = ((u * cols as f32) as u32).min(cols - 1);
         let row = match part {
             Some(p) => RingPart::ALL.iter().position(|&q| q == p)? as u32,

@@ -15,8 +15,7 @@ pub use gather::IrradianceCache;
 pub use map::PhotonMap;
 pub use trace::{PathKind, Photon};
 
-use super::radiosity::Visualize;
-use super::RenderSettings;
+use super::{RenderSettings, Visualize};
 use crate::accel::Accel;
 use crate::film::Film;
 use crate::geometry::{Bounds3, Vec3};
@@ -149,22 +148,12 @@ impl PhotonMaps {
 /// The photons of a map seen from the camera (`--visualize photons`): each photon's power
 /// splatted into the pixel it projects to, scaled so the brightest pixel is 1.
 pub fn visualize(scene: &Scene, maps: &PhotonMaps, settings: &RenderSettings) -> Film {
-    let (w, h) = (settings.width, settings.height);
     let camera = scene.camera();
-    let mut film = Film::new(w, h);
-    let m = w.max(h) as f32;
+    let mut film = Film::new(settings.width, settings.height);
     for p in maps.global.photons.iter().chain(&maps.caustic.photons) {
-        let Some((x, y)) = camera.project(p.position) else {
-            continue;
-        };
-        // Inverse of Camera::screen_point.
-        let i = ((x - 0.5) * m + w as f32 / 2.0).floor();
-        let j = ((y - 0.5) * m + h as f32 / 2.0).floor();
-        if i < 0.0 || j < 0.0 || i >= w as f32 || j >= h as f32 {
-            continue;
+        if let Some(idx) = film.pixel_of(&camera, p.position) {
+            film.pixels[idx] += p.power;
         }
-        let row = h as usize - 1 - j as usize;
-        film.pixels[row * w as usize + i as usize] += p.power;
     }
     let brightest = film
         .pixels
@@ -253,7 +242,7 @@ pub fn render(
         maps.save(path, file::fingerprint(scene, settings))
             .map_err(|e| e.to_string())?;
     }
-    let mode = settings.radiosity.visualize;
+    let mode = settings.visualize;
     if matches!(mode, Visualize::Photons | Visualize::Kdtree) {
         let stats = super::RenderStats::default();
         stats.photon_rays.store(maps.rays, Relaxed);

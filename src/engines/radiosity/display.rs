@@ -5,9 +5,9 @@
 use rayon::prelude::*;
 
 use super::solver::FormFactorSampler;
-use super::{Solution, Visualize};
+use super::Solution;
 use crate::accel::Accel;
-use crate::engines::{render_pixels, RenderSettings, RenderStats};
+use crate::engines::{render_pixels, RenderSettings, RenderStats, Visualize};
 use crate::film::Film;
 use crate::geometry::mesh::NONE;
 use crate::geometry::Vec3;
@@ -20,7 +20,7 @@ const SOURCE_OUTLINE: Color = Vec3 {
     z: 0.0,
 };
 
-/// Renders a solution in the mode `settings.radiosity.visualize`.
+/// Renders a solution in the mode `settings.visualize`.
 pub fn render_solution(
     scene: &Scene,
     accel: &dyn Accel,
@@ -30,7 +30,7 @@ pub fn render_solution(
     let r = &settings.radiosity;
     let patches = &solution.patches;
     let source = form_factor_source(solution, r.ff_source);
-    let values: Vec<Color> = match r.visualize {
+    let values: Vec<Color> = match settings.visualize {
         Visualize::Radiance | Visualize::Photons | Visualize::Kdtree => solution.display_radiance(),
         Visualize::Materials => patches.iter().map(|p| p.albedo).collect(),
         Visualize::Lights => patches.iter().map(|p| p.emitted).collect(),
@@ -55,7 +55,7 @@ pub fn render_solution(
             solution.sample(scene, &s, &field).unwrap_or(Vec3::ZERO)
         },
     );
-    let outline_source = r.visualize == Visualize::FormFactors;
+    let outline_source = settings.visualize == Visualize::FormFactors;
     if r.wireframe || outline_source {
         let ids = patch_ids(scene, accel, settings, solution);
         let (w, h) = (settings.width as usize, settings.height as usize);

@@ -22,28 +22,6 @@ use crate::geometry::mesh::{QuadMesh, Rasterization, NONE};
 use crate::geometry::{RingPart, Vec3};
 use crate::scene::{Color, PrimKind, Scene, SurfaceHit};
 
-/// What the radiosity engine shows (`--visualize`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum Visualize {
-    /// The solution: radiance of each patch plus the ambient term for light not yet shot.
-    #[default]
-    Radiance,
-    /// Each patch's albedo.
-    Materials,
-    /// Form factors from one patch (`--ff-source`) to every other, grey by relative size.
-    FormFactors,
-    /// Emitted radiance.
-    Lights,
-    /// Radiance received but not yet shot.
-    Undistributed,
-    /// Radiance absorbed: (1 − ρ) × incident.
-    Absorbed,
-    /// The photon engine's photons projected through the camera, coloured by power.
-    Photons,
-    /// The photons with the cells of a balanced kd-tree over them drawn in green.
-    Kdtree,
-}
-
 /// Settings only the radiosity engine reads. Defaults are the course program's where it has one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RadiositySettings {
@@ -76,7 +54,6 @@ pub struct RadiositySettings {
     pub adaptive_threshold: Option<f32>,
     /// Rounds of adaptive splitting (`--adaptive-rounds`, default 3).
     pub adaptive_rounds: u32,
-    pub visualize: Visualize,
     /// Patch outlines over the image (`--wireframe`).
     pub wireframe: bool,
     /// The patch whose form factors `--visualize form-factors` shows (`--ff-source`,
@@ -101,7 +78,6 @@ impl Default for RadiositySettings {
             ff_cache_mb: 1024,
             adaptive_threshold: None,
             adaptive_rounds: 3,
-            visualize: Visualize::Radiance,
             wireframe: false,
             ff_source: None,
             log_convergence: false,
