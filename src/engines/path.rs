@@ -6,7 +6,9 @@
 //! sampled as in the ray tracer, one branch at a time (glass chooses reflection with the
 //! Fresnel probability). Paths end by Russian roulette on their throughput from the fourth
 //! vertex on, which keeps the estimate unbiased. `-num_antialias_samples` is the number of
-//! paths per pixel; every random number comes from (seed, pixel, sample).
+//! paths per pixel; every random number comes from (seed, pixel, sample). The background
+//! colour is seen, not a light: a path that leaves the scene after a diffuse bounce brings
+//! nothing back.
 
 use std::collections::HashMap;
 
@@ -140,9 +142,15 @@ impl PathTracer<'_> {
             point: ray.origin,
             bsdf_pdf: None,
         };
+        // The background is what a ray leaving the scene shows, seen directly or through
+        // mirrors and glass; it does not light diffuse surfaces (as in the course program and
+        // the other engines, which take light from the emitters only).
+        let mut diffuse_bounce = false;
         for vertex in 0..MAX_VERTICES {
             let Some(s) = hit else {
-                radiance += throughput.mul_elem(self.scene.background);
+                if !diffuse_bounce {
+                    radiance += throughput.mul_elem(self.scene.background);
+                }
                 break;
             };
             let m = &self.scene.materials[s.material as usize];
@@ -178,6 +186,7 @@ impl PathTracer<'_> {
                 let (tx, ty) = orthonormal_basis(n);
                 dir = tx * dir_local.x + ty * dir_local.y + n * dir_local.z;
                 throughput = throughput.mul_elem(lobe);
+                diffuse_bounce = true;
                 previous = Previous {
                     point: s.point,
                     bsdf_pdf: Some(cos / std::f32::consts::PI),
