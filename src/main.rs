@@ -13,7 +13,7 @@ use trilux::accel::{self, AccelKind, AccelOptions, EmbreeQuality};
 use trilux::engines::photon::{self, PhotonSettings};
 use trilux::engines::radiosity::{self, RadiositySettings};
 use trilux::engines::{
-    path, raycast, raytrace, EngineKind, IndirectKind, RenderSettings, RenderStats, Visualize,
+    self, raytrace, EngineKind, IndirectKind, RenderSettings, Rendered, Visualize,
 };
 use trilux::geometry::vec3;
 use trilux::plan::Plan;
@@ -217,6 +217,10 @@ struct RenderArgs {
     /// Photons to emit (photon engine).
     #[arg(long)]
     num_photons_to_shoot: Option<u64>,
+    /// Photons aimed at the mirrors and glass for the caustic map (photon engine; default: as
+    /// many as -num_photons_to_shoot; 0: caustics from the main pass only).
+    #[arg(long)]
+    caustic_photons: Option<u64>,
     /// Photons per density estimate (photon engine).
     #[arg(long)]
     num_photons_to_collect: Option<u32>,
@@ -351,6 +355,7 @@ impl RenderArgs {
         let d = PhotonSettings::default();
         PhotonSettings {
             num_photons_to_shoot: self.num_photons_to_shoot.unwrap_or(0),
+            caustic_photons: self.caustic_photons,
             num_photons_to_collect: self
                 .num_photons_to_collect
                 .unwrap_or(d.num_photons_to_collect),
@@ -366,8 +371,9 @@ impl RenderArgs {
     }
 
     /// Flags that only the photon engine reads: giving one chooses it.
-    fn photon_flags(&self) -> [(&'static str, bool); 5] {
+    fn photon_flags(&self) -> [(&'static str, bool); 6] {
         [
+            ("--caustic-photons", self.caustic_photons.is_some()),
             ("--save-photons", self.save_photons.is_some()),
             ("--load-photons", self.load_photons.is_some()),
             ("-num_photons_to_shoot", self.num_photons_to_shoot.is_some()),
@@ -556,60 +562,16 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     let build_s = build_start.elapsed().as_secs_f64();
     let render_start = Instant::now();
     let accel = accel.as_ref();
-    let (film, stats, solution) = pool.install(|| -> Result<_, String> {
-        Ok(match engine {
-        EngineKind::Raycast => {
-            let film = raycast::render(&scene, accel, &settings);
-            let stats = RenderStats::default();
-            stats
-                .camera_rays
-                .store(settings.width as u64 * settings.height as u64, Relaxed);
-            (film, stats, None)
-        }
-        EngineKind::Path => {
-            let (film, stats) = path::render(&scene, accel, &settings);
-            (film, stats, None)
-        }
-        EngineKind::Radiosity => {
-            let (film, stats, solution) = radiosity::render(&scene, accel, &settings);
-            (film, stats, Some(solution))
-        }
-        EngineKind::Photon => {
-            let (film, stats, maps) = photon::render(&scene, accel, &settings)?;
-            if maps.truncated * 1000 > maps.emitted {
-                eprintln!(
-                    "warning: {} of {} photons were still carrying light when --max-photon-depth {} stopped them; their light is missing from the image (raise the depth: Russian roulette alone keeps paths finite)",
-                    maps.truncated, maps.emitted, settings.photon.max_photon_depth
-                );
-            }
-            if !settings.quiet {
-                eprintln!(
-                    "photons: {} emitted, {} photon rays in {:.3} s; global map {} photons, caustic map {} (kd-trees built in {:.3} s); {} per estimate within {:.3}",
-                    maps.emitted,
-                    maps.rays,
-                    maps.trace_seconds,
-                    maps.global.len(),
-                    maps.caustic.len(),
-                    maps.build_seconds,
-                    maps.collect,
-                    maps.max_radius
-                );
-            }
-            (film, stats, None)
-        }
-        _ if settings.indirect == IndirectKind::Radiosity => {
-            let solution = radiosity::solve_with_progress(&scene, accel, &settings);
-            let indirect = raytrace::Indirect::radiosity(&solution, settings.radiosity.interpolate);
-            let (film, stats) = raytrace::render_with(&scene, accel, &settings, indirect);
-            stats.form_factor_rays.store(solution.rays, Relaxed);
-            (film, stats, Some(solution))
-        }
-        _ => {
-            let (film, stats) = raytrace::render(&scene, accel, &settings);
-            (film, stats, None)
-        }
-    })
-    })?;
+    let rendered = pool.install(|| engines::render(engine, &scene, accel, &settings))?;
+    let Rendered {
+        film,
+        stats,
+        solution,
+        maps,
+    } = rendered;
+    if let Some(maps) = &maps {
+        report_photons(maps, &settings);
+    }
     if let Some(solution) = &solution {
         report_radiosity(solution, &settings);
         if let Some(path) = &args.log_convergence {
@@ -650,6 +612,31 @@ fn render(args: &RenderArgs) -> Result<(), String> {
         eprintln!("wrote {}", output.display());
     }
     Ok(())
+}
+
+/// One line on the photon maps, and a warning when the depth limit cut photons short.
+fn report_photons(maps: &photon::PhotonMaps, settings: &RenderSettings) {
+    let emitted = maps.emitted + maps.caustic_emitted;
+    if maps.truncated * 1000 > emitted {
+        eprintln!(
+            "warning: {} of {emitted} photons were still carrying light when --max-photon-depth {} stopped them; their light is missing from the image (raise the depth: Russian roulette alone keeps paths finite)",
+            maps.truncated, settings.photon.max_photon_depth
+        );
+    }
+    if !settings.quiet {
+        eprintln!(
+            "photons: {} emitted, {} more aimed at mirrors and glass, {} photon rays in {:.3} s; global map {} photons, caustic map {} (kd-trees built in {:.3} s); {} per estimate within {:.3}",
+            maps.emitted,
+            maps.caustic_emitted,
+            maps.rays,
+            maps.trace_seconds,
+            maps.global.len(),
+            maps.caustic.len(),
+            maps.build_seconds,
+            maps.collect,
+            maps.max_radius
+        );
+    }
 }
 
 /// One paragraph on how the radiosity solve went; a solve stopped by the safety cap is a

@@ -257,3 +257,91 @@ fn both_accels_give_identical_photon_maps() {
         assert_eq!(maps[0].caustic.photons, maps[1].caustic.photons, "{file}");
     }
 }
+
+/// The course's ring caustic, seen from above with the floor's wood texture replaced by a
+/// uniform grey (the grain alone makes regions of the floor twice as bright as their
+/// surroundings): the brightest small region inside the ring stands out from the floor around
+/// it with photons, as much as in the unbiased path tracer's image, and not with photons off.
+///
+/// The issue asked for 3×; the path tracer, which agrees with the photon image within 2% over
+/// the whole view, puts this scene's caustic at about 2× its surroundings: the 2×2 light
+/// blurs the cusp over about a unit of floor (see the note on issue #5).
+#[test]
+fn ring_caustic_stands_out_as_in_the_path_tracer() {
+    let Some(dir) = course_dir() else {
+        return;
+    };
+    let mut scene = Scene::load(&dir.join("reflective_ring.obj")).expect("loads");
+    for m in scene.materials.iter_mut().filter(|m| m.texture.is_some()) {
+        m.texture = None;
+        m.diffuse = trilux::geometry::vec3(0.5, 0.5, 0.5);
+    }
+    let ring = scene.rings[0].shape;
+    let centre = trilux::geometry::vec3(ring.base.x, -1.0, ring.base.z);
+    scene.camera = Some(trilux::scene::Camera {
+        position: centre + trilux::geometry::vec3(0.0, 30.0, 0.0),
+        point_of_interest: centre,
+        up: trilux::geometry::vec3(0.0, 0.0, -1.0),
+        projection: trilux::scene::Projection::Orthographic {
+            size: 2.0 * ring.r_out,
+        },
+    });
+    let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
+    // 11.7 pixels per unit: the region is 5×5 pixels (0.4 units), the floor around it the
+    // pixels 5 to 7 pixels from its centre (a frame 0.4 to 0.6 units away).
+    let (w, h) = (96u32, 96u32);
+    let floor = floor_points(&scene, accel.as_ref(), w, h, -1.0);
+    let inside = |k: usize| floor[k].is_some_and(|p| (p - centre).length() < ring.r_in - 0.05);
+    let square = |i: usize, j: usize, r: usize| -> Vec<usize> {
+        (j - r..=j + r)
+            .flat_map(|y| (i - r..=i + r).map(move |x| y * w as usize + x))
+            .collect()
+    };
+    let luminance = |c: trilux::geometry::Vec3| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+    // The brightest region's contrast with the floor around it, and where it is.
+    let contrast = |film: &trilux::film::Film| {
+        let mut best = (0.0f32, 0, 0);
+        for j in 7..h as usize - 7 {
+            for i in 7..w as usize - 7 {
+                let outer = square(i, j, 7);
+                if !outer.iter().all(|&k| inside(k)) {
+                    continue;
+                }
+                let middle = square(i, j, 4);
+                let around: Vec<usize> =
+                    outer.into_iter().filter(|k| !middle.contains(k)).collect();
+                let region = luminance(mean_over(film, &square(i, j, 2)));
+                let c = region / luminance(mean_over(film, &around));
+                if c > best.0 {
+                    best = (c, i, j);
+                }
+            }
+        }
+        best
+    };
+    let mut s = settings(500_000);
+    (s.width, s.height) = (w, h);
+    s.num_bounces = 2;
+    s.num_shadow_samples = 10;
+    let (with_photons, _, _) = photon::render(&scene, accel.as_ref(), &s).expect("renders");
+    let without = trilux::engines::raytrace::render(&scene, accel.as_ref(), &s).0;
+    s.num_antialias_samples = 512;
+    let reference = trilux::engines::path::render(&scene, accel.as_ref(), &s).0;
+    let (on, off, path) = (
+        contrast(&with_photons),
+        contrast(&without),
+        contrast(&reference),
+    );
+    let caustic = square(path.1, path.2, 2);
+    let (photon_level, path_level) = (
+        luminance(mean_over(&with_photons, &caustic)),
+        luminance(mean_over(&reference, &caustic)),
+    );
+    println!(
+        "brightest region inside the ring over the floor around it: photons {:.2} at ({}, {}), photons off {:.2}, path tracer {:.2} at ({}, {}); the path tracer's region: photons {photon_level:.4}, path {path_level:.4}",
+        on.0, on.1, on.2, off.0, path.0, path.1, path.2
+    );
+    assert!(on.0 > 1.5 && off.0 < 1.25, "{on:?} {off:?}");
+    assert!((on.0 / path.0 - 1.0).abs() < 0.15, "{on:?} {path:?}");
+    assert!((photon_level / path_level - 1.0).abs() < 0.1);
+}

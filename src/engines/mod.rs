@@ -1,5 +1,6 @@
-//! The lighting engines. Each takes the scene, an `Accel` and the settings and fills a `Film`.
-//! So far: `raycast`, the course's MATERIALS view (first surface's emitted + albedo).
+//! The lighting engines. Each takes the scene, an `Accel` and the settings and fills a `Film`:
+//! `raycast` (the course's MATERIALS view), `raytrace`, `radiosity`, `photon` and the
+//! reference `path` tracer. `render` is the one entry point that picks among them.
 
 pub mod lights;
 pub mod optics;
@@ -26,7 +27,7 @@ use crate::geometry::Vec3;
 pub enum EngineKind {
     /// The first visible surface's emitted radiance plus its albedo (texture looked up).
     Raycast,
-    /// Whitted and distribution ray tracing (not implemented yet).
+    /// Whitted and distribution ray tracing.
     Raytrace,
     /// Radiosity on the quad mesh.
     Radiosity,
@@ -56,6 +57,68 @@ impl EngineKind {
             EngineKind::Path => "path",
         }
     }
+}
+
+/// What one render produced: the image, its counters, and the radiosity solution or photon
+/// maps it came from, for the caller to report on.
+pub struct Rendered {
+    pub film: Film,
+    pub stats: RenderStats,
+    pub solution: Option<radiosity::Solution>,
+    pub maps: Option<photon::PhotonMaps>,
+}
+
+/// Renders the scene with the engine asked for (the ray tracer with the radiosity solution as
+/// its indirect light when `settings.indirect` says so). Fails only where the photon engine
+/// cannot read `--load-photons`.
+pub fn render(
+    engine: EngineKind,
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+) -> Result<Rendered, String> {
+    let plain = |(film, stats)| Rendered {
+        film,
+        stats,
+        solution: None,
+        maps: None,
+    };
+    Ok(match engine {
+        EngineKind::Raycast => {
+            let film = raycast::render(scene, accel, settings);
+            let stats = RenderStats::default();
+            stats
+                .camera_rays
+                .store(settings.width as u64 * settings.height as u64, Relaxed);
+            plain((film, stats))
+        }
+        EngineKind::Path => plain(path::render(scene, accel, settings)),
+        EngineKind::Radiosity => {
+            let (film, stats, solution) = radiosity::render(scene, accel, settings);
+            Rendered {
+                solution: Some(solution),
+                ..plain((film, stats))
+            }
+        }
+        EngineKind::Photon => {
+            let (film, stats, maps) = photon::render(scene, accel, settings)?;
+            Rendered {
+                maps: Some(maps),
+                ..plain((film, stats))
+            }
+        }
+        EngineKind::Raytrace if settings.indirect == IndirectKind::Radiosity => {
+            let solution = radiosity::solve_with_progress(scene, accel, settings);
+            let indirect = raytrace::Indirect::radiosity(&solution, settings.radiosity.interpolate);
+            let (film, stats) = raytrace::render_with(scene, accel, settings, indirect);
+            stats.form_factor_rays.store(solution.rays, Relaxed);
+            Rendered {
+                solution: Some(solution),
+                ..plain((film, stats))
+            }
+        }
+        EngineKind::Raytrace => plain(raytrace::render(scene, accel, settings)),
+    })
 }
 
 /// What an engine shows instead of the rendered image (`--visualize`): the radiosity

@@ -63,6 +63,16 @@ pub fn sample_lobe(axis: Vec3, exponent: f32, u: f32, v: f32) -> Vec3 {
     (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + axis * cos_t).normalized()
 }
 
+/// A direction uniformly distributed over the cone of half-angle acos(`cos_max`) around the
+/// unit vector `axis` (solid angle 2π(1 − cos_max)), from (u, v) in [0,1)².
+pub fn sample_cone(axis: Vec3, cos_max: f32, u: f32, v: f32) -> Vec3 {
+    let cos_t = 1.0 - u * (1.0 - cos_max);
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * v;
+    let (t, b) = orthonormal_basis(axis);
+    (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + axis * cos_t).normalized()
+}
+
 /// Two unit vectors that complete `n` to an orthonormal basis (Duff et al. 2017).
 pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
     let sign = 1f32.copysign(n.z);

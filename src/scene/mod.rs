@@ -238,17 +238,30 @@ impl Scene {
     }
 
     pub fn bounds(&self) -> Bounds3 {
+        self.bounds_of(|_| true)
+    }
+
+    /// The bounds of the primitives whose material mirrors or transmits light (what caustic
+    /// photons are aimed at), or None when there are none.
+    pub fn specular_bounds(&self) -> Option<Bounds3> {
+        let specular: Vec<bool> = self.materials.iter().map(Material::is_specular).collect();
+        let b = self.bounds_of(|m| specular.get(m as usize).copied().unwrap_or(false));
+        (!b.is_empty()).then_some(b)
+    }
+
+    /// The bounds of the primitives whose material index passes `keep`.
+    fn bounds_of(&self, keep: impl Fn(u32) -> bool) -> Bounds3 {
         let mut b = Bounds3::EMPTY;
-        for q in &self.quads {
+        for q in self.quads.iter().filter(|q| keep(q.material)) {
             b = b.union(Bounds3::from_points(&q.vertices));
         }
-        for p in &self.triangles.positions {
-            b = b.union_point(*p);
+        for i in (0..self.triangles.len()).filter(|&i| keep(self.triangles.materials[i])) {
+            b = b.union(Bounds3::from_points(&self.triangles.vertices(i)));
         }
-        for s in &self.spheres {
+        for s in self.spheres.iter().filter(|s| keep(s.material)) {
             b = b.union(s.shape.bounds());
         }
-        for r in &self.rings {
+        for r in self.rings.iter().filter(|r| keep(r.material)) {
             b = b.union(r.shape.bounds());
         }
         b

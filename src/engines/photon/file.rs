@@ -2,9 +2,10 @@
 //! with a fingerprint of the scene file and the settings that shaped the photons, so that a file
 //! made for another scene or other settings is refused with a clear error.
 //!
-//! Layout: magic `TRILUXPM`, version (u32), fingerprint (u64), photons emitted, photon rays,
-//! photons cut by the depth limit (u64 each), global and caustic counts (u64 each), then each
-//! photon: position, direction, power, normal (3 × f32 each) and its path kind (u8).
+//! Layout: magic `TRILUXPM`, version (u32), fingerprint (u64), photons emitted by the main and
+//! by the caustic pass, photon rays, photons cut by the depth limit, global and caustic counts
+//! (u64 each), then each photon: position, direction, power, normal (3 × f32 each) and its path
+//! kind (u8). Version 2 added the caustic pass.
 
 use std::io::{Read, Write};
 use std::path::Path;
@@ -17,12 +18,13 @@ use crate::sampling::mix64;
 use crate::scene::Scene;
 
 const MAGIC: &[u8; 8] = b"TRILUXPM";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
+const HEADER_BYTES: usize = 8 + 4 + 7 * 8;
 const PHOTON_BYTES: usize = 12 * 4 + 1;
 
 /// A hash of the scene file's bytes and of every setting that changes which photons are
-/// stored: their number, the depth limit, the seed, and whether the global map keeps all
-/// photons (final gathering).
+/// stored: their numbers (main and caustic pass), the depth limit, the seed, and whether the
+/// global map keeps all photons (final gathering).
 pub fn fingerprint(scene: &Scene, settings: &RenderSettings) -> u64 {
     let p = &settings.photon;
     let bytes = std::fs::read(&scene.path).unwrap_or_default();
@@ -34,6 +36,7 @@ pub fn fingerprint(scene: &Scene, settings: &RenderSettings) -> u64 {
     }
     for v in [
         p.num_photons_to_shoot,
+        p.caustic_photons(),
         p.max_photon_depth as u64,
         settings.seed,
         p.gather_indirect as u64,
@@ -55,6 +58,7 @@ impl PhotonMaps {
             for v in [
                 fingerprint,
                 self.emitted,
+                self.caustic_emitted,
                 self.rays,
                 self.truncated,
                 self.global.len() as u64,
@@ -85,7 +89,7 @@ impl PhotonMaps {
         std::fs::File::open(path)
             .and_then(|mut f| f.read_to_end(&mut data))
             .map_err(|e| format!("{name}: cannot read photon file: {e}"))?;
-        if data.len() < 60 || &data[..8] != MAGIC {
+        if data.len() < HEADER_BYTES || &data[..8] != MAGIC {
             return Err(format!("{name}: not a trilux photon file"));
         }
         let u32_at = |o: usize| u32::from_le_bytes(data[o..o + 4].try_into().unwrap_or_default());
@@ -99,24 +103,25 @@ impl PhotonMaps {
         let expected = fingerprint(scene, settings);
         if u64_at(12) != expected {
             return Err(format!(
-                "{name}: these photons were made for another scene or other settings (scene file, -num_photons_to_shoot, --max-photon-depth, --seed and -gather_indirect must match {})",
+                "{name}: these photons were made for another scene or other settings (scene file, -num_photons_to_shoot, --caustic-photons, --max-photon-depth, --seed and -gather_indirect must match {})",
                 scene.path.display()
             ));
         }
-        let (emitted, rays, truncated) = (u64_at(20), u64_at(28), u64_at(36));
-        let (n_global, n_caustic) = (u64_at(44), u64_at(52));
+        let (emitted, caustic_emitted) = (u64_at(20), u64_at(28));
+        let (rays, truncated) = (u64_at(36), u64_at(44));
+        let (n_global, n_caustic) = (u64_at(52), u64_at(60));
         let count = n_global
             .checked_add(n_caustic)
             .and_then(|n| usize::try_from(n).ok())
-            .filter(|&n| n.checked_mul(PHOTON_BYTES) == Some(data.len() - 60))
+            .filter(|&n| n.checked_mul(PHOTON_BYTES) == Some(data.len() - HEADER_BYTES))
             .ok_or_else(|| {
-                format!("{name}: the file is truncated or damaged ({n_global} + {n_caustic} photons announced, {} bytes of photons)", data.len() - 60)
+                format!("{name}: the file is truncated or damaged ({n_global} + {n_caustic} photons announced, {} bytes of photons)", data.len() - HEADER_BYTES)
             })?;
         let f32_at = |o: usize| f32::from_le_bytes(data[o..o + 4].try_into().unwrap_or_default());
         let vec_at = |o: usize| vec3(f32_at(o), f32_at(o + 4), f32_at(o + 8));
         let mut photons: Vec<Photon> = Vec::with_capacity(count);
         for k in 0..count {
-            let o = 60 + k * PHOTON_BYTES;
+            let o = HEADER_BYTES + k * PHOTON_BYTES;
             let kind = match data[o + 48] {
                 0 => PathKind::Direct,
                 1 => PathKind::Caustic,
@@ -141,6 +146,7 @@ impl PhotonMaps {
             global: PhotonMap::new(photons),
             caustic: PhotonMap::new(caustic),
             emitted,
+            caustic_emitted,
             rays,
             truncated,
             trace_seconds: 0.0,

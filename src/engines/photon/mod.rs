@@ -13,7 +13,7 @@ use std::sync::atomic::Ordering::Relaxed;
 
 pub use gather::IrradianceCache;
 pub use map::PhotonMap;
-pub use trace::{PathKind, Photon};
+pub use trace::{Aim, PathKind, Photon};
 
 use super::{RenderSettings, Visualize};
 use crate::accel::Accel;
@@ -26,6 +26,10 @@ use crate::scene::{Color, Scene};
 pub struct PhotonSettings {
     /// Photons emitted (`-num_photons_to_shoot`, default 0: no photon map).
     pub num_photons_to_shoot: u64,
+    /// Photons aimed at the mirrors and glass for the caustic map (`--caustic-photons`,
+    /// default None: as many as `num_photons_to_shoot`). 0 turns the caustic pass off; the
+    /// caustic map then holds the caustic photons of the main pass.
+    pub caustic_photons: Option<u64>,
     /// Photons per density estimate (`-num_photons_to_collect`, default 100).
     pub num_photons_to_collect: u32,
     /// Bounces a photon may make (`--max-photon-depth`, default 10).
@@ -52,6 +56,7 @@ impl Default for PhotonSettings {
     fn default() -> Self {
         PhotonSettings {
             num_photons_to_shoot: 0,
+            caustic_photons: None,
             num_photons_to_collect: 100,
             max_photon_depth: 10,
             max_radius: 0.1,
@@ -65,14 +70,22 @@ impl Default for PhotonSettings {
     }
 }
 
+impl PhotonSettings {
+    /// Photons of the caustic pass: `--caustic-photons`, else as many as the main pass.
+    pub fn caustic_photons(&self) -> u64 {
+        self.caustic_photons.unwrap_or(self.num_photons_to_shoot)
+    }
+}
+
 /// The two photon maps of a scene and what the lookups need.
 pub struct PhotonMaps {
     /// Indirect photons (all photons when final gathering: gather rays look up the full
     /// light at the surfaces they reach).
     pub global: PhotonMap,
     pub caustic: PhotonMap,
-    /// Photons emitted and photon rays cast.
+    /// Photons emitted by the main pass and by the caustic pass, and photon rays cast.
     pub emitted: u64,
+    pub caustic_emitted: u64,
     pub rays: u64,
     /// Photons stopped by `--max-photon-depth` while still carrying power.
     pub truncated: u64,
@@ -85,28 +98,46 @@ pub struct PhotonMaps {
 }
 
 impl PhotonMaps {
-    /// Traces the photons and builds both maps.
+    /// Traces the photons (the main pass, then the caustic pass when the scene has mirrors or
+    /// glass) and builds both maps.
     pub fn build(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> PhotonMaps {
         let p = &settings.photon;
         let clock = std::time::Instant::now();
-        let blocks = p.num_photons_to_shoot.div_ceil(4096);
+        let caustic_aim = scene.specular_bounds().map(|b| Aim::Caustics {
+            centre: b.centre(),
+            radius: 0.5 * b.extent().length(),
+        });
+        let caustic_emitted = match caustic_aim {
+            Some(_) => p.caustic_photons(),
+            None => 0,
+        };
+        let blocks = p.num_photons_to_shoot.div_ceil(4096) + caustic_emitted.div_ceil(4096);
         let bar = crate::progress::bar(blocks, "photons", settings.quiet);
-        let traced = trace::trace_photons(
-            scene,
-            accel,
-            p.num_photons_to_shoot,
-            p.max_photon_depth,
-            settings.seed,
-            || bar.inc(1),
-        );
+        let trace = |count, aim| {
+            trace::trace_photons(
+                scene,
+                accel,
+                count,
+                p.max_photon_depth,
+                aim,
+                settings.seed,
+                || bar.inc(1),
+            )
+        };
+        let main = trace(p.num_photons_to_shoot, Aim::Everywhere);
+        let aimed = caustic_aim
+            .filter(|_| caustic_emitted > 0)
+            .map(|aim| trace(caustic_emitted, aim));
         bar.finish_and_clear();
         let trace_seconds = clock.elapsed().as_secs_f64();
         let clock = std::time::Instant::now();
         let (mut global, mut caustic) = (Vec::new(), Vec::new());
-        for ph in traced.photons {
+        for ph in main.photons {
             match ph.kind {
                 PathKind::Caustic => {
-                    caustic.push(ph);
+                    if aimed.is_none() {
+                        caustic.push(ph);
+                    }
                     if p.gather_indirect {
                         global.push(ph);
                     }
@@ -116,6 +147,12 @@ impl PhotonMaps {
                 PathKind::Direct => {}
             }
         }
+        let (mut rays, mut truncated) = (main.rays, main.truncated);
+        if let Some(aimed) = aimed {
+            caustic = aimed.photons;
+            rays += aimed.rays;
+            truncated += aimed.truncated;
+        }
         let (global, caustic) = (PhotonMap::new(global), PhotonMap::new(caustic));
         PhotonMaps {
             global,
@@ -123,8 +160,9 @@ impl PhotonMaps {
             trace_seconds,
             build_seconds: clock.elapsed().as_secs_f64(),
             emitted: p.num_photons_to_shoot,
-            rays: traced.rays,
-            truncated: traced.truncated,
+            caustic_emitted,
+            rays,
+            truncated,
             collect: p.num_photons_to_collect.max(1) as usize,
             max_radius: p.max_radius * scene.bounds().extent().length(),
         }

@@ -3,13 +3,18 @@
 //! surface a photon on a diffuse surface is stored, then Russian roulette on the albedos
 //! (diffuse, mirror, transmitted) decides whether it goes on, with its power rescaled so the
 //! estimate stays unbiased.
+//!
+//! A second pass (Jensen's caustic photons) aims photons only at a sphere around the mirrors
+//! and glass, each carrying the power that the narrower choice of directions leaves it, and
+//! follows them only until their first diffuse hit: the same count puts many times more
+//! photons into the caustics, so the caustic estimate gathers from a smaller radius.
 
 use rayon::prelude::*;
 
 use crate::accel::{closest_surface, Accel};
 use crate::engines::lights::Light;
 use crate::engines::optics::{
-    fresnel_dielectric, glossy_reflection, reflect, refract, sample_lobe,
+    fresnel_dielectric, glossy_reflection, reflect, refract, sample_cone, sample_lobe,
 };
 use crate::geometry::{offset_ray_origin, point_error, Ray, Vec3};
 use crate::sampling::Rng;
@@ -40,6 +45,18 @@ pub struct Photon {
     pub kind: PathKind,
 }
 
+/// Where photons leave the lights for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Aim {
+    /// Cosine-weighted over each emitter's hemisphere, followed until absorbed: every path.
+    Everywhere,
+    /// Uniformly within the cone from the emitting point to this sphere (which bounds the
+    /// specular surfaces), and followed only while no diffuse bounce has happened: the
+    /// caustic paths L S+ D. Photons that leave from inside the sphere use the full
+    /// cosine-weighted hemisphere.
+    Caustics { centre: Vec3, radius: f32 },
+}
+
 /// Photons emitted per parallel task.
 const BLOCK: u64 = 4096;
 
@@ -57,13 +74,14 @@ pub struct Traced {
     pub truncated: u64,
 }
 
-/// Traces `count` photons. Photon k draws from hash(seed, k): the result does not depend on
-/// threads.
+/// Traces `count` photons aimed as `aim` says. Photon k draws from hash(seed, k): the result
+/// does not depend on threads.
 pub fn trace_photons(
     scene: &Scene,
     accel: &dyn Accel,
     count: u64,
     max_depth: u32,
+    aim: Aim,
     seed: u64,
     on_block: impl Fn() + Sync,
 ) -> Traced {
@@ -103,7 +121,11 @@ pub fn trace_photons(
             let mut stored = Vec::new();
             let (mut rays, mut truncated) = (0, 0);
             for k in b * BLOCK..((b + 1) * BLOCK).min(count) {
-                let mut rng = Rng::new(seed, k, 0x9407);
+                let stream = match aim {
+                    Aim::Everywhere => 0x9407,
+                    Aim::Caustics { .. } => 0xca05,
+                };
+                let mut rng = Rng::new(seed, k, stream);
                 let pick = rng.next_f32() as f64;
                 let l = cdf
                     .iter()
@@ -117,6 +139,7 @@ pub fn trace_photons(
                     &lights[l],
                     power,
                     max_depth,
+                    aim,
                     &mut rng,
                     &mut stored,
                 );
@@ -140,12 +163,14 @@ pub fn trace_photons(
 
 /// Follows one photon from a light until it is absorbed; returns the rays it cast and whether
 /// the depth limit stopped it.
+#[allow(clippy::too_many_arguments)]
 fn trace_one(
     scene: &Scene,
     accel: &dyn Accel,
     light: &Light,
     mut power: Color,
     max_depth: u32,
+    aim: Aim,
     rng: &mut Rng,
     stored: &mut Vec<Photon>,
 ) -> (u64, bool) {
@@ -154,7 +179,36 @@ fn trace_one(
     if !p.one_sided && rng.next_f32() < 0.5 {
         normal = -normal;
     }
-    let dir = sample_lobe(normal, 1.0, rng.next_f32(), rng.next_f32());
+    let (u, v) = (rng.next_f32(), rng.next_f32());
+    let dir = match aim {
+        Aim::Caustics { centre, radius } if (centre - p.point).length() > radius => {
+            // Uniform in the cone of solid angle Ω: the power becomes Le·cosθ·A·Ω per photon
+            // instead of the cosine-weighted photon's π·Le·A (per side), a factor cosθ·Ω/π.
+            let to = centre - p.point;
+            let d = to.length();
+            let cos_max = (1.0 - (radius / d) * (radius / d)).max(0.0).sqrt();
+            let dir = sample_cone(to / d, cos_max, u, v);
+            let cos = if p.one_sided {
+                p.normal.dot(dir)
+            } else {
+                p.normal.dot(dir).abs()
+            };
+            if cos <= 0.0 {
+                return (0, false);
+            }
+            let solid_angle = std::f32::consts::TAU * (1.0 - cos_max);
+            let sides = if p.one_sided { 1.0 } else { 2.0 };
+            normal = if p.normal.dot(dir) >= 0.0 {
+                p.normal
+            } else {
+                -p.normal
+            };
+            power *= cos * solid_angle / (std::f32::consts::PI * sides);
+            dir
+        }
+        _ => sample_lobe(normal, 1.0, u, v),
+    };
+    let caustics_only = matches!(aim, Aim::Caustics { .. });
     let origin = offset_ray_origin(p.point, normal, point_error(p.point.abs().max_elem()));
     let mut ray = Ray::new(origin, dir);
     let mut any_diffuse = false;
@@ -167,7 +221,7 @@ fn trace_one(
         let m = &scene.materials[s.material as usize];
         let (front, n) = s.facing(ray.direction);
         let albedo = scene.albedo(&s);
-        if albedo.max_elem() > 0.0 {
+        if albedo.max_elem() > 0.0 && !(caustics_only && depth == 0) {
             let kind = if depth == 0 {
                 PathKind::Direct
             } else if any_diffuse {
@@ -189,6 +243,10 @@ fn trace_one(
         let (pd, pr, pt) = (mean(albedo), mean(m.reflective), mean(m.transmitted));
         let xi = rng.next_f32();
         let dir = if xi < pd {
+            if caustics_only {
+                // Every later hit would be indirect light: not this pass's business.
+                break;
+            }
             power = power.mul_elem(albedo) / pd;
             any_diffuse = true;
             sample_lobe(n, 1.0, rng.next_f32(), rng.next_f32())
