@@ -44,9 +44,10 @@ pub struct RadiositySettings {
     /// Safety cap on shots per patch when no iteration count is given
     /// (`--radiosity-max-shots-per-patch`, default 1000); reaching it is reported.
     pub max_shots_per_patch: u64,
-    /// Over-relaxation of each shot (`--radiosity-relaxation ω`, in [1, 2), default 1: plain
-    /// progressive refinement).
-    pub relaxation: f32,
+    /// Over-relaxation of each shot (`--radiosity-relaxation auto|ω`, default auto: ω from
+    /// how much of each shot comes back; 1 is plain progressive refinement; see
+    /// `solver::Relaxation`).
+    pub relaxation: solver::Relaxation,
     /// Memory for cached form-factor rows, MiB (`--ff-cache-mb`, default 1024).
     pub ff_cache_mb: usize,
     /// Split patches whose radiance differs from a neighbour's by more than this (largest
@@ -74,7 +75,7 @@ impl Default for RadiositySettings {
             tolerance: 1e-3,
             iterations: None,
             max_shots_per_patch: 1000,
-            relaxation: 1.0,
+            relaxation: solver::Relaxation::Auto,
             ff_cache_mb: 1024,
             adaptive_threshold: None,
             adaptive_rounds: 3,

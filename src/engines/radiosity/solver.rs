@@ -256,6 +256,8 @@ pub enum Stop {
     Cap,
     /// Nothing emits: the solution is dark.
     NoLight,
+    /// Ctrl-C stopped the solve: the solution is incomplete.
+    Interrupted,
 }
 
 /// One line of `--log-convergence`.
@@ -295,9 +297,37 @@ pub struct SolveLimits {
     pub cap: u64,
     pub cache_bytes: usize,
     pub log: bool,
-    /// Over-relaxation factor ω of each shot (1: plain progressive refinement).
-    pub relaxation: f32,
+    /// Over-relaxation of each shot.
+    pub relaxation: Relaxation,
 }
+
+/// The over-relaxation factor ω of each shot (`--radiosity-relaxation`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Relaxation {
+    /// ω from the solve itself: the fraction μ of a shot's power that comes back as unshot
+    /// power (a running mean over the shots: ρ in a furnace, less where light escapes) gives
+    /// successive over-relaxation's ω = 2 / (1 + √(1 − μ²)), at most 1.95. Open and dark
+    /// scenes get ω near 1 (plain shooting); bright closed rooms get ω near 2.
+    Auto,
+    /// A fixed ω in [1, 2); 1 is plain progressive refinement.
+    Fixed(f32),
+}
+
+impl std::str::FromStr for Relaxation {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "auto" {
+            return Ok(Relaxation::Auto);
+        }
+        match s.parse::<f32>() {
+            Ok(w) if (1.0..2.0).contains(&w) => Ok(Relaxation::Fixed(w)),
+            _ => Err(format!("expected auto or a number in [1, 2), found {s}")),
+        }
+    }
+}
+
+/// Weight of each shot in the running mean of the returned fraction μ.
+const RETURN_MEAN_WEIGHT: f32 = 0.02;
 
 /// Power of a (possibly negative, when over-relaxing) radiance over an area, all channels.
 fn power(c: Color, area: f32) -> f32 {
@@ -329,6 +359,7 @@ pub fn solve(
         return (s, Stop::NoLight, cache);
     }
     let start = Instant::now();
+    let mut returned: Option<f32> = None;
     let stop = loop {
         let (mut best, mut best_power, mut undistributed) = (0usize, -1.0f32, 0.0f64);
         for (i, (u, p)) in s.unshot.iter().zip(patches).enumerate() {
@@ -341,6 +372,9 @@ pub fn solve(
         }
         s.residual = (undistributed / total_emitted) as f32;
         on_shot(s.residual);
+        if crate::interrupt::requested() {
+            break Stop::Interrupted;
+        }
         match limits.iterations {
             Some(k) if s.shots >= k => break Stop::Iterations,
             None if s.residual <= limits.tolerance => break Stop::Converged,
@@ -354,8 +388,15 @@ pub fn solve(
         // Over-relaxation (ω > 1) shoots more than the patch holds; what it shot too much
         // stays behind as negative unshot radiance, shot back later. The patch's own
         // radiance is what it received, unchanged by shooting.
-        let omega = limits.relaxation;
+        let omega = match (limits.relaxation, returned) {
+            (Relaxation::Fixed(w), _) => w,
+            (Relaxation::Auto, None) => 1.0,
+            (Relaxation::Auto, Some(mu)) => {
+                (2.0 / (1.0 + (1.0 - mu * mu).max(0.0).sqrt())).min(1.95)
+            }
+        };
         let shot = s.unshot[best] * omega;
+        let mut returned_power = 0.0f64;
         let shot_emission = s.unshot_emission[best] * omega;
         s.unshot[best] -= shot;
         s.unshot_emission[best] *= 1.0 - omega;
@@ -367,8 +408,14 @@ pub fn solve(
             s.incident[j] += arriving;
             s.incident_direct[j] += shot_emission * f;
             let reflected = patches[j].albedo.mul_elem(arriving);
+            returned_power += power(reflected, patches[j].area) as f64;
             s.radiance[j] += reflected;
             s.unshot[j] += reflected;
+        }
+        let shot_power = power(shot, patches[best].area) as f64;
+        if shot_power > 0.0 {
+            let mu = (returned_power / shot_power) as f32;
+            returned = Some(returned.map_or(mu, |m| m + RETURN_MEAN_WEIGHT * (mu - m)));
         }
         s.shots += 1;
         if limits.log {
