@@ -80,6 +80,9 @@ enum Command {
         #[arg(long)]
         heatmap: Option<PathBuf>,
     },
+    /// Each engine's error against run time on a scene, and Embree against the BVH: a CSV, a
+    /// log-log plot (PNG) and a markdown summary.
+    Report(ReportArgs),
     /// Writes a height-field terrain of at least N triangles as standard OBJ.
     GenTerrain {
         /// Number of triangles (at least).
@@ -128,6 +131,43 @@ struct BenchArgs {
     accel: Vec<AccelKind>,
 }
 
+#[derive(Args, Debug)]
+struct ReportArgs {
+    /// The scene file.
+    scene: PathBuf,
+    /// Engines to measure.
+    #[arg(long, value_delimiter = ',', default_values_t = [EngineKind::Raytrace, EngineKind::Radiosity, EngineKind::Photon, EngineKind::Path])]
+    engines: Vec<EngineKind>,
+    /// Accels to run each engine on.
+    #[arg(long, value_delimiter = ',', default_values_t = default_bench_accels())]
+    accel: Vec<AccelKind>,
+    /// Image width and height.
+    #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [96, 96])]
+    size: Vec<u32>,
+    /// Seeds per budget; errors and times are averaged over them.
+    #[arg(long, default_value_t = 2)]
+    seeds: u32,
+    /// Wall-time limit of the whole report in seconds, reference render included.
+    #[arg(long, default_value_t = 600.0)]
+    time_limit: f64,
+    /// Reference image (PFM, EXR or PNG); default: a path-traced render, cached in the
+    /// output directory.
+    #[arg(long, value_name = "FILE")]
+    reference: Option<PathBuf>,
+    /// Samples per pixel of the path-traced reference.
+    #[arg(long, default_value_t = 4096)]
+    reference_samples: u32,
+    /// Output directory (default: report-<scene name>).
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Worker threads (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
 fn default_bench_accels() -> Vec<AccelKind> {
     if cfg!(feature = "embree") {
         vec![AccelKind::Embree, AccelKind::Bvh]
@@ -166,6 +206,10 @@ struct RenderArgs {
     /// Print the stages and structures this render would build, and exit.
     #[arg(long)]
     plan: bool,
+    /// Refuse renders estimated to need more memory than this (e.g. 512M, 8G; default 80% of
+    /// physical memory).
+    #[arg(long, value_name = "SIZE", value_parser = trilux::plan::parse_bytes)]
+    max_memory: Option<u64>,
     /// Print counters (rays cast, build and render time) after rendering.
     #[arg(long)]
     stats: bool,
@@ -265,9 +309,10 @@ struct RenderArgs {
     /// Safety cap: at most this many shots per patch before giving up, reported (radiosity).
     #[arg(long, default_value_t = 1000)]
     radiosity_max_shots_per_patch: u64,
-    /// Over-relaxation of each radiosity shot, in [1, 2): 1 is plain progressive refinement.
-    #[arg(long, default_value_t = 1.0)]
-    radiosity_relaxation: f32,
+    /// Over-relaxation of each radiosity shot: auto (from how much of each shot comes back),
+    /// or a fixed ω in [1, 2), 1 being plain progressive refinement.
+    #[arg(long, default_value = "auto")]
+    radiosity_relaxation: radiosity::solver::Relaxation,
 
     /// Memory for cached rows of form factors, MiB (radiosity).
     #[arg(long, default_value_t = 1024)]
@@ -488,6 +533,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse_from(normalize_args(std::env::args()));
     let result = match &cli.command {
         Some(Command::BenchAccel(args)) => bench_accel(args),
+        Some(Command::Report(args)) => report(args),
         Some(Command::Compare {
             image,
             reference,
@@ -542,6 +588,24 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     if args.plan {
         return emit(&format!("scene: {}\n{plan}", input.display()));
     }
+    let max_memory = args
+        .max_memory
+        .unwrap_or_else(trilux::plan::default_max_memory);
+    if plan.memory > max_memory {
+        let parts: Vec<String> = plan
+            .memory_parts
+            .iter()
+            .map(|(name, b)| format!("{name} {}", trilux::plan::human_bytes(*b)))
+            .collect();
+        return Err(format!(
+            "this render would need about {} ({}), more than --max-memory {}{}; ask for less (-size, -num_photons_to_shoot, --subdivide) or raise --max-memory",
+            trilux::plan::human_bytes(plan.memory),
+            parts.join(", "),
+            trilux::plan::human_bytes(max_memory),
+            if args.max_memory.is_none() { " (80% of this machine's memory)" } else { "" }
+        ));
+    }
+    trilux::interrupt::install();
     if !engine.is_implemented() {
         return Err(format!(
             "the {} engine is not implemented yet; available: raycast, raytrace, radiosity, path",
@@ -588,6 +652,12 @@ fn render(args: &RenderArgs) -> Result<(), String> {
 
     let output = args.output.clone().unwrap_or_else(|| default_output(input));
     film.write(&output).map_err(|e| e.to_string())?;
+    if trilux::interrupt::requested() {
+        return Err(format!(
+            "interrupted: wrote the image rendered so far to {}",
+            output.display()
+        ));
+    }
     if let Some(xy) = &args.ray_tree {
         write_ray_tree(&scene, accel, &settings, &film, &output, (xy[0], xy[1]))?;
     }
@@ -649,6 +719,7 @@ fn report_radiosity(solution: &radiosity::Solution, settings: &RenderSettings) {
         Stop::Converged => format!("converged to tolerance {:.1e}", r.tolerance),
         Stop::Iterations => format!("stopped after {} shots as asked", state.shots),
         Stop::NoLight => "nothing emits".to_string(),
+        Stop::Interrupted => format!("interrupted after {} shots", state.shots),
         Stop::Cap => String::new(),
     };
     if solution.stop == Stop::Cap {
@@ -806,6 +877,44 @@ fn write_ray_tree(
             png.display(),
             obj.display(),
             segments.len()
+        );
+    }
+    Ok(())
+}
+
+fn report(args: &ReportArgs) -> Result<(), String> {
+    let stem = args
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let settings = trilux::report::ReportSettings {
+        engines: args.engines.clone(),
+        accels: args.accel.clone(),
+        width: args.size[0],
+        height: args.size[1],
+        seeds: args.seeds.max(1),
+        time_limit: args.time_limit,
+        reference: args.reference.clone(),
+        reference_samples: args.reference_samples.max(1),
+        output: args
+            .output
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("report-{stem}"))),
+        quiet: args.quiet,
+    };
+    if settings.width == 0 || settings.height == 0 {
+        return Err("--size: both must be at least 1".into());
+    }
+    let pool = trilux::parallel::thread_pool(args.threads).map_err(|e| e.to_string())?;
+    trilux::parallel::worker_start();
+    trilux::interrupt::install();
+    let report = pool.install(|| trilux::report::run(&args.scene, &settings))?;
+    emit(&trilux::report::summary(&report, &settings))?;
+    if !args.quiet {
+        eprintln!(
+            "wrote report.csv, report.png and report.md in {}",
+            settings.output.display()
         );
     }
     Ok(())

@@ -59,6 +59,12 @@ impl EngineKind {
     }
 }
 
+impl std::fmt::Display for EngineKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// What one render produced: the image, its counters, and the radiosity solution or photon
 /// maps it came from, for the caller to report on.
 pub struct Rendered {
@@ -297,6 +303,10 @@ pub(crate) fn render_pixels(
         .par_chunks_mut(w as usize)
         .enumerate()
         .for_each(|(row, out)| {
+            if crate::interrupt::requested() {
+                // Ctrl-C: the rows not yet rendered stay black in the image written.
+                return;
+            }
             let j = h - 1 - row as u32;
             let mut counts = Counts::default();
             let mut rngs = Vec::with_capacity(w as usize * spp);
@@ -312,24 +322,29 @@ pub(crate) fn render_pixels(
             accel.intersect_batch(&rays, &mut hits);
             counts.camera += rays.len() as u64;
             for (i, pixel) in out.iter_mut().enumerate() {
-                let mut sum = Vec3::ZERO;
+                // Summed in f64: finite samples near f32's largest value must not add up to
+                // infinity; their mean is again a finite f32.
+                let mut sum = [0.0f64; 3];
                 let mut good = 0u32;
                 for idx in i * spp..(i + 1) * spp {
                     let ray = &rays[idx];
                     let hit = hits[idx].map(|h| scene.surface(ray, &h));
                     let l = radiance(ray, hit, &mut rngs[idx], &mut counts);
                     if l.is_finite() {
-                        sum += l;
+                        for (s, c) in sum.iter_mut().zip(l.to_array()) {
+                            *s += c as f64;
+                        }
                         good += 1;
                     } else {
                         counts.non_finite += 1;
                     }
                 }
-                *pixel = if good > 0 {
-                    sum / good as f32
-                } else {
-                    Vec3::ZERO
-                };
+                let n = good.max(1) as f64;
+                *pixel = crate::geometry::vec3(
+                    (sum[0] / n) as f32,
+                    (sum[1] / n) as f32,
+                    (sum[2] / n) as f32,
+                );
             }
             stats.camera_rays.fetch_add(counts.camera, Relaxed);
             stats.shadow_rays.fetch_add(counts.shadow, Relaxed);

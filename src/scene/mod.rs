@@ -237,6 +237,19 @@ impl Scene {
             .unwrap_or_else(|| Camera::default_for(&self.bounds()))
     }
 
+    /// A hash of the scene file's bytes (0 bytes if it cannot be read): what caches made for
+    /// this scene are keyed by.
+    pub fn file_hash(&self) -> u64 {
+        let bytes = std::fs::read(&self.path).unwrap_or_default();
+        let mut h = crate::sampling::mix64(bytes.len() as u64);
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            h = crate::sampling::mix64(h ^ u64::from_le_bytes(word));
+        }
+        h
+    }
+
     pub fn bounds(&self) -> Bounds3 {
         self.bounds_of(|_| true)
     }

@@ -27,13 +27,7 @@ const PHOTON_BYTES: usize = 12 * 4 + 1;
 /// global map keeps all photons (final gathering).
 pub fn fingerprint(scene: &Scene, settings: &RenderSettings) -> u64 {
     let p = &settings.photon;
-    let bytes = std::fs::read(&scene.path).unwrap_or_default();
-    let mut h = mix64(bytes.len() as u64);
-    for chunk in bytes.chunks(8) {
-        let mut word = [0u8; 8];
-        word[..chunk.len()].copy_from_slice(chunk);
-        h = mix64(h ^ u64::from_le_bytes(word));
-    }
+    let mut h = scene.file_hash();
     for v in [
         p.num_photons_to_shoot,
         p.caustic_photons(),

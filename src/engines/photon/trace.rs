@@ -120,7 +120,13 @@ pub fn trace_photons(
         .map(|b| {
             let mut stored = Vec::new();
             let (mut rays, mut truncated) = (0, 0);
-            for k in b * BLOCK..((b + 1) * BLOCK).min(count) {
+            // After Ctrl-C the blocks not yet traced are skipped.
+            let end = if crate::interrupt::requested() {
+                b * BLOCK
+            } else {
+                ((b + 1) * BLOCK).min(count)
+            };
+            for k in b * BLOCK..end {
                 let stream = match aim {
                     Aim::Everywhere => 0x9407,
                     Aim::Caustics { .. } => 0xca05,
