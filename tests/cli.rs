@@ -741,3 +741,58 @@ fn photon_maps_are_saved_and_loaded_and_checked() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a trilux photon file"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `render report` on the course Cornell box with the path tracer alone, small and quick:
+/// it writes the CSV, the plot and the summary, and the path tracer's relMSE falls with
+/// slope close to −1 against time.
+#[test]
+fn report_writes_csv_plot_and_summary_with_the_path_tracers_slope() {
+    let Some(dir) = common::course_dir() else {
+        return;
+    };
+    let out = std::env::temp_dir().join(format!("trilux-report-{}", std::process::id()));
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+        .arg("report")
+        .arg(dir.join("cornell_box_diffuse_sphere.obj"))
+        .args([
+            "--engines",
+            "path",
+            "--size",
+            "24",
+            "24",
+            "--reference-samples",
+            "4096",
+        ])
+        .args(["--seeds", "4", "--time-limit", "60", "--quiet", "-o"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let summary = String::from_utf8_lossy(&run.stdout);
+    println!("{summary}");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let csv = std::fs::read_to_string(out.join("report.csv")).expect("CSV written");
+    assert!(csv.lines().count() > 8, "{csv}");
+    let plot = image::open(out.join("report.png")).expect("PNG written");
+    assert!(plot.width() > 100);
+    assert!(out.join("report.md").exists());
+    // The slope column of the path tracer's rows of the first table (one per Accel).
+    let rows: Vec<&str> = summary
+        .lines()
+        .filter(|l| l.starts_with("| path | embree |") || l.starts_with("| path | bvh |"))
+        .collect();
+    assert_eq!(rows.len(), backends().len(), "{summary}");
+    for line in rows {
+        let slope: f64 = line
+            .trim_end_matches('|')
+            .rsplit('|')
+            .next()
+            .and_then(|s| s.trim().parse().ok())
+            .expect("a fitted slope");
+        assert!((slope + 1.0).abs() < 0.2, "slope {slope}: {line}");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
