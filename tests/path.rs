@@ -3,13 +3,10 @@
 
 mod common;
 
-use std::path::Path;
-
-use common::{backends, furnace};
+use common::{backends, furnace, square_light};
 use trilux::accel::{self, AccelOptions};
 use trilux::engines::{path, RenderSettings};
 use trilux::geometry::Vec3;
-use trilux::scene::Scene;
 
 #[test]
 fn furnace_radiance_is_le_over_one_minus_rho() {
@@ -46,18 +43,7 @@ fn furnace_radiance_is_le_over_one_minus_rho() {
 #[test]
 fn square_light_matches_the_closed_form() {
     let (le, rho) = (10.0f32, 0.6f32);
-    let scene = Scene::parse_dialect(
-        Path::new("square.obj"),
-        &format!(
-            "material\ndiffuse 0 0 0\nemitted {le} {le} {le}\n\
-             material\ndiffuse {rho} {rho} {rho}\n\
-             m 0\nv -0.5 1 0.5\nv -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nf 1 2 3 4\n\
-             m 1\nv -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\nf 5 6 7 8\n\
-             background_color 0 0 0\n\
-             OrthographicCamera {{\ncamera_position 0 5 0\npoint_of_interest 0 0 0\nup 0 0 -1\nsize 0.0001\n}}\n"
-        ),
-    )
-    .expect("parses");
+    let scene = square_light(le, rho);
     let truth = (rho * le) as f64 * 0.239456;
     for kind in backends() {
         let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");

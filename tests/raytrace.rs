@@ -8,7 +8,7 @@ mod common;
 use std::f64::consts::PI;
 use std::path::Path;
 
-use common::backends;
+use common::{backends, square_light};
 use trilux::accel::{self, AccelOptions};
 use trilux::engines::{raytrace, RenderSettings};
 use trilux::film::Film;
@@ -52,19 +52,6 @@ fn render(scene: &Scene, settings: &RenderSettings, kind: trilux::accel::AccelKi
 const LE: f32 = 10.0;
 const RHO: f32 = 0.6;
 
-/// A unit square light at height 1 facing down over a large floor, seen from above through
-/// the light's back side (quads are one-sided) by a tiny orthographic camera at the point
-/// right under the light's centre.
-fn square_light_scene() -> Scene {
-    load(&format!(
-        "material\ndiffuse 0 0 0\nemitted {LE} {LE} {LE}\n\
-         material\ndiffuse {RHO} {RHO} {RHO}\n\
-         m 0\nv -0.5 1 0.5\nv -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nf 1 2 3 4\n\
-         m 1\nv -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\nf 5 6 7 8\n\
-         OrthographicCamera {{\ncamera_position 0 5 0\npoint_of_interest 0 0 0\nup 0 0 -1\nsize 0.0001\n}}\n"
-    ))
-}
-
 fn quiet(width: u32, height: u32) -> RenderSettings {
     RenderSettings {
         width,
@@ -103,7 +90,7 @@ fn square_light_matches_the_closed_form() {
         "Lambert's formula gives F = {form_factor}"
     );
     let truth = RHO as f64 * LE as f64 * form_factor;
-    let scene = square_light_scene();
+    let scene = square_light(LE, RHO);
     for kind in backends() {
         let settings = RenderSettings {
             num_shadow_samples: 1024,
@@ -137,7 +124,7 @@ fn jittered_and_stratified_beat_random_sampling() {
     ];
     let truth =
         RHO as f64 * LE as f64 * polygon_irradiance([0.0; 3], [0.0, 1.0, 0.0], &square) / PI;
-    let scene = square_light_scene();
+    let scene = square_light(LE, RHO);
     let error = |pattern: Pattern, n: u32| {
         let settings = RenderSettings {
             num_shadow_samples: n,

@@ -7,7 +7,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{backends, course_scenes, furnace};
+use common::{backends, course_scenes, furnace, square_light};
 use trilux::accel::{self, AccelOptions};
 use trilux::engines::radiosity::solver::{Relaxation, Stop};
 use trilux::engines::radiosity::{RadiositySettings, Solution};
@@ -226,18 +226,7 @@ fn emitted_radiance_from_1e_minus_30_to_1e30_scales_linearly() {
 fn albedo_zero_and_one_under_a_square_light() {
     let le = 10.0f32;
     for rho in [0.0f32, 1.0] {
-        let scene = Scene::parse_dialect(
-            Path::new("square.obj"),
-            &format!(
-                "material\ndiffuse 0 0 0\nemitted {le} {le} {le}\n\
-                 material\ndiffuse {rho} {rho} {rho}\n\
-                 m 0\nv -0.5 1 0.5\nv -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nf 1 2 3 4\n\
-                 m 1\nv -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\nf 5 6 7 8\n\
-                 background_color 0 0 0\n\
-                 OrthographicCamera {{\ncamera_position 0 5 0\npoint_of_interest 0 0 0\nup 0 0 -1\nsize 0.0001\n}}\n"
-            ),
-        )
-        .expect("parses");
+        let scene = square_light(le, rho);
         let truth = (rho * le) as f64 * 0.239456;
         for engine in [EngineKind::Raytrace, EngineKind::Path] {
             let s = RenderSettings {

@@ -160,3 +160,19 @@ pub fn furnace(rho: f32) -> Scene {
     );
     Scene::parse_dialect(Path::new("furnace.obj"), &text).expect("furnace parses")
 }
+
+/// A unit square light of radiance `le` at height 1 facing down over a large floor of albedo
+/// `rho`, seen from above through the light's back side (quads are one-sided) by a tiny
+/// orthographic camera at the point right under the light's centre. The floor's radiance
+/// there is ρ·Le·F, F = 0.239456 (point-to-square form factor).
+pub fn square_light(le: f32, rho: f32) -> Scene {
+    let text = format!(
+        "material\ndiffuse 0 0 0\nemitted {le} {le} {le}\n\
+         material\ndiffuse {rho} {rho} {rho}\n\
+         m 0\nv -0.5 1 0.5\nv -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nf 1 2 3 4\n\
+         m 1\nv -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\nf 5 6 7 8\n\
+         background_color 0 0 0\n\
+         OrthographicCamera {{\ncamera_position 0 5 0\npoint_of_interest 0 0 0\nup 0 0 -1\nsize 0.0001\n}}\n"
+    );
+    Scene::parse_dialect(Path::new("square.obj"), &text).expect("square light parses")
+}
