@@ -606,12 +606,6 @@ fn render(args: &RenderArgs) -> Result<(), String> {
         ));
     }
     trilux::interrupt::install();
-    if !engine.is_implemented() {
-        return Err(format!(
-            "the {} engine is not implemented yet; available: raycast, raytrace, radiosity, path",
-            engine.name()
-        ));
-    }
     for flag in args.unused_flags() {
         eprintln!(
             "note: {flag} is accepted but has no effect: the {} engine does not read it",

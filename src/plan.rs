@@ -78,12 +78,6 @@ impl Plan {
                 engine.name()
             ));
         }
-        if !engine.is_implemented() {
-            notes.push(format!(
-                "the {} engine is not implemented yet",
-                engine.name()
-            ));
-        }
         let radiosity_patches = if radiosity_mesh {
             radiosity_patches(scene, settings)
         } else {

@@ -38,16 +38,6 @@ pub enum EngineKind {
 }
 
 impl EngineKind {
-    pub fn is_implemented(self) -> bool {
-        matches!(
-            self,
-            EngineKind::Raycast
-                | EngineKind::Raytrace
-                | EngineKind::Radiosity
-                | EngineKind::Photon
-                | EngineKind::Path
-        )
-    }
     pub fn name(self) -> &'static str {
         match self {
             EngineKind::Raycast => "raycast",
