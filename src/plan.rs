@@ -34,8 +34,8 @@ pub struct Plan {
     pub memory_parts: Vec<(&'static str, u64)>,
 }
 
-/// Bytes per pixel of the image, and per camera sample of a row in flight (ray, generator,
-/// hit; one row per core).
+/// Bytes per pixel of the image, and per camera sample in flight (ray, generator, hit; one
+/// chunk of a row per core, `engines::CHUNK_SAMPLES` samples or one pixel's).
 const FILM_BYTES_PER_PIXEL: u64 = 12;
 const SAMPLE_BYTES_IN_FLIGHT: u64 = 96;
 /// Bytes per primitive of either Accel (nodes, references, Embree's copies).
@@ -125,13 +125,11 @@ fn memory_parts(
     let (w, h) = (settings.width as u64, settings.height as u64);
     let spp = settings.num_antialias_samples.max(1) as u64;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get() as u64);
+    let in_flight = spp.max(crate::engines::CHUNK_SAMPLES as u64);
     let image = w
         .saturating_mul(h)
         .saturating_mul(FILM_BYTES_PER_PIXEL)
-        .saturating_add(
-            w.saturating_mul(spp)
-                .saturating_mul(SAMPLE_BYTES_IN_FLIGHT * cores.min(h.max(1))),
-        );
+        .saturating_add(in_flight.saturating_mul(SAMPLE_BYTES_IN_FLIGHT * cores.min(h.max(1))));
     let accel = (scene.primitive_count() as u64).saturating_mul(ACCEL_BYTES_PER_PRIMITIVE);
     let mut parts = vec![("image", image), ("acceleration structure", accel)];
     if photon_engine {

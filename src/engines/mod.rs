@@ -273,6 +273,9 @@ pub(crate) fn camera_sample(
 /// traced as one batch, `-num_antialias_samples` per pixel averaged with a box filter, and
 /// samples that come out NaN or infinite left out and counted. `radiance` gives the radiance
 /// along a camera ray from its closest hit.
+/// Camera samples traced as one batch (a row is cut into chunks of about this many).
+pub const CHUNK_SAMPLES: usize = 4096;
+
 pub(crate) fn render_pixels(
     scene: &Scene,
     accel: &dyn Accel,
@@ -299,42 +302,52 @@ pub(crate) fn render_pixels(
             }
             let j = h - 1 - row as u32;
             let mut counts = Counts::default();
-            let mut rngs = Vec::with_capacity(w as usize * spp);
-            let mut rays = Vec::with_capacity(w as usize * spp);
-            for i in 0..w {
-                for k in 0..spp as u32 {
-                    let (ray, rng) = camera_sample(&camera, settings, focus, (i, j), k);
-                    rays.push(ray);
-                    rngs.push(rng);
+            // A row in chunks of about CHUNK_SAMPLES camera samples: one batch of camera rays
+            // each, memory bounded whatever the samples per pixel, and Ctrl-C heard between
+            // chunks (the pixels not yet rendered stay black).
+            let chunk = (CHUNK_SAMPLES / spp).max(1);
+            for (c, pixels) in out.chunks_mut(chunk).enumerate() {
+                if crate::interrupt::requested() {
+                    break;
                 }
-            }
-            let mut hits = vec![None; rays.len()];
-            accel.intersect_batch(&rays, &mut hits);
-            counts.camera += rays.len() as u64;
-            for (i, pixel) in out.iter_mut().enumerate() {
-                // Summed in f64: finite samples near f32's largest value must not add up to
-                // infinity; their mean is again a finite f32.
-                let mut sum = [0.0f64; 3];
-                let mut good = 0u32;
-                for idx in i * spp..(i + 1) * spp {
-                    let ray = &rays[idx];
-                    let hit = hits[idx].map(|h| scene.surface(ray, &h));
-                    let l = radiance(ray, hit, &mut rngs[idx], &mut counts);
-                    if l.is_finite() {
-                        for (s, c) in sum.iter_mut().zip(l.to_array()) {
-                            *s += c as f64;
-                        }
-                        good += 1;
-                    } else {
-                        counts.non_finite += 1;
+                let first = (c * chunk) as u32;
+                let mut rngs = Vec::with_capacity(pixels.len() * spp);
+                let mut rays = Vec::with_capacity(pixels.len() * spp);
+                for i in first..first + pixels.len() as u32 {
+                    for k in 0..spp as u32 {
+                        let (ray, rng) = camera_sample(&camera, settings, focus, (i, j), k);
+                        rays.push(ray);
+                        rngs.push(rng);
                     }
                 }
-                let n = good.max(1) as f64;
-                *pixel = crate::geometry::vec3(
-                    (sum[0] / n) as f32,
-                    (sum[1] / n) as f32,
-                    (sum[2] / n) as f32,
-                );
+                let mut hits = vec![None; rays.len()];
+                accel.intersect_batch(&rays, &mut hits);
+                counts.camera += rays.len() as u64;
+                for (i, pixel) in pixels.iter_mut().enumerate() {
+                    // Summed in f64: finite samples near f32's largest value must not add up
+                    // to infinity; their mean is again a finite f32.
+                    let mut sum = [0.0f64; 3];
+                    let mut good = 0u32;
+                    for idx in i * spp..(i + 1) * spp {
+                        let ray = &rays[idx];
+                        let hit = hits[idx].map(|h| scene.surface(ray, &h));
+                        let l = radiance(ray, hit, &mut rngs[idx], &mut counts);
+                        if l.is_finite() {
+                            for (s, c) in sum.iter_mut().zip(l.to_array()) {
+                                *s += c as f64;
+                            }
+                            good += 1;
+                        } else {
+                            counts.non_finite += 1;
+                        }
+                    }
+                    let n = good.max(1) as f64;
+                    *pixel = crate::geometry::vec3(
+                        (sum[0] / n) as f32,
+                        (sum[1] / n) as f32,
+                        (sum[2] / n) as f32,
+                    );
+                }
             }
             stats.camera_rays.fetch_add(counts.camera, Relaxed);
             stats.shadow_rays.fetch_add(counts.shadow, Relaxed);
