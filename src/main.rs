@@ -592,15 +592,9 @@ fn render(args: &RenderArgs) -> Result<(), String> {
         .max_memory
         .unwrap_or_else(trilux::plan::default_max_memory);
     if plan.memory > max_memory {
-        let parts: Vec<String> = plan
-            .memory_parts
-            .iter()
-            .map(|(name, b)| format!("{name} {}", trilux::plan::human_bytes(*b)))
-            .collect();
         return Err(format!(
-            "this render would need about {} ({}), more than --max-memory {}{}; ask for less (-size, -num_photons_to_shoot, --subdivide) or raise --max-memory",
-            trilux::plan::human_bytes(plan.memory),
-            parts.join(", "),
+            "this render would need about {}, more than --max-memory {}{}; ask for less (-size, -num_photons_to_shoot, --subdivide) or raise --max-memory",
+            plan.memory_summary(),
             trilux::plan::human_bytes(max_memory),
             if args.max_memory.is_none() { " (80% of this machine's memory)" } else { "" }
         ));
@@ -620,13 +614,12 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     let build_s = build_start.elapsed().as_secs_f64();
     let render_start = Instant::now();
     let accel = accel.as_ref();
-    let rendered = pool.install(|| engines::render(engine, &scene, accel, &settings))?;
     let Rendered {
         film,
         stats,
         solution,
         maps,
-    } = rendered;
+    } = pool.install(|| engines::render(engine, &scene, accel, &settings))?;
     if let Some(maps) = &maps {
         report_photons(maps, &settings);
     }
@@ -746,24 +739,16 @@ fn report_radiosity(solution: &radiosity::Solution, settings: &RenderSettings) {
 
 /// `--log-convergence`: one CSV line per shot.
 fn write_convergence_log(path: &Path, solution: &radiosity::Solution) -> Result<(), String> {
-    use std::io::Write;
-    trilux::film::write_atomically(path, |w| {
-        let io = |source| trilux::film::FilmError::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        writeln!(w, "shot,patch,residual,seconds,rays").map_err(io)?;
-        for r in &solution.state.log {
-            writeln!(
-                w,
-                "{},{},{:.6e},{:.6},{}",
-                r.shot, r.patch, r.residual, r.seconds, r.rays
-            )
-            .map_err(io)?;
-        }
-        Ok(())
-    })
-    .map_err(|e| e.to_string())
+    use std::fmt::Write;
+    let mut csv = String::from("shot,patch,residual,seconds,rays\n");
+    for r in &solution.state.log {
+        let _ = writeln!(
+            csv,
+            "{},{},{:.6e},{:.6},{}",
+            r.shot, r.patch, r.residual, r.seconds, r.rays
+        );
+    }
+    trilux::film::write_text_atomically(path, &csv).map_err(|e| e.to_string())
 }
 
 fn default_output(input: &Path) -> PathBuf {

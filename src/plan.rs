@@ -185,6 +185,18 @@ fn radiosity_patches(scene: &Scene, settings: &RenderSettings) -> u64 {
     top.saturating_mul(4u64.saturating_pow(r.subdivide))
 }
 
+impl Plan {
+    /// The memory estimate and its parts, e.g. `1.2 GiB (image 816 KiB, photon maps 1.2 GiB)`.
+    pub fn memory_summary(&self) -> String {
+        let parts: Vec<String> = self
+            .memory_parts
+            .iter()
+            .map(|(name, b)| format!("{name} {}", human_bytes(*b)))
+            .collect();
+        format!("{} ({})", human_bytes(self.memory), parts.join(", "))
+    }
+}
+
 /// Bytes as KiB, MiB, GiB or TiB with three significant digits.
 pub fn human_bytes(b: u64) -> String {
     let units = ["B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
@@ -307,17 +319,7 @@ impl fmt::Display for Plan {
         } else {
             writeln!(f, "radiosity mesh: no")?;
         }
-        let parts: Vec<String> = self
-            .memory_parts
-            .iter()
-            .map(|(name, b)| format!("{name} {}", human_bytes(*b)))
-            .collect();
-        writeln!(
-            f,
-            "memory estimate: {} ({})",
-            human_bytes(self.memory),
-            parts.join(", ")
-        )?;
+        writeln!(f, "memory estimate: {}", self.memory_summary())?;
         for note in &self.notes {
             writeln!(f, "note: {note}")?;
         }

@@ -296,10 +296,6 @@ pub(crate) fn render_pixels(
         .par_chunks_mut(w as usize)
         .enumerate()
         .for_each(|(row, out)| {
-            if crate::interrupt::requested() {
-                // Ctrl-C: the rows not yet rendered stay black in the image written.
-                return;
-            }
             let j = h - 1 - row as u32;
             let mut counts = Counts::default();
             // A row in chunks of about CHUNK_SAMPLES camera samples: one batch of camera rays

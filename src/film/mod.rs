@@ -156,6 +156,17 @@ impl Film {
     }
 }
 
+/// Writes `text` to `path` atomically (temporary file, then rename).
+pub fn write_text_atomically(path: &Path, text: &str) -> Result<(), FilmError> {
+    write_atomically(path, |w| {
+        w.write_all(text.as_bytes())
+            .map_err(|source| FilmError::Io {
+                path: path.to_path_buf(),
+                source,
+            })
+    })
+}
+
 /// Runs `fill` on a temporary file beside `path`, then renames it to `path`.
 pub fn write_atomically(
     path: &Path,

@@ -13,14 +13,13 @@
 mod plot;
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::accel::{self, AccelKind, AccelOptions};
 use crate::engines::{self, EngineKind, RenderSettings};
 use crate::film::metrics::{self, Metrics};
-use crate::film::{write_atomically, Film};
+use crate::film::{write_text_atomically, Film};
 use crate::scene::Scene;
 
 /// What `render report` is asked to do.
@@ -447,20 +446,10 @@ fn write_report(report: &Report, settings: &ReportSettings) -> Result<(), String
             r.metrics.mape
         );
     }
-    write_text(&dir.join("report.csv"), &csv)?;
-    write_text(&dir.join("report.md"), &summary(report, settings))?;
+    write_text_atomically(&dir.join("report.csv"), &csv).map_err(|e| e.to_string())?;
+    write_text_atomically(&dir.join("report.md"), &summary(report, settings))
+        .map_err(|e| e.to_string())?;
     plot::write(&dir.join("report.png"), report)
-}
-
-fn write_text(path: &Path, text: &str) -> Result<(), String> {
-    write_atomically(path, |w| {
-        w.write_all(text.as_bytes())
-            .map_err(|source| crate::film::FilmError::Io {
-                path: path.to_path_buf(),
-                source,
-            })
-    })
-    .map_err(|e| e.to_string())
 }
 
 /// The markdown summary: per curve its last point and slope, per engine the Accel comparison.

@@ -186,33 +186,33 @@ fn trace_one(
         normal = -normal;
     }
     let (u, v) = (rng.next_f32(), rng.next_f32());
-    let dir = match aim {
-        Aim::Caustics { centre, radius } if (centre - p.point).length() > radius => {
-            // Uniform in the cone of solid angle Ω: the power becomes Le·cosθ·A·Ω per photon
-            // instead of the cosine-weighted photon's π·Le·A (per side), a factor cosθ·Ω/π.
+    // Towards the specular sphere: the cone's axis and the sine of its half-angle, unless
+    // the photon leaves from inside the sphere.
+    let cone = match aim {
+        Aim::Caustics { centre, radius } => {
             let to = centre - p.point;
             let d = to.length();
-            let cos_max = (1.0 - (radius / d) * (radius / d)).max(0.0).sqrt();
-            let dir = sample_cone(to / d, cos_max, u, v);
-            let cos = if p.one_sided {
-                p.normal.dot(dir)
-            } else {
-                p.normal.dot(dir).abs()
-            };
-            if cos <= 0.0 {
+            (d > radius).then(|| (to / d, radius / d))
+        }
+        Aim::Everywhere => None,
+    };
+    let dir = match cone {
+        Some((axis, sin_max)) => {
+            // Uniform in the cone of solid angle Ω: the power becomes Le·cosθ·A·Ω per photon
+            // instead of the cosine-weighted photon's π·Le·A (per side), a factor cosθ·Ω/π.
+            let cos_max = (1.0 - sin_max * sin_max).max(0.0).sqrt();
+            let dir = sample_cone(axis, cos_max, u, v);
+            let facing = p.normal.dot(dir);
+            if facing == 0.0 || (p.one_sided && facing < 0.0) {
                 return (0, false);
             }
+            normal = if facing > 0.0 { p.normal } else { -p.normal };
             let solid_angle = std::f32::consts::TAU * (1.0 - cos_max);
             let sides = if p.one_sided { 1.0 } else { 2.0 };
-            normal = if p.normal.dot(dir) >= 0.0 {
-                p.normal
-            } else {
-                -p.normal
-            };
-            power *= cos * solid_angle / (std::f32::consts::PI * sides);
+            power *= facing.abs() * solid_angle / (std::f32::consts::PI * sides);
             dir
         }
-        _ => sample_lobe(normal, 1.0, u, v),
+        None => sample_lobe(normal, 1.0, u, v),
     };
     let caustics_only = matches!(aim, Aim::Caustics { .. });
     let origin = offset_ray_origin(p.point, normal, point_error(p.point.abs().max_elem()));
