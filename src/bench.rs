@@ -13,12 +13,12 @@ use crate::scene::{Camera, Scene};
 
 /// One ray per pixel of a `side`×`side` image through the scene's camera, row by row.
 pub fn camera_rays(scene: &Scene, side: u32) -> Vec<Ray> {
-    let camera = scene.camera();
+    let view = scene.camera().view();
     let mut rays = Vec::with_capacity((side * side) as usize);
     for j in 0..side {
         for i in 0..side {
             let (x, y) = Camera::screen_point(i, j, 0.5, 0.5, side, side);
-            rays.push(camera.generate_ray(x, y));
+            rays.push(view.ray(x, y));
         }
     }
     rays
@@ -104,16 +104,60 @@ pub fn shadow_rays(
     Ok(rays)
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The ray sets of the table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum RaySet {
+    /// One ray per pixel through the scene's camera.
+    Camera,
+    /// Random origins in the scene's bounds, random directions.
+    Incoherent,
+    /// From the surfaces the camera rays see to random points on the lights.
+    Shadow,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Query {
+    /// The closest hit.
     Closest,
+    /// Whether anything is hit (the ray's t range limited for the camera and incoherent sets).
     Occluded,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Mode {
+    /// One ray per call.
     Single,
+    /// Slices of rays per call (packets of 8 in Embree).
     Batched,
+}
+
+/// Which cells of the table to measure: every combination of these (`--sets`, `--queries`,
+/// `--modes`; all by default).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Cells {
+    pub sets: Vec<RaySet>,
+    pub queries: Vec<Query>,
+    pub modes: Vec<Mode>,
+}
+
+impl Default for Cells {
+    fn default() -> Cells {
+        Cells {
+            sets: vec![RaySet::Camera, RaySet::Incoherent, RaySet::Shadow],
+            queries: vec![Query::Closest, Query::Occluded],
+            modes: vec![Mode::Single, Mode::Batched],
+        }
+    }
+}
+
+impl RaySet {
+    fn name(self) -> &'static str {
+        match self {
+            RaySet::Camera => "camera",
+            RaySet::Incoherent => "incoherent",
+            RaySet::Shadow => "shadow",
+        }
+    }
 }
 
 /// Traces `rays` once through the API; returns the number of hits (so nothing is optimised
@@ -177,30 +221,40 @@ pub struct Report {
     pub builds: Vec<(String, f64)>,
 }
 
-/// The full measurement over one scene. `n_rays` per ray set, `repeats` timings per cell.
+/// The measurement over one scene: the `cells` chosen, `n_rays` per ray set, `repeats`
+/// timings per cell.
 pub fn bench_accel(
     scene: &Scene,
     kinds: &[AccelKind],
     options: &AccelOptions,
+    cells: &Cells,
     n_rays: usize,
     repeats: usize,
     threads: usize,
 ) -> Result<Report, accel::AccelError> {
     let side = (n_rays as f64).sqrt().ceil() as u32;
     let camera = camera_rays(scene, side);
-    let incoherent = incoherent_rays(scene, n_rays, 1);
-    let shadow = shadow_rays(scene, &camera, 4)?;
-    let mut sets = vec![
-        ("camera", camera.clone(), occlusion_rays(scene, &camera, 2)),
-        (
-            "incoherent",
-            incoherent.clone(),
-            occlusion_rays(scene, &incoherent, 3),
-        ),
-    ];
-    if !shadow.is_empty() {
-        sets.push(("shadow", shadow.clone(), shadow));
+    let mut sets = Vec::new();
+    for &set in &cells.sets {
+        // Each set's rays for closest-hit queries and for occlusion queries.
+        let (closest, occluded) = match set {
+            RaySet::Camera => (camera.clone(), occlusion_rays(scene, &camera, 2)),
+            RaySet::Incoherent => {
+                let rays = incoherent_rays(scene, n_rays, 1);
+                let occluded = occlusion_rays(scene, &rays, 3);
+                (rays, occluded)
+            }
+            RaySet::Shadow => {
+                let rays = shadow_rays(scene, &camera, 4)?;
+                (rays.clone(), rays)
+            }
+        };
+        if !closest.is_empty() {
+            sets.push((set.name(), closest, occluded));
+        }
     }
+    let chosen =
+        |query: Query, mode: Mode| cells.queries.contains(&query) && cells.modes.contains(&mode);
     let mut rows = Vec::new();
     let mut builds = Vec::new();
     for &kind in kinds {
@@ -214,6 +268,9 @@ pub fn bench_accel(
                 (Query::Occluded, "occluded", occl_rays),
             ] {
                 for (mode, mname) in [(Mode::Single, "single"), (Mode::Batched, "batched")] {
+                    if !chosen(query, mode) {
+                        continue;
+                    }
                     for (parallel, t) in [(false, 1), (true, threads)] {
                         let s = median_seconds(repeats, || {
                             std::hint::black_box(trace(
@@ -241,12 +298,35 @@ pub fn bench_accel(
             use crate::accel::embree::{Baseline, EmbreeAccel};
             let e = EmbreeAccel::build(scene, options)?;
             for (set_name, closest_rays, occl_rays) in &sets {
-                for (b, qname, mname, rays) in [
-                    (Baseline::Intersect1, "closest", "single", closest_rays),
-                    (Baseline::Occluded1, "occluded", "single", occl_rays),
-                    (Baseline::Intersect8, "closest", "batched", closest_rays),
-                    (Baseline::Occluded8, "occluded", "batched", occl_rays),
+                for (b, (query, qname), (mode, mname), rays) in [
+                    (
+                        Baseline::Intersect1,
+                        (Query::Closest, "closest"),
+                        (Mode::Single, "single"),
+                        closest_rays,
+                    ),
+                    (
+                        Baseline::Occluded1,
+                        (Query::Occluded, "occluded"),
+                        (Mode::Single, "single"),
+                        occl_rays,
+                    ),
+                    (
+                        Baseline::Intersect8,
+                        (Query::Closest, "closest"),
+                        (Mode::Batched, "batched"),
+                        closest_rays,
+                    ),
+                    (
+                        Baseline::Occluded8,
+                        (Query::Occluded, "occluded"),
+                        (Mode::Batched, "batched"),
+                        occl_rays,
+                    ),
                 ] {
+                    if !chosen(query, mode) {
+                        continue;
+                    }
                     let s = median_seconds(repeats, || {
                         std::hint::black_box(e.baseline(rays, b));
                     });

@@ -129,6 +129,15 @@ struct BenchArgs {
     /// Backends to measure.
     #[arg(long, value_delimiter = ',', default_values_t = default_bench_accels())]
     accel: Vec<AccelKind>,
+    /// Ray sets to measure.
+    #[arg(long, value_enum, value_delimiter = ',', default_values = ["camera", "incoherent", "shadow"])]
+    sets: Vec<trilux::bench::RaySet>,
+    /// Queries to measure.
+    #[arg(long, value_enum, value_delimiter = ',', default_values = ["closest", "occluded"])]
+    queries: Vec<trilux::bench::Query>,
+    /// Single rays per call, batches, or both.
+    #[arg(long, value_enum, value_delimiter = ',', default_values = ["single", "batched"])]
+    modes: Vec<trilux::bench::Mode>,
 }
 
 #[derive(Args, Debug)]
@@ -779,6 +788,11 @@ fn bench_accel(args: &BenchArgs) -> Result<(), String> {
                 &scene,
                 &args.accel,
                 &options,
+                &trilux::bench::Cells {
+                    sets: args.sets.clone(),
+                    queries: args.queries.clone(),
+                    modes: args.modes.clone(),
+                },
                 args.rays,
                 args.repeats,
                 threads,

@@ -4,15 +4,68 @@
 use crate::geometry::{vec3, RingPart, RingShape, SphereShape, Vec3};
 use crate::scene::{Color, PrimKind, PrimRef, Scene};
 
+/// A planar parallelogram `origin + u·edge_u + v·edge_v`, emitting on its front side; the
+/// first sampling axis runs along the longer edge (`swap_axes`: that is `edge_v`), for N×1
+/// strata.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Parallelogram {
+    origin: Vec3,
+    edge_u: Vec3,
+    edge_v: Vec3,
+    normal: Vec3,
+    swap_axes: bool,
+}
+
+impl Parallelogram {
+    /// The point at (u, v) in [0,1)² of the sampling axes: uniform by area for uniform (u, v).
+    #[inline(always)]
+    pub fn sample(&self, u: f32, v: f32) -> LightPoint {
+        let (u, v) = if self.swap_axes { (v, u) } else { (u, v) };
+        LightPoint {
+            point: self.origin + self.edge_u * u + self.edge_v * v,
+            normal: self.normal,
+            one_sided: true,
+        }
+    }
+}
+
+/// Points on a light, a block at a time, as a structure of arrays: the loops over a block's
+/// lanes compile to vector instructions.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointBlock {
+    pub x: [f32; LANES],
+    pub y: [f32; LANES],
+    pub z: [f32; LANES],
+}
+
+/// Points in a `PointBlock`.
+pub const LANES: usize = 8;
+
+impl Parallelogram {
+    /// The points `sample` gives for (u[i], v[i]), lane by lane (the same arithmetic, so
+    /// the same bits).
+    #[inline(always)]
+    pub fn sample_block(&self, u: &[f32; LANES], v: &[f32; LANES]) -> PointBlock {
+        let (u, v) = if self.swap_axes { (v, u) } else { (u, v) };
+        let (o, a, b) = (self.origin, self.edge_u, self.edge_v);
+        let mut p = PointBlock::default();
+        for i in 0..LANES {
+            p.x[i] = o.x + a.x * u[i] + b.x * v[i];
+            p.y[i] = o.y + a.y * u[i] + b.y * v[i];
+            p.z[i] = o.z + a.z * u[i] + b.z * v[i];
+        }
+        p
+    }
+
+    /// The unit normal of the emitting side.
+    pub fn normal(&self) -> Vec3 {
+        self.normal
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightShape {
-    /// A planar parallelogram `origin + u·edge_u + v·edge_v`, emitting on its front side.
-    Parallelogram {
-        origin: Vec3,
-        edge_u: Vec3,
-        edge_v: Vec3,
-        normal: Vec3,
-    },
+    Parallelogram(Parallelogram),
     /// A triangle `v0 + u·e1 + v·e2` (u + v ≤ 1), emitting on both sides.
     Triangle {
         v0: Vec3,
@@ -31,8 +84,6 @@ pub struct Light {
     pub emitted: Color,
     pub area: f32,
     pub prim: PrimRef,
-    /// The first sampling axis runs along `edge_v` (the longer edge), for N×1 strata.
-    swap_axes: bool,
 }
 
 /// A point on a light with its outward unit normal; `one_sided` lights emit only where
@@ -54,16 +105,16 @@ impl Light {
             if e.max_elem() > 0.0 {
                 let [v0, v1, _, v3] = q.vertices;
                 lights.push(Light {
-                    shape: LightShape::Parallelogram {
+                    shape: LightShape::Parallelogram(Parallelogram {
                         origin: v0,
                         edge_u: v1 - v0,
                         edge_v: v3 - v0,
                         normal: q.normal,
-                    },
+                        swap_axes: (v3 - v0).length() > (v1 - v0).length(),
+                    }),
                     emitted: e,
                     area: q.area(),
                     prim: prim(PrimKind::Quad, i),
-                    swap_axes: (v3 - v0).length() > (v1 - v0).length(),
                 });
             }
         }
@@ -82,7 +133,6 @@ impl Light {
                     emitted: e,
                     area: 0.5 * n.length(),
                     prim: prim(PrimKind::Triangle, i),
-                    swap_axes: false,
                 });
             }
         }
@@ -95,7 +145,6 @@ impl Light {
                     emitted: e,
                     area: 4.0 * std::f32::consts::PI * r * r,
                     prim: prim(PrimKind::Sphere, i),
-                    swap_axes: false,
                 });
             }
         }
@@ -107,7 +156,6 @@ impl Light {
                     emitted: e,
                     area: ring_part_areas(&r.shape).iter().sum(),
                     prim: prim(PrimKind::Ring, i),
-                    swap_axes: false,
                 });
             }
         }
@@ -118,7 +166,7 @@ impl Light {
     /// centre of a planar light, the point of a sphere or ring nearest to `towards`.
     pub fn centre(&self, towards: Vec3) -> LightPoint {
         match self.shape {
-            LightShape::Parallelogram { .. } => self.sample(0.5, 0.5),
+            LightShape::Parallelogram(q) => q.sample(0.5, 0.5),
             LightShape::Triangle { v0, e1, e2, normal } => LightPoint {
                 point: v0 + (e1 + e2) * (1.0 / 3.0),
                 normal,
@@ -144,32 +192,9 @@ impl Light {
     }
 
     /// A point uniformly distributed by area, from (u, v) in [0,1)².
-    ///
-    /// Inlined, with the quad light (by far the most common) handled here: called once per
-    /// shadow ray, an out-of-line call returned the point through memory, and reading it back
-    /// stalled the shading loop (perf: a fifth of `Tracer::shade`).
-    #[inline]
     pub fn sample(&self, u: f32, v: f32) -> LightPoint {
-        let (u, v) = if self.swap_axes { (v, u) } else { (u, v) };
         match self.shape {
-            LightShape::Parallelogram {
-                origin,
-                edge_u,
-                edge_v,
-                normal,
-            } => LightPoint {
-                point: origin + edge_u * u + edge_v * v,
-                normal,
-                one_sided: true,
-            },
-            _ => self.sample_other(u, v),
-        }
-    }
-
-    /// `sample` for the lights other than parallelograms; (u, v) already swapped.
-    fn sample_other(&self, u: f32, v: f32) -> LightPoint {
-        match self.shape {
-            LightShape::Parallelogram { .. } => unreachable!("handled by Light::sample"),
+            LightShape::Parallelogram(q) => q.sample(u, v),
             LightShape::Triangle { v0, e1, e2, normal } => {
                 // Fold the unit square onto the triangle.
                 let (a, b) = if u + v > 1.0 {

@@ -18,7 +18,7 @@ use crate::accel::Accel;
 use crate::film::Film;
 use crate::geometry::Ray;
 use crate::sampling::{Pattern, Rng, Strata};
-use crate::scene::{Camera, Color, Scene, SurfaceHit};
+use crate::scene::{Camera, Color, Scene, SurfaceHit, View};
 
 use crate::geometry::Vec3;
 
@@ -247,35 +247,64 @@ pub(crate) struct Counts {
     pub blocked: Vec<bool>,
 }
 
-/// Camera ray `k` of pixel (i, j) (j from the bottom) and the generator that the rest of its
-/// path draws from: both depend only on (seed, pixel, sample).
-pub(crate) fn camera_sample(
-    camera: &Camera,
-    settings: &RenderSettings,
-    focus: f32,
-    (i, j): (u32, u32),
-    k: u32,
-) -> (Ray, Rng) {
-    let (w, h) = (settings.width, settings.height);
-    let spp = settings.num_antialias_samples.max(1);
-    let mut rng = Rng::new(settings.seed, j as u64 * w as u64 + i as u64, k as u64);
-    let (dx, dy) = if spp == 1 {
-        (0.5, 0.5)
-    } else {
-        Strata::new(Pattern::Jittered, spp).sample(k, &mut rng)
-    };
-    let (x, y) = Camera::screen_point(i, j, dx, dy, w, h);
-    let (lu, lv) = (rng.next_f32(), rng.next_f32());
-    (camera.lens_ray(x, y, settings.aperture, focus, lu, lv), rng)
+/// The camera samples of an image: the view, the pixel strata and the lens, worked out once.
+pub(crate) struct CameraSampler {
+    view: View,
+    pixel_strata: Strata,
+    /// Per pixel, 1 for one ray through the centre.
+    spp: u32,
+    aperture: f32,
+    focus_distance: f32,
+    seed: u64,
+    width: u32,
+    height: u32,
 }
+
+impl CameraSampler {
+    pub fn new(scene: &Scene, settings: &RenderSettings) -> CameraSampler {
+        let camera = scene.camera();
+        let spp = settings.num_antialias_samples.max(1);
+        CameraSampler {
+            view: camera.view(),
+            pixel_strata: Strata::new(Pattern::Jittered, spp),
+            spp,
+            aperture: settings.aperture,
+            focus_distance: settings
+                .focus_distance
+                .unwrap_or_else(|| camera.focus_distance()),
+            seed: settings.seed,
+            width: settings.width,
+            height: settings.height,
+        }
+    }
+
+    /// Camera ray `k` of pixel (i, j) (j from the bottom) and the generator that the rest of
+    /// its path draws from: both depend only on (seed, pixel, sample).
+    #[inline]
+    pub fn sample(&self, (i, j): (u32, u32), k: u32) -> (Ray, Rng) {
+        let (w, h) = (self.width, self.height);
+        let mut rng = Rng::new(self.seed, j as u64 * w as u64 + i as u64, k as u64);
+        let (dx, dy) = if self.spp == 1 {
+            (0.5, 0.5)
+        } else {
+            self.pixel_strata.sample(k, &mut rng)
+        };
+        let screen = Camera::screen_point(i, j, dx, dy, w, h);
+        let lens = (rng.next_f32(), rng.next_f32());
+        let ray = self
+            .view
+            .lens_ray(screen, self.aperture, self.focus_distance, lens);
+        (ray, rng)
+    }
+}
+
+/// Camera samples traced as one batch (a row is cut into chunks of about this many).
+pub const CHUNK_SAMPLES: usize = 4096;
 
 /// The pixel loop every sampling engine shares: rows in parallel, the camera rays of a row
 /// traced as one batch, `-num_antialias_samples` per pixel averaged with a box filter, and
 /// samples that come out NaN or infinite left out and counted. `radiance` gives the radiance
 /// along a camera ray from its closest hit.
-/// Camera samples traced as one batch (a row is cut into chunks of about this many).
-pub const CHUNK_SAMPLES: usize = 4096;
-
 pub(crate) fn render_pixels(
     scene: &Scene,
     accel: &dyn Accel,
@@ -284,10 +313,7 @@ pub(crate) fn render_pixels(
     radiance: impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, &mut Counts) -> Color + Sync,
 ) -> (Film, RenderStats) {
     let (w, h) = (settings.width, settings.height);
-    let camera = scene.camera();
-    let focus = settings
-        .focus_distance
-        .unwrap_or_else(|| camera.focus_distance());
+    let camera = CameraSampler::new(scene, settings);
     let spp = settings.num_antialias_samples.max(1) as usize;
     let stats = RenderStats::default();
     let mut film = Film::new(w, h);
@@ -311,7 +337,7 @@ pub(crate) fn render_pixels(
                 let mut rays = Vec::with_capacity(pixels.len() * spp);
                 for i in first..first + pixels.len() as u32 {
                     for k in 0..spp as u32 {
-                        let (ray, rng) = camera_sample(&camera, settings, focus, (i, j), k);
+                        let (ray, rng) = camera.sample((i, j), k);
                         rays.push(ray);
                         rngs.push(rng);
                     }

@@ -13,7 +13,7 @@ use crate::scene::{Camera, Scene};
 /// Renders the MATERIALS view; camera rays of each row go to the Accel as one batch.
 pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> Film {
     let (w, h) = (settings.width, settings.height);
-    let camera = scene.camera();
+    let view = scene.camera().view();
     let mut film = Film::new(w, h);
     let bar = crate::progress::bar(h as u64, "raycast", settings.quiet);
     film.pixels
@@ -24,7 +24,7 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> Fi
             let rays: Vec<Ray> = (0..w)
                 .map(|i| {
                     let (x, y) = Camera::screen_point(i, j, 0.5, 0.5, w, h);
-                    camera.generate_ray(x, y)
+                    view.ray(x, y)
                 })
                 .collect();
             let mut hits = vec![None; rays.len()];

@@ -8,14 +8,14 @@
 //! constant `-ambient_light`, or the radiosity solution's indirect light (`--indirect
 //! radiosity`).
 
-use super::lights::{Light, LightPoint};
+use super::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
 use super::optics::{fresnel_dielectric, glossy_reflection, reflect, refract};
 use super::photon::{IrradianceCache, PhotonMaps};
 use super::radiosity::{PatchField, Solution};
-use super::{camera_sample, render_pixels, Counts, RenderSettings, RenderStats};
+use super::{render_pixels, CameraSampler, Counts, RenderSettings, RenderStats};
 use crate::accel::Accel;
 use crate::film::Film;
-use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
+use crate::geometry::{offset_ray_origin, shadow_ray, vec3, Ray, Vec3};
 use crate::sampling::{Rng, Strata};
 use crate::scene::{Color, Scene, SurfaceHit};
 
@@ -208,50 +208,74 @@ impl Tracer<'_> {
     /// reflected radiance. `n`: the normal on the side being lit.
     fn direct(&self, s: &SurfaceHit, n: Vec3, rng: &mut Rng, counts: &mut Counts) -> Color {
         let samples = self.settings.num_shadow_samples;
-        let mut total = Vec3::ZERO;
+        let count = samples.max(1) as usize;
+        let strata = Strata::new(self.settings.light_sampling, samples);
         // Every shadow ray leaves on the lit side (n · dir > 0): one offset origin serves all.
         let origin = offset_ray_origin(s.point, n, s.error);
+        counts
+            .shadow_rays
+            .resize(count, shadow_ray(origin, s.point));
+        counts.shadow_weights.resize(count, 0.0);
+        counts.blocked.resize(count, false);
+        let mut total = Vec3::ZERO;
         for light in &self.lights {
             if light.prim == s.prim {
                 continue;
             }
-            let count = samples.max(1);
-            let strata = Strata::new(self.settings.light_sampling, samples);
             let per_sample = light.area / count as f32 / std::f32::consts::PI;
-            counts.shadow_rays.clear();
-            counts.shadow_weights.clear();
-            // The centre and the sampled points take separate loops: choosing the point by a
-            // branch inside one loop made the compiler merge the two through memory in a way
-            // that stalled every shadow ray (perf: a fifth of the time spent in `shade`).
-            if samples <= 1 {
-                let p = light.centre(s.point);
-                if let Some(g) = geometric_term(s.point, n, &p) {
-                    if samples == 0 {
-                        total += light.emitted * (g * per_sample);
-                    } else {
-                        self.queue_shadow_ray(origin, p.point, g * per_sample, counts);
-                    }
+            if samples == 0 {
+                if let Some(g) = geometric_term(s.point, n, &light.centre(s.point)) {
+                    total += light.emitted * (g * per_sample);
                 }
+                continue;
+            }
+            let mut batch = ShadowBatch {
+                x: s.point,
+                n,
+                origin,
+                per_sample,
+                rays: &mut counts.shadow_rays[..count],
+                weights: &mut counts.shadow_weights[..count],
+                len: 0,
+                tree: self.tree.as_ref(),
+            };
+            if samples == 1 {
+                batch.push(light.centre(s.point));
             } else {
-                for k in 0..count {
-                    let (u, v) = strata.sample(k, rng);
-                    let p = light.sample(u, v);
-                    if let Some(g) = geometric_term(s.point, n, &p) {
-                        self.queue_shadow_ray(origin, p.point, g * per_sample, counts);
+                // Quad lights (the common case) take their own loop with the parallelogram
+                // copied out of the light, held in registers: read through `light` the normal
+                // was re-read for every ray, and the read stalled on store forwarding (perf:
+                // a fifth of `shade`).
+                match light.shape {
+                    LightShape::Parallelogram(quad) => {
+                        let mut samples = strata.samples(rng);
+                        let (mut u, mut v) = ([0.0; LANES], [0.0; LANES]);
+                        let mut left = count;
+                        while left > 0 {
+                            let m = left.min(LANES);
+                            for (i, (ui, vi)) in samples.by_ref().take(m).enumerate() {
+                                (u[i], v[i]) = (ui, vi);
+                            }
+                            batch.push_block(&quad.sample_block(&u, &v), quad.normal(), m);
+                            left -= m;
+                        }
+                    }
+                    _ => {
+                        for (u, v) in strata.samples(rng) {
+                            batch.push(light.sample(u, v));
+                        }
                     }
                 }
             }
-            let n_rays = counts.shadow_rays.len();
+            let n_rays = batch.len;
             if n_rays > 0 {
-                counts.blocked.clear();
-                counts.blocked.resize(n_rays, false);
+                let blocked = &mut counts.blocked[..n_rays];
                 self.accel
-                    .occluded_batch(&counts.shadow_rays, &mut counts.blocked);
+                    .occluded_batch(&counts.shadow_rays[..n_rays], blocked);
                 counts.shadow += n_rays as u64;
-                let visible: f32 = counts
-                    .shadow_weights
+                let visible: f32 = counts.shadow_weights[..n_rays]
                     .iter()
-                    .zip(&counts.blocked)
+                    .zip(blocked.iter())
                     .filter(|(_, &b)| !b)
                     .map(|(w, _)| w)
                     .sum();
@@ -260,23 +284,76 @@ impl Tracer<'_> {
         }
         total
     }
+}
 
-    /// Adds the shadow ray from `origin` to the light point `to`, carrying the unoccluded
-    /// contribution `weight`, to the batch traced once per light.
+/// The shadow rays from one surface point to one light, gathered to be traced as one batch.
+/// Written into slices rather than pushed onto vectors: a vector's length and buffer, which
+/// the stored rays might overwrite as far as the compiler knows, were re-read for every ray.
+struct ShadowBatch<'a> {
+    /// The surface point and its unit normal on the lit side.
+    x: Vec3,
+    n: Vec3,
+    /// Where every ray starts: `x` moved off the surface on the lit side.
+    origin: Vec3,
+    /// Each ray's share of the light's contribution: area / (N·π).
+    per_sample: f32,
+    rays: &'a mut [Ray],
+    /// The unoccluded contribution of each ray (geometric term × `per_sample`).
+    weights: &'a mut [f32],
+    /// Rays gathered so far.
+    len: usize,
+    /// The ray tree being recorded (`--ray-tree`), None while rendering.
+    tree: Option<&'a std::sync::Mutex<Vec<Segment>>>,
+}
+
+impl ShadowBatch<'_> {
+    /// Adds the ray to the light point `p`, unless either side faces away.
     #[inline(always)]
-    fn queue_shadow_ray(&self, origin: Vec3, to: Vec3, weight: f32, counts: &mut Counts) {
-        let shadow = shadow_ray(origin, to);
-        if let Some(tree) = &self.tree {
+    fn push(&mut self, p: LightPoint) {
+        if let Some(g) = geometric_term(self.x, self.n, &p) {
+            self.add(p.point, g);
+        }
+    }
+
+    /// `push` for the first `m` points of a block on a one-sided planar light of unit normal
+    /// `normal`: the geometric terms lane by lane (vector instructions, the same arithmetic
+    /// as `geometric_term`), then the rays of the lanes that face each other.
+    #[inline(always)]
+    fn push_block(&mut self, p: &PointBlock, normal: Vec3, m: usize) {
+        let (x, n) = (self.x, self.n);
+        let mut g = [0.0f32; LANES];
+        let mut facing = [false; LANES];
+        for i in 0..LANES {
+            let (wx, wy, wz) = (p.x[i] - x.x, p.y[i] - x.y, p.z[i] - x.z);
+            let r2 = wx * wx + wy * wy + wz * wz;
+            let along_surface = n.x * wx + n.y * wy + n.z * wz;
+            let along_light = -(normal.x * wx + normal.y * wy + normal.z * wz);
+            facing[i] = r2 > 0.0 && along_surface > 0.0 && along_light > 0.0;
+            g[i] = along_surface * along_light / (r2 * r2);
+        }
+        for i in 0..m {
+            if facing[i] {
+                self.add(vec3(p.x[i], p.y[i], p.z[i]), g[i]);
+            }
+        }
+    }
+
+    /// Adds the ray to `point`, of geometric term `g`.
+    #[inline(always)]
+    fn add(&mut self, point: Vec3, g: f32) {
+        let ray = shadow_ray(self.origin, point);
+        if let Some(tree) = self.tree {
             if let Ok(mut t) = tree.lock() {
                 t.push(Segment {
-                    from: shadow.origin,
-                    to,
+                    from: ray.origin,
+                    to: point,
                     kind: SegmentKind::Shadow,
                 });
             }
         }
-        counts.shadow_rays.push(shadow);
-        counts.shadow_weights.push(weight);
+        self.rays[self.len] = ray;
+        self.weights[self.len] = g * self.per_sample;
+        self.len += 1;
     }
 }
 
@@ -353,14 +430,11 @@ pub fn ray_tree(
         lights: Light::collect(scene),
         tree: Some(std::sync::Mutex::new(Vec::new())),
     };
-    let camera = scene.camera();
-    let focus = settings
-        .focus_distance
-        .unwrap_or_else(|| camera.focus_distance());
+    let camera = CameraSampler::new(scene, settings);
     let spp = settings.num_antialias_samples.max(1);
     let mut counts = Counts::default();
     for k in 0..spp {
-        let (ray, mut rng) = camera_sample(&camera, settings, focus, (x, y), k);
+        let (ray, mut rng) = camera.sample((x, y), k);
         let hit = crate::accel::closest_surface(accel, scene, &ray);
         tracer.record(&ray, hit.as_ref(), SegmentKind::Eye);
         tracer.shade(&ray, hit, 0, 1.0, &mut rng, &mut counts);

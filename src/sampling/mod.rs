@@ -41,9 +41,12 @@ impl Rng {
     /// Uniform in [0, 1).
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+        (self.next_u64() >> 40) as f32 * UNIT_24
     }
 }
+
+/// 2^-24: a 24-bit integer times this is a float in [0, 1) with every bit exact.
+const UNIT_24: f32 = 1.0 / (1u64 << 24) as f32;
 
 /// How points on a light (or in a pixel) are placed (`--light-sampling`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -60,11 +63,15 @@ pub enum Pattern {
 /// `n` samples in [0,1)² placed by a pattern over a grid of strata: √n × √n when n is a
 /// square, else n × 1 (n strata along the first axis, which callers align with the longer
 /// edge).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Strata {
     pattern: Pattern,
     nx: u32,
     ny: u32,
+    /// 1/nx and 1/ny: a stratum's size, multiplied rather than divided by (a divide per
+    /// sample was a good part of the shadow-ray loop's time).
+    dx: f32,
+    dy: f32,
 }
 
 impl Strata {
@@ -72,20 +79,47 @@ impl Strata {
         let n = n.max(1);
         let r = (n as f64).sqrt().round() as u32;
         let (nx, ny) = if r * r == n { (r, r) } else { (n, 1) };
-        Strata { pattern, nx, ny }
+        Strata {
+            pattern,
+            nx,
+            ny,
+            dx: 1.0 / nx as f32,
+            dy: 1.0 / ny as f32,
+        }
     }
 
     /// Sample `k` (of the n the grid was made for).
     #[inline]
     pub fn sample(&self, k: u32, rng: &mut Rng) -> (f32, f32) {
-        let (nx, ny) = (self.nx, self.ny);
-        let (ix, iy) = (k % nx, k / nx);
+        self.in_cell(k % self.nx, k / self.nx, rng)
+    }
+
+    /// All n samples in order (sample k is the k-th), without the division that finds
+    /// sample k's stratum.
+    pub fn samples<'a>(&'a self, rng: &'a mut Rng) -> impl Iterator<Item = (f32, f32)> + 'a {
+        let mut cell = (0, 0);
+        std::iter::from_fn(move || {
+            let (ix, iy) = cell;
+            if iy == self.ny {
+                return None;
+            }
+            cell = if ix + 1 == self.nx {
+                (0, iy + 1)
+            } else {
+                (ix + 1, iy)
+            };
+            Some(self.in_cell(ix, iy, rng))
+        })
+    }
+
+    #[inline(always)]
+    fn in_cell(&self, ix: u32, iy: u32, rng: &mut Rng) -> (f32, f32) {
         match self.pattern {
             Pattern::Random => (rng.next_f32(), rng.next_f32()),
-            Pattern::Stratified => ((ix as f32 + 0.5) / nx as f32, (iy as f32 + 0.5) / ny as f32),
+            Pattern::Stratified => ((ix as f32 + 0.5) * self.dx, (iy as f32 + 0.5) * self.dy),
             Pattern::Jittered => (
-                (ix as f32 + rng.next_f32()) / nx as f32,
-                (iy as f32 + rng.next_f32()) / ny as f32,
+                (ix as f32 + rng.next_f32()) * self.dx,
+                (iy as f32 + rng.next_f32()) * self.dy,
             ),
         }
     }
@@ -106,4 +140,33 @@ pub fn sample_disk(u: f32, v: f32) -> (f32, f32) {
         )
     };
     (r * phi.cos(), r * phi.sin())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `samples` gives exactly what `sample(k)` gives for k = 0, 1, ..., with one point in
+    /// each stratum for the jittered pattern.
+    #[test]
+    fn strata_iterator_matches_indexed_samples() {
+        for n in [1, 4, 9, 10, 16] {
+            let strata = Strata::new(Pattern::Jittered, n);
+            let (mut a, mut b) = (Rng::new(3, n as u64, 0), Rng::new(3, n as u64, 0));
+            let all: Vec<(f32, f32)> = strata.samples(&mut a).collect();
+            assert_eq!(all.len(), n as usize);
+            let mut cells: Vec<(u32, u32)> = Vec::new();
+            for (k, &(u, v)) in all.iter().enumerate() {
+                assert_eq!((u, v), strata.sample(k as u32, &mut b));
+                cells.push(((u * strata.nx as f32) as u32, (v * strata.ny as f32) as u32));
+            }
+            cells.sort_unstable();
+            cells.dedup();
+            assert_eq!(
+                cells.len(),
+                n as usize,
+                "one sample per stratum for n = {n}"
+            );
+        }
+    }
 }

@@ -39,56 +39,29 @@ impl Camera {
         }
     }
 
-    /// Orthonormal frame: (forward, horizontal, up).
-    fn frame(&self) -> (Vec3, Vec3, Vec3) {
+    /// The camera's frame and screen worked out once, for generating many rays.
+    pub fn view(&self) -> View {
         let forward = (self.point_of_interest - self.position).normalized();
         let horizontal = forward.cross(self.up).normalized();
         let up = horizontal.cross(forward);
-        (forward, horizontal, up)
+        let (perspective, side) = match self.projection {
+            Projection::Perspective { angle } => (true, 2.0 * (angle * 0.5).tan()),
+            Projection::Orthographic { size } => (false, size),
+        };
+        View {
+            position: self.position,
+            forward,
+            horizontal,
+            up,
+            perspective,
+            side,
+        }
     }
 
-    /// The ray through screen point (x, y) in [0,1]², (0,0) bottom left.
+    /// The ray through screen point (x, y) in [0,1]², (0,0) bottom left. For many rays,
+    /// `view()` once and `View::ray`.
     pub fn generate_ray(&self, x: f32, y: f32) -> Ray {
-        let (forward, horizontal, up) = self.frame();
-        match self.projection {
-            Projection::Perspective { angle } => {
-                let side = 2.0 * (angle * 0.5).tan();
-                let dir = forward + horizontal * ((x - 0.5) * side) + up * ((y - 0.5) * side);
-                Ray::new(self.position, dir.normalized())
-            }
-            Projection::Orthographic { size } => {
-                let origin =
-                    self.position + horizontal * ((x - 0.5) * size) + up * ((y - 0.5) * size);
-                Ray::new(origin, forward)
-            }
-        }
-    }
-
-    /// The ray through screen point (x, y) of a thin lens: `aperture` is the lens radius,
-    /// `focus_distance` the distance (along the view direction) of the plane in focus, and
-    /// (lens_u, lens_v) in [0,1)² picks the point on the lens. Aperture 0 is the pinhole.
-    pub fn lens_ray(
-        &self,
-        x: f32,
-        y: f32,
-        aperture: f32,
-        focus_distance: f32,
-        lens_u: f32,
-        lens_v: f32,
-    ) -> Ray {
-        let ray = self.generate_ray(x, y);
-        if aperture <= 0.0 {
-            return ray;
-        }
-        let (forward, horizontal, up) = self.frame();
-        let along = ray.direction.dot(forward);
-        if along <= 0.0 {
-            return ray;
-        }
-        let focus = ray.at(focus_distance / along);
-        let (dx, dy) = crate::sampling::sample_disk(lens_u, lens_v);
-        let origin = ray.origin + horizontal * (dx * aperture) + up * (dy * aperture);
-        Ray::new(origin, (focus - origin).normalized())
+        self.view().ray(x, y)
     }
 
     /// Distance from the camera to its point of interest: the default focus distance.
@@ -107,23 +80,80 @@ impl Camera {
 
     /// Projects a world point to screen coordinates in [0,1]² (None when behind the camera).
     pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
-        let (forward, horizontal, up) = self.frame();
-        let d = p - self.position;
-        match self.projection {
-            Projection::Perspective { angle } => {
-                let z = d.dot(forward);
-                if z <= 0.0 {
-                    return None;
-                }
-                let side = 2.0 * (angle * 0.5).tan();
-                Some((
-                    d.dot(horizontal) / z / side + 0.5,
-                    d.dot(up) / z / side + 0.5,
-                ))
-            }
-            Projection::Orthographic { size } => {
-                Some((d.dot(horizontal) / size + 0.5, d.dot(up) / size + 0.5))
-            }
+        self.view().project(p)
+    }
+}
+
+/// A camera's orthonormal frame and screen size, computed once per image rather than per ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    position: Vec3,
+    forward: Vec3,
+    horizontal: Vec3,
+    up: Vec3,
+    perspective: bool,
+    /// The screen's side: at distance 1 in front of a perspective camera (2·tan(angle/2)),
+    /// in scene units for an orthographic one.
+    side: f32,
+}
+
+impl View {
+    /// The ray through screen point (x, y) in [0,1]², (0,0) bottom left.
+    #[inline]
+    pub fn ray(&self, x: f32, y: f32) -> Ray {
+        let (h, v) = ((x - 0.5) * self.side, (y - 0.5) * self.side);
+        if self.perspective {
+            let dir = self.forward + self.horizontal * h + self.up * v;
+            Ray::new(self.position, dir.normalized())
+        } else {
+            Ray::new(
+                self.position + self.horizontal * h + self.up * v,
+                self.forward,
+            )
         }
+    }
+
+    /// The ray through screen point (x, y) of a thin lens: `aperture` is the lens radius,
+    /// `focus_distance` the distance (along the view direction) of the plane in focus, and
+    /// (lens_u, lens_v) in [0,1)² picks the point on the lens. Aperture 0 is the pinhole.
+    #[inline]
+    pub fn lens_ray(
+        &self,
+        (x, y): (f32, f32),
+        aperture: f32,
+        focus_distance: f32,
+        (lens_u, lens_v): (f32, f32),
+    ) -> Ray {
+        let ray = self.ray(x, y);
+        if aperture <= 0.0 {
+            return ray;
+        }
+        let along = ray.direction.dot(self.forward);
+        if along <= 0.0 {
+            return ray;
+        }
+        let focus = ray.at(focus_distance / along);
+        let (dx, dy) = crate::sampling::sample_disk(lens_u, lens_v);
+        let origin = ray.origin + self.horizontal * (dx * aperture) + self.up * (dy * aperture);
+        Ray::new(origin, (focus - origin).normalized())
+    }
+
+    /// Projects a world point to screen coordinates in [0,1]² (None when behind the camera).
+    pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
+        let d = p - self.position;
+        if !self.perspective {
+            return Some((
+                d.dot(self.horizontal) / self.side + 0.5,
+                d.dot(self.up) / self.side + 0.5,
+            ));
+        }
+        let z = d.dot(self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        Some((
+            d.dot(self.horizontal) / z / self.side + 0.5,
+            d.dot(self.up) / z / self.side + 0.5,
+        ))
     }
 }

@@ -10,7 +10,7 @@ pub mod texture;
 
 use std::path::{Path, PathBuf};
 
-pub use camera::{Camera, Projection};
+pub use camera::{Camera, Projection, View};
 pub use error::SceneError;
 pub use surface::{bilinear, PrimHit, QuadNeighbours, SurfaceHit};
 pub use texture::Texture;

@@ -58,11 +58,9 @@ pub fn final_gather(
     rng: &mut Rng,
 ) -> (Color, f32) {
     let strata = Strata::new(Pattern::Jittered, count);
-    let rays: Vec<Ray> = (0..count)
-        .map(|k| {
-            let (u, v) = strata.sample(k, rng);
-            spawn_ray(x, n, error, sample_lobe(n, 1.0, u, v))
-        })
+    let rays: Vec<Ray> = strata
+        .samples(rng)
+        .map(|(u, v)| spawn_ray(x, n, error, sample_lobe(n, 1.0, u, v)))
         .collect();
     let mut hits = vec![None; rays.len()];
     accel.intersect_batch(&rays, &mut hits);
@@ -99,7 +97,7 @@ impl IrradianceCache {
         let p = &settings.photon;
         let spacing = p.irradiance_cache_spacing.max(1);
         let (w, h) = (settings.width, settings.height);
-        let camera = scene.camera();
+        let view = scene.camera().view();
         let extent = scene.bounds().extent().length();
         let pixels: Vec<(u32, u32)> = (0..h)
             .step_by(spacing as usize)
@@ -112,7 +110,7 @@ impl IrradianceCache {
             .filter_map(|&(i, j)| {
                 bar.inc(1);
                 let (sx, sy) = Camera::screen_point(i, j, 0.5, 0.5, w, h);
-                let ray = camera.generate_ray(sx, sy);
+                let ray = view.ray(sx, sy);
                 let s = crate::accel::closest_surface(accel, scene, &ray)?;
                 if scene.albedo(&s).max_elem() <= 0.0 {
                     return None;

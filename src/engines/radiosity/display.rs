@@ -149,7 +149,7 @@ fn patch_ids(
     solution: &Solution,
 ) -> Vec<u32> {
     let (w, h) = (settings.width, settings.height);
-    let camera = scene.camera();
+    let view = scene.camera().view();
     let mut ids = vec![NONE; w as usize * h as usize];
     ids.par_chunks_mut(w as usize)
         .enumerate()
@@ -157,7 +157,7 @@ fn patch_ids(
             let j = h - 1 - row as u32;
             for (i, id) in out.iter_mut().enumerate() {
                 let (x, y) = Camera::screen_point(i as u32, j, 0.5, 0.5, w, h);
-                let ray = camera.generate_ray(x, y);
+                let ray = view.ray(x, y);
                 if let Some(s) = crate::accel::closest_surface(accel, scene, &ray) {
                     if let Some((k, _, _)) = solution.locate(scene, &s) {
                         *id = k as u32;
