@@ -160,6 +160,24 @@ impl RaySet {
     }
 }
 
+impl Query {
+    fn name(self) -> &'static str {
+        match self {
+            Query::Closest => "closest",
+            Query::Occluded => "occluded",
+        }
+    }
+}
+
+impl Mode {
+    fn name(self) -> &'static str {
+        match self {
+            Mode::Single => "single",
+            Mode::Batched => "batched",
+        }
+    }
+}
+
 /// Traces `rays` once through the API; returns the number of hits (so nothing is optimised
 /// away).
 pub fn trace(accel: &dyn Accel, rays: &[Ray], query: Query, mode: Mode, parallel: bool) -> usize {
@@ -263,11 +281,8 @@ pub fn bench_accel(
         let accel = built.expect("built at least once")?;
         builds.push((kind.to_string(), build_s));
         for (set_name, closest_rays, occl_rays) in &sets {
-            for (query, qname, rays) in [
-                (Query::Closest, "closest", closest_rays),
-                (Query::Occluded, "occluded", occl_rays),
-            ] {
-                for (mode, mname) in [(Mode::Single, "single"), (Mode::Batched, "batched")] {
+            for (query, rays) in [(Query::Closest, closest_rays), (Query::Occluded, occl_rays)] {
+                for mode in [Mode::Single, Mode::Batched] {
                     if !chosen(query, mode) {
                         continue;
                     }
@@ -284,8 +299,8 @@ pub fn bench_accel(
                         rows.push(Row {
                             backend: kind.to_string(),
                             rays: set_name,
-                            query: qname,
-                            mode: mname,
+                            query: query.name(),
+                            mode: mode.name(),
                             threads: t,
                             mrays_per_s: rays.len() as f64 / s / 1e6,
                         });
@@ -298,29 +313,29 @@ pub fn bench_accel(
             use crate::accel::embree::{Baseline, EmbreeAccel};
             let e = EmbreeAccel::build(scene, options)?;
             for (set_name, closest_rays, occl_rays) in &sets {
-                for (b, (query, qname), (mode, mname), rays) in [
+                for (b, query, mode, rays) in [
                     (
                         Baseline::Intersect1,
-                        (Query::Closest, "closest"),
-                        (Mode::Single, "single"),
+                        Query::Closest,
+                        Mode::Single,
                         closest_rays,
                     ),
                     (
                         Baseline::Occluded1,
-                        (Query::Occluded, "occluded"),
-                        (Mode::Single, "single"),
+                        Query::Occluded,
+                        Mode::Single,
                         occl_rays,
                     ),
                     (
                         Baseline::Intersect8,
-                        (Query::Closest, "closest"),
-                        (Mode::Batched, "batched"),
+                        Query::Closest,
+                        Mode::Batched,
                         closest_rays,
                     ),
                     (
                         Baseline::Occluded8,
-                        (Query::Occluded, "occluded"),
-                        (Mode::Batched, "batched"),
+                        Query::Occluded,
+                        Mode::Batched,
                         occl_rays,
                     ),
                 ] {
@@ -333,8 +348,8 @@ pub fn bench_accel(
                     rows.push(Row {
                         backend: "embree C loop".into(),
                         rays: set_name,
-                        query: qname,
-                        mode: mname,
+                        query: query.name(),
+                        mode: mode.name(),
                         threads: 1,
                         mrays_per_s: rays.len() as f64 / s / 1e6,
                     });

@@ -796,3 +796,46 @@ fn report_writes_csv_plot_and_summary_with_the_path_tracers_slope() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `bench-accel --sets/--queries/--modes` measures exactly the cells asked for, on every
+/// backend built, with the C baseline rows of the same cells for Embree; the figures are
+/// positive rates.
+#[test]
+fn bench_accel_measures_only_the_cells_asked_for() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_box_diffuse_sphere.obj");
+    let out = render(
+        Path::new(env!("CARGO_MANIFEST_DIR")),
+        &[
+            "bench-accel",
+            scene.to_str().expect("UTF-8 path"),
+            "--sets",
+            "shadow",
+            "--queries",
+            "occluded",
+            "--modes",
+            "batched",
+            "--rays",
+            "20000",
+            "--repeats",
+            "1",
+            "--threads",
+            "2",
+        ],
+    );
+    let table = ok(&out);
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .filter(|l| {
+            l.matches('|').count() == 7 && !l.starts_with("| backend") && !l.starts_with("|---")
+        })
+        .map(|l| l.trim_matches('|').split('|').map(str::trim).collect())
+        .collect();
+    // One row per thread count per backend, one C-loop row for Embree.
+    let expected = 2 * backends().len() + usize::from(cfg!(feature = "embree"));
+    assert_eq!(rows.len(), expected, "{table}");
+    for row in &rows {
+        assert_eq!(&row[1..4], ["shadow", "occluded", "batched"], "{table}");
+        let rate: f64 = row[5].parse().expect("a rate");
+        assert!(rate > 0.0, "{table}");
+    }
+}
