@@ -4,6 +4,18 @@
 use crate::geometry::{vec3, RingPart, RingShape, SphereShape, Vec3};
 use crate::scene::{Color, PrimKind, PrimRef, Scene};
 
+/// Points on a light, a block at a time, as a structure of arrays: the loops over a block's
+/// lanes compile to vector instructions.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointBlock {
+    pub x: [f32; LANES],
+    pub y: [f32; LANES],
+    pub z: [f32; LANES],
+}
+
+/// Points in a `PointBlock`.
+pub const LANES: usize = 8;
+
 /// A planar parallelogram `origin + u·edge_u + v·edge_v`, emitting on its front side; the
 /// first sampling axis runs along the longer edge (`swap_axes`: that is `edge_v`), for N×1
 /// strata.
@@ -27,21 +39,7 @@ impl Parallelogram {
             one_sided: true,
         }
     }
-}
 
-/// Points on a light, a block at a time, as a structure of arrays: the loops over a block's
-/// lanes compile to vector instructions.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PointBlock {
-    pub x: [f32; LANES],
-    pub y: [f32; LANES],
-    pub z: [f32; LANES],
-}
-
-/// Points in a `PointBlock`.
-pub const LANES: usize = 8;
-
-impl Parallelogram {
     /// The points `sample` gives for (u[i], v[i]), lane by lane (the same arithmetic, so
     /// the same bits).
     #[inline(always)]

@@ -444,3 +444,69 @@ pub fn ray_tree(
         .and_then(|t| t.into_inner().ok())
         .unwrap_or_default()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::vec3;
+
+    /// The block path gives the same rays and weights, bit for bit, as point-by-point
+    /// `push` (the per-point path every other light takes), including the points that face
+    /// away and are left out: a 2×0.5 light, tilted, above surface points on every side of it.
+    #[test]
+    fn block_of_light_samples_matches_point_by_point() {
+        let text = "material\ndiffuse 0 0 0\nemitted 1 1 1\n\
+                    m 0\nv -1 1 0.2\nv -1 1.3 -0.3\nv 1 1.3 -0.3\nv 1 1 0.2\nf 1 2 3 4\n";
+        let scene = Scene::parse_dialect(std::path::Path::new("t.obj"), text).expect("parses");
+        let light = Light::collect(&scene)[0];
+        let LightShape::Parallelogram(quad) = light.shape else {
+            panic!("a quad light");
+        };
+        let mut rng = Rng::new(11, 0, 0);
+        let (mut kept, mut tried) = (0, 0);
+        for _ in 0..200 {
+            let x = vec3(
+                4.0 * rng.next_f32() - 2.0,
+                2.0 * rng.next_f32(),
+                4.0 * rng.next_f32() - 2.0,
+            );
+            let n = vec3(rng.next_f32() - 0.5, 1.0, rng.next_f32() - 0.5).normalized();
+            let (u, v): ([f32; LANES], [f32; LANES]) = (
+                std::array::from_fn(|_| rng.next_f32()),
+                std::array::from_fn(|_| rng.next_f32()),
+            );
+            for m in [LANES, 3] {
+                let mut rays = [[shadow_ray(x, x); LANES]; 2];
+                let mut weights = [[0.0f32; LANES]; 2];
+                let [rays_a, rays_b] = &mut rays;
+                let [weights_a, weights_b] = &mut weights;
+                let batch = |rays, weights| ShadowBatch {
+                    x,
+                    n,
+                    origin: x + n * 1e-3,
+                    per_sample: 0.25,
+                    rays,
+                    weights,
+                    len: 0,
+                    tree: None,
+                };
+                let mut one_by_one = batch(&mut rays_a[..], &mut weights_a[..]);
+                for i in 0..m {
+                    one_by_one.push(quad.sample(u[i], v[i]));
+                }
+                let mut block = batch(&mut rays_b[..], &mut weights_b[..]);
+                block.push_block(&quad.sample_block(&u, &v), quad.normal(), m);
+                assert_eq!(one_by_one.len, block.len);
+                let len = block.len;
+                (kept, tried) = (kept + len, tried + m);
+                assert_eq!(rays_a[..len], rays_b[..len]);
+                assert_eq!(weights_a[..len], weights_b[..len]);
+            }
+        }
+        // Both kinds of point occur: rays kept and rays left out.
+        assert!(
+            kept > tried / 10 && kept < tried * 9 / 10,
+            "{kept} of {tried}"
+        );
+    }
+}
