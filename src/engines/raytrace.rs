@@ -101,6 +101,8 @@ struct Tracer<'a> {
     accel: &'a dyn Accel,
     settings: &'a RenderSettings,
     lights: Vec<Light>,
+    /// Where the N points on each light go (`--light-sampling`, `-num_shadow_samples`).
+    light_strata: Strata,
     /// The rays traced, when recording a ray tree (`--ray-tree`); None while rendering.
     tree: Option<std::sync::Mutex<Vec<Segment>>>,
 }
@@ -209,7 +211,6 @@ impl Tracer<'_> {
     fn direct(&self, s: &SurfaceHit, n: Vec3, rng: &mut Rng, counts: &mut Counts) -> Color {
         let samples = self.settings.num_shadow_samples;
         let count = samples.max(1) as usize;
-        let strata = Strata::new(self.settings.light_sampling, samples);
         // Every shadow ray leaves on the lit side (n · dir > 0): one offset origin serves all.
         let origin = offset_ray_origin(s.point, n, s.error);
         counts
@@ -248,7 +249,7 @@ impl Tracer<'_> {
                 // a fifth of `shade`).
                 match light.shape {
                     LightShape::Parallelogram(quad) => {
-                        let mut samples = strata.samples(rng);
+                        let mut samples = self.light_strata.samples(rng);
                         let (mut u, mut v) = ([0.0; LANES], [0.0; LANES]);
                         let mut left = count;
                         while left > 0 {
@@ -261,7 +262,7 @@ impl Tracer<'_> {
                         }
                     }
                     _ => {
-                        for (u, v) in strata.samples(rng) {
+                        for (u, v) in self.light_strata.samples(rng) {
                             batch.push(light.sample(u, v));
                         }
                     }
@@ -401,6 +402,7 @@ pub fn render_with(
         accel,
         settings,
         lights: Light::collect(scene),
+        light_strata: Strata::new(settings.light_sampling, settings.num_shadow_samples),
         tree: None,
     };
     render_pixels(
@@ -428,6 +430,7 @@ pub fn ray_tree(
         accel,
         settings,
         lights: Light::collect(scene),
+        light_strata: Strata::new(settings.light_sampling, settings.num_shadow_samples),
         tree: Some(std::sync::Mutex::new(Vec::new())),
     };
     let camera = CameraSampler::new(scene, settings);
