@@ -153,7 +153,7 @@ struct ReportArgs {
     /// Image width and height.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [96, 96])]
     size: Vec<u32>,
-    /// Seeds per budget; errors and times are averaged over them.
+    /// Seeds per budget; errors are averaged over them, a budget's time is the fastest seed's.
     #[arg(long, default_value_t = 2)]
     seeds: u32,
     /// Wall-time limit of the whole report in seconds, reference render included.
