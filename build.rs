@@ -30,8 +30,10 @@ mod embree {
         println!("cargo:rerun-if-changed=sys/shim.c");
         println!("cargo:rerun-if-changed=sys/shim.h");
 
-        let found = from_pkg_config()
-            .or_else(from_env)
+        // Variables the user set on purpose come first: pkg-config would otherwise always find
+        // the system's Embree 3 and an Embree 4 elsewhere could never be chosen.
+        let found = from_env()
+            .or_else(from_pkg_config)
             .or_else(from_system_paths)
             .unwrap_or_else(|| {
                 panic!(
@@ -116,7 +118,13 @@ mod embree {
         let lib = env::var_os("EMBREE_LIB_DIR")
             .map(PathBuf::from)
             .or_else(|| dir.as_ref().map(|d| d.join("lib")));
-        let major = header_major(&include)?;
+        let major = header_major(&include).unwrap_or_else(|| {
+            panic!(
+                "\n\ntrilux: EMBREE_DIR / EMBREE_INCLUDE_DIR point at {}, which holds neither \
+                 embree4/rtcore.h nor embree3/rtcore.h\n\n",
+                include.display()
+            )
+        });
         Some(Found {
             major,
             include_dirs: vec![include],

@@ -1,6 +1,7 @@
 /* trilux's C shim over Intel Embree 3 and 4: see shim.h for the interface.
  *
- * Everything version-specific lives here, behind TX_EMBREE_MAJOR (set by build.rs). The hot
+ * Everything version-specific lives here, behind TX_EMBREE_MAJOR (set by build.rs) and
+ * RTC_GEOMETRY_INSTANCE_ARRAY (Embree 4.3+ built with instance arrays: hits are larger). The hot
  * callbacks stay in C: back-face rejection of one-sided quads is a filter over a plain array of
  * normals; user geometry (spheres, rings) unpacks each ray and calls trilux's Rust intersection
  * routine through a function pointer, so Embree and the built-in BVH run the same arithmetic. */
@@ -41,6 +42,8 @@
 #define HIT_PRIM 5
 #define HIT_GEOM 6
 #define HIT_INST0 7
+/* Embree 4.3+ built with instance arrays has instPrimID after the instID levels. */
+#define HIT_INST_PRIM0 (HIT_INST0 + RTC_MAX_INSTANCE_LEVEL_COUNT)
 #define TX_RAYHITN_RAY(rh, N) ((struct RTCRayN*)(rh))
 #define TX_RAYHITN_HIT(rh, N) ((struct RTCHitN*)&((float*)(rh))[12 * (N)])
 
@@ -290,6 +293,9 @@ static void user_intersect(const struct RTCIntersectFunctionNArguments* args) {
       TX_HITN_U(hit, N, i, HIT_PRIM) = args->primID;
       TX_HITN_U(hit, N, i, HIT_GEOM) = args->geomID;
       TX_HITN_U(hit, N, i, HIT_INST0) = args->context->instID[0];
+#if defined(RTC_GEOMETRY_INSTANCE_ARRAY)
+      TX_HITN_U(hit, N, i, HIT_INST_PRIM0) = args->context->instPrimID[0];
+#endif
     } else {
 #if TX_EMBREE_MAJOR >= 4
       /* Embree 4 reads valid[i] back: -1 means the callback reported a hit. */
@@ -363,6 +369,9 @@ static void init_rayhit(struct RTCRayHit* rh, const TxRay* r) {
   rh->ray.flags = 0;
   rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+#if defined(RTC_GEOMETRY_INSTANCE_ARRAY)
+  rh->hit.instPrimID[0] = RTC_INVALID_GEOMETRY_ID;
+#endif
 }
 
 static void init_ray(struct RTCRay* ray, const TxRay* r) {
@@ -466,16 +475,24 @@ static void load_packet(struct RTCRay8* p, int* valid, const TxRay* rays, size_t
   }
 }
 
+/* Marks every lane of a hit packet as "no hit yet", as Embree requires before a query. */
+static void init_hit_packet(struct RTCHit8* hit) {
+  for (size_t k = 0; k < 8; k++) {
+    hit->geomID[k] = RTC_INVALID_GEOMETRY_ID;
+    hit->instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+#if defined(RTC_GEOMETRY_INSTANCE_ARRAY)
+    hit->instPrimID[0][k] = RTC_INVALID_GEOMETRY_ID;
+#endif
+  }
+}
+
 void tx_intersect_batch(const TxScene* s, const TxRay* rays, size_t n, TxHit* hits) {
   RTC_ALIGN(32) int valid[8];
   struct RTCRayHit8 rh;
   for (size_t base = 0; base < n; base += 8) {
     size_t count = n - base < 8 ? n - base : 8;
     load_packet(&rh.ray, valid, rays + base, count);
-    for (size_t k = 0; k < 8; k++) {
-      rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-      rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-    }
+    init_hit_packet(&rh.hit);
     rtc_intersect8(valid, s->scene, &rh);
     for (size_t k = 0; k < count; k++) {
       TxHit* h = &hits[base + k];
@@ -530,10 +547,7 @@ size_t tx_baseline_intersect8(const TxScene* s, const TxRay* rays, size_t n) {
   for (size_t base = 0; base < n; base += 8) {
     size_t m = n - base < 8 ? n - base : 8;
     load_packet(&rh.ray, valid, rays + base, m);
-    for (size_t k = 0; k < 8; k++) {
-      rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-      rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-    }
+    init_hit_packet(&rh.hit);
     rtc_intersect8(valid, s->scene, &rh);
     for (size_t k = 0; k < m; k++) count += rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
   }
