@@ -39,9 +39,10 @@ fn course_args(course: &Path, line: &str) -> Vec<String> {
 }
 
 /// Runs `render` once per backend with `args` plus `--accel KIND` (a "{kind}" in `args` or
-/// `output` stands for the backend's name) and returns the bytes each run wrote to `output`.
-fn render_per_backend(dir: &Path, args: &[&str], output: &str) -> Vec<Vec<u8>> {
-    backends()
+/// `output` stands for the backend's name) and asserts that every run wrote the same bytes to
+/// `output`; `what` names the run in the failure message.
+fn assert_backends_write_identical_images(dir: &Path, args: &[&str], output: &str, what: &str) {
+    let images: Vec<Vec<u8>> = backends()
         .into_iter()
         .map(|kind| {
             let kind = kind.to_string();
@@ -51,7 +52,11 @@ fn render_per_backend(dir: &Path, args: &[&str], output: &str) -> Vec<Vec<u8>> {
             ok(&render(dir, &argv));
             std::fs::read(dir.join(output.replace("{kind}", &kind))).expect("image written")
         })
-        .collect()
+        .collect();
+    assert!(
+        images.windows(2).all(|w| w[0] == w[1]),
+        "{what}: the backends' images differ"
+    );
 }
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -76,10 +81,11 @@ fn every_course_scene_renders_identically_with_both_backends() {
                 "-input", input, "-size", "160", "120", "-o", &out, "--quiet",
             ];
             args.extend(engine);
-            let images = render_per_backend(&dir, &args, &out);
-            assert!(
-                images.windows(2).all(|w| w[0] == w[1]),
-                "{stem} {engine:?}: backends give different images"
+            assert_backends_write_identical_images(
+                &dir,
+                &args,
+                &out,
+                &format!("{stem} {engine:?}"),
             );
         }
     }
@@ -433,12 +439,13 @@ fn course_ray_tracing_commands_give_identical_images_with_both_backends() {
         let argv: Vec<&str> = args.iter().map(String::as_str).collect();
         // Each run writes the default output, <stem>.png, read before the next run.
         let stem = command.split(' ').find(|a| a.ends_with(".obj")).unwrap();
-        let images = render_per_backend(&dir, &argv, &stem.replace(".obj", ".png"));
-        std::fs::remove_dir_all(&dir).ok();
-        assert!(
-            images.windows(2).all(|w| w[0] == w[1]),
-            "`{command}`: the backends' images differ"
+        assert_backends_write_identical_images(
+            &dir,
+            &argv,
+            &stem.replace(".obj", ".png"),
+            &format!("`{command}`"),
         );
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
 
@@ -612,17 +619,13 @@ fn radiosity_modes_write_their_outputs_identically_with_both_backends() {
         );
         let mut args = run.clone();
         args.extend(["-size", "64", "48", "-o", &out, "--log-convergence", &log]);
-        let images = render_per_backend(&dir, &args, &out);
+        assert_backends_write_identical_images(&dir, &args, &out, &format!("{run:?}"));
         for kind in backends() {
             let log = log.replace("{kind}", &kind.to_string());
             let csv = std::fs::read_to_string(dir.join(&log)).expect("log written");
             assert!(csv.starts_with("shot,patch,residual,seconds,rays"));
             assert!(csv.lines().count() > 1, "{run:?}: empty log");
         }
-        assert!(
-            images.windows(2).all(|w| w[0] == w[1]),
-            "{run:?}: backends give different images"
-        );
     }
     std::fs::remove_dir_all(&dir).ok();
 }
