@@ -167,14 +167,15 @@ pub fn run(scene_path: &Path, settings: &ReportSettings) -> Result<Report, Strin
                         "{} {accel_kind} {budget_kind} {budget}",
                         engine.name()
                     ));
-                    let t = Instant::now();
-                    let rendered = engines::render(engine, &scene, accel.as_ref(), &s)?;
-                    let mut elapsed = t.elapsed().as_secs_f64();
+                    let timed_render = || {
+                        let t = Instant::now();
+                        let rendered = engines::render(engine, &scene, accel.as_ref(), &s)?;
+                        Ok::<_, String>((rendered, t.elapsed().as_secs_f64()))
+                    };
+                    let (rendered, mut elapsed) = timed_render()?;
                     let mut spent = elapsed;
                     while spent < MIN_TIMED_SECONDS && !crate::interrupt::requested() {
-                        let t = Instant::now();
-                        engines::render(engine, &scene, accel.as_ref(), &s)?;
-                        let again = t.elapsed().as_secs_f64();
+                        let (_, again) = timed_render()?;
                         elapsed = elapsed.min(again);
                         spent += again;
                     }
