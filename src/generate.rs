@@ -4,8 +4,8 @@
 use std::io::Write;
 use std::path::Path;
 
-use crate::film::{write_atomically, FilmError};
 use crate::geometry::{vec3, Vec3};
+use crate::output::{write_atomically, OutputError};
 use crate::scene::{Camera, Material, Projection, Scene, TriangleMesh};
 
 /// Height of the terrain at (x, z): a few octaves of sines, smooth and deterministic.
@@ -65,9 +65,9 @@ pub fn terrain(triangles: usize) -> Scene {
 }
 
 /// Writes a scene's triangles as standard OBJ (positions and faces only).
-pub fn write_obj(scene: &Scene, path: &Path) -> Result<(), FilmError> {
+pub fn write_obj(scene: &Scene, path: &Path) -> Result<(), OutputError> {
     write_atomically(path, |w| {
-        let io = |source| FilmError::Io {
+        let io = |source| OutputError::Io {
             path: path.to_path_buf(),
             source,
         };
@@ -170,9 +170,9 @@ pub fn room(patches: usize) -> Scene {
 
 /// Writes a scene of quads in the course dialect: materials (diffuse and emitted), vertices,
 /// faces, camera.
-pub fn write_dialect(scene: &Scene, path: &Path) -> Result<(), FilmError> {
+pub fn write_dialect(scene: &Scene, path: &Path) -> Result<(), OutputError> {
     write_atomically(path, |w| {
-        let io = |source| FilmError::Io {
+        let io = |source| OutputError::Io {
             path: path.to_path_buf(),
             source,
         };
@@ -269,9 +269,9 @@ pub fn texture(kind: TextureKind, size: u32) -> Vec<u8> {
 }
 
 /// Writes a texture as binary PPM (P6), which the course program reads too.
-pub fn write_ppm(rgb: &[u8], size: u32, path: &Path) -> Result<(), FilmError> {
+pub fn write_ppm(rgb: &[u8], size: u32, path: &Path) -> Result<(), OutputError> {
     write_atomically(path, |w| {
-        let io = |source| FilmError::Io {
+        let io = |source| OutputError::Io {
             path: path.to_path_buf(),
             source,
         };

@@ -6,11 +6,13 @@
 
 pub mod accel;
 pub mod bench;
+pub mod color;
 pub mod engines;
 pub mod film;
 pub mod generate;
 pub mod geometry;
 pub mod interrupt;
+pub mod output;
 pub mod parallel;
 pub mod plan;
 pub mod progress;

@@ -757,7 +757,7 @@ fn write_convergence_log(path: &Path, solution: &radiosity::Solution) -> Result<
             r.shot, r.patch, r.residual, r.seconds, r.rays
         );
     }
-    trilux::film::write_text_atomically(path, &csv).map_err(|e| e.to_string())
+    trilux::output::write_text_atomically(path, &csv).map_err(|e| e.to_string())
 }
 
 fn default_output(input: &Path) -> PathBuf {

@@ -283,7 +283,7 @@ fn output_formats_are_linear_and_written_atomically() {
     // The top-left corner sees the background: sRGB (0.2, 0.1, 0.6) from the file, linear here.
     let film = trilux::film::read_pfm(&dir.join("a.pfm")).expect("PFM reads back");
     let corner = film.get(0, 0);
-    let expected = [0.2f32, 0.1, 0.6].map(trilux::scene::texture::srgb_to_linear);
+    let expected = [0.2f32, 0.1, 0.6].map(trilux::color::srgb_to_linear);
     for (got, want) in corner.to_array().iter().zip(expected) {
         assert!(
             (got - want).abs() < 1e-6,

@@ -9,11 +9,11 @@ use std::path::Path;
 
 use common::{backends, course_dir, furnace};
 use trilux::accel::{self, Accel, AccelOptions};
+use trilux::engines::radiosity::mesh::{QuadMesh, Rasterization};
 use trilux::engines::radiosity::patch::patches;
 use trilux::engines::radiosity::solver::{FormFactorSampler, Stop};
 use trilux::engines::radiosity::{RadiositySettings, Solution};
 use trilux::engines::RenderSettings;
-use trilux::geometry::mesh::{QuadMesh, Rasterization};
 use trilux::scene::Scene;
 
 fn scene(text: &str) -> Scene {

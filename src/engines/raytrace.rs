@@ -14,6 +14,7 @@ use super::photon::{IrradianceCache, PhotonMaps};
 use super::radiosity::{PatchField, Solution};
 use super::{render_pixels, CameraSampler, Counts, RenderSettings, RenderStats};
 use crate::accel::Accel;
+use crate::film::ray_tree::{Segment, SegmentKind};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, vec3, Ray, Vec3};
 use crate::sampling::{Rng, Strata};
@@ -22,25 +23,6 @@ use crate::scene::{Color, Scene, SurfaceHit};
 /// Branches of the ray tree whose weight falls below this are not traced: their
 /// contribution cannot reach 1e-4 of the pixel.
 const MIN_WEIGHT: f32 = 1e-4;
-
-/// What a segment of a ray tree is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SegmentKind {
-    /// The camera ray.
-    Eye,
-    /// A reflected or refracted ray.
-    Specular,
-    /// A ray towards a point on a light.
-    Shadow,
-}
-
-/// One ray of a ray tree, from its origin to where it ended.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Segment {
-    pub from: Vec3,
-    pub to: Vec3,
-    pub kind: SegmentKind,
-}
 
 /// Where diffuse indirect light comes from: what a surface's albedo multiplies besides the
 /// direct light.

@@ -4,8 +4,7 @@
 use std::path::Path;
 
 use super::{read_pfm, Film, ImageFormat};
-use crate::scene::texture::srgb_to_linear;
-use crate::scene::Color;
+use crate::color::{srgb_to_linear, Color};
 
 /// The ε of relMSE: keeps dark reference pixels from dominating.
 pub const RELMSE_EPSILON: f64 = 1e-2;

@@ -7,10 +7,10 @@ pub mod ray_tree;
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use crate::scene::texture::linear_to_srgb;
-use crate::scene::Color;
+use crate::color::{linear_to_srgb, Color};
+use crate::output::{write_atomically, OutputError};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
@@ -18,20 +18,6 @@ pub struct Film {
     pub height: u32,
     /// Row-major, row 0 at the top of the image.
     pub pixels: Vec<Color>,
-}
-
-#[derive(Debug, thiserror::Error)]
-pub enum FilmError {
-    #[error("{path}: unknown image format (use .png, .exr or .pfm)")]
-    UnknownFormat { path: PathBuf },
-    #[error("{path}: cannot write the image: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("{path}: cannot encode the image: {message}")]
-    Encode { path: PathBuf, message: String },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -99,8 +85,8 @@ impl Film {
     }
 
     /// Writes the film in the format the extension names.
-    pub fn write(&self, path: &Path) -> Result<(), FilmError> {
-        let format = ImageFormat::from_path(path).ok_or_else(|| FilmError::UnknownFormat {
+    pub fn write(&self, path: &Path) -> Result<(), OutputError> {
+        let format = ImageFormat::from_path(path).ok_or_else(|| OutputError::UnknownFormat {
             path: path.to_path_buf(),
         })?;
         write_atomically(path, |w| self.encode(format, w, path))
@@ -111,19 +97,19 @@ impl Film {
         format: ImageFormat,
         w: &mut BufWriter<File>,
         path: &Path,
-    ) -> Result<(), FilmError> {
-        let encode_err = |e: image::ImageError| FilmError::Encode {
+    ) -> Result<(), OutputError> {
+        let encode_err = |e: image::ImageError| OutputError::Encode {
             path: path.to_path_buf(),
             message: e.to_string(),
         };
-        let io_err = |source| FilmError::Io {
+        let io_err = |source| OutputError::Io {
             path: path.to_path_buf(),
             source,
         };
         match format {
             ImageFormat::Png => {
                 let img = image::RgbImage::from_raw(self.width, self.height, self.to_srgb8())
-                    .ok_or_else(|| FilmError::Encode {
+                    .ok_or_else(|| OutputError::Encode {
                         path: path.to_path_buf(),
                         message: "pixel count does not match the size".into(),
                     })?;
@@ -132,7 +118,7 @@ impl Film {
             ImageFormat::Exr => {
                 let data: Vec<f32> = self.pixels.iter().flat_map(|c| c.to_array()).collect();
                 let img = image::Rgb32FImage::from_raw(self.width, self.height, data).ok_or_else(
-                    || FilmError::Encode {
+                    || OutputError::Encode {
                         path: path.to_path_buf(),
                         message: "pixel count does not match the size".into(),
                     },
@@ -154,45 +140,6 @@ impl Film {
             }
         }
     }
-}
-
-/// Writes `text` to `path` atomically (temporary file, then rename).
-pub fn write_text_atomically(path: &Path, text: &str) -> Result<(), FilmError> {
-    write_atomically(path, |w| {
-        w.write_all(text.as_bytes())
-            .map_err(|source| FilmError::Io {
-                path: path.to_path_buf(),
-                source,
-            })
-    })
-}
-
-/// Runs `fill` on a temporary file beside `path`, then renames it to `path`.
-pub fn write_atomically(
-    path: &Path,
-    fill: impl FnOnce(&mut BufWriter<File>) -> Result<(), FilmError>,
-) -> Result<(), FilmError> {
-    let io_err = |source| FilmError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "image".into());
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let file = File::create(&tmp).map_err(io_err)?;
-        let mut w = BufWriter::new(file);
-        fill(&mut w)?;
-        let file = w.into_inner().map_err(|e| io_err(e.into_error()))?;
-        file.sync_all().map_err(io_err)?;
-        std::fs::rename(&tmp, path).map_err(io_err)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }
 
 /// Reads a PFM file written by `Film::write` (or any little- or big-endian colour PFM).

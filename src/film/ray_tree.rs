@@ -4,10 +4,31 @@
 use std::io::Write;
 use std::path::Path;
 
-use super::{write_atomically, Film, FilmError};
-use crate::engines::raytrace::{Segment, SegmentKind};
+use super::Film;
+use crate::color::Color;
 use crate::geometry::vec3;
-use crate::scene::{Camera, Color};
+use crate::geometry::Vec3;
+use crate::output::{write_atomically, OutputError};
+use crate::scene::Camera;
+
+/// What a segment of a ray tree is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SegmentKind {
+    /// The camera ray.
+    Eye,
+    /// A reflected or refracted ray.
+    Specular,
+    /// A ray towards a point on a light.
+    Shadow,
+}
+
+/// One ray of a ray tree, from its origin to where it ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    pub from: Vec3,
+    pub to: Vec3,
+    pub kind: SegmentKind,
+}
 
 fn colour(kind: SegmentKind) -> Color {
     match kind {
@@ -29,9 +50,9 @@ pub fn overlay(film: &Film, camera: &Camera, segments: &[Segment]) -> Film {
 }
 
 /// Writes the segments as an OBJ file of line elements, one object per kind.
-pub fn write_obj(segments: &[Segment], path: &Path) -> Result<(), FilmError> {
+pub fn write_obj(segments: &[Segment], path: &Path) -> Result<(), OutputError> {
     write_atomically(path, |w| {
-        let io = |source| FilmError::Io {
+        let io = |source| OutputError::Io {
             path: path.to_path_buf(),
             source,
         };

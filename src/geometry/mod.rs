@@ -2,7 +2,6 @@
 //! routines of the four primitive kinds.
 
 mod bounds;
-pub mod mesh;
 mod ray;
 mod shapes;
 mod vec;

@@ -19,7 +19,8 @@ use std::time::Instant;
 use crate::accel::{self, AccelKind, AccelOptions};
 use crate::engines::{self, EngineKind, RenderSettings};
 use crate::film::metrics::{self, Metrics};
-use crate::film::{write_text_atomically, Film};
+use crate::film::Film;
+use crate::output::write_text_atomically;
 use crate::scene::Scene;
 
 /// What `render report` is asked to do.

@@ -8,7 +8,7 @@ use plotters::style::FontStyle;
 
 use super::Report;
 use crate::engines::EngineKind;
-use crate::film::{write_atomically, FilmError};
+use crate::output::{write_atomically, OutputError};
 
 const SIZE: (u32, u32) = (900, 600);
 
@@ -61,7 +61,7 @@ pub fn write(path: &Path, report: &Report) -> Result<(), String> {
     write_atomically(path, |w| {
         image
             .write_to(w, image::ImageFormat::Png)
-            .map_err(|e| FilmError::Io {
+            .map_err(|e| OutputError::Io {
                 path: path.to_path_buf(),
                 source: std::io::Error::other(e),
             })

@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use super::camera::{Camera, Projection};
 use super::error::SceneError;
-use super::texture::srgb_to_linear;
 use super::{Material, Quad, Ring, Scene, Sphere};
+use crate::color::srgb_to_linear;
 use crate::geometry::{quad_normal, vec2, vec3, RingShape, SphereShape, Vec2, Vec3};
 
 /// Whether `text` is in the course dialect: some line starts with one of the dialect's own

@@ -17,8 +17,7 @@ pub use texture::Texture;
 
 use crate::geometry::{quad_normal, Bounds3, RingShape, SphereShape, Vec2, Vec3};
 
-/// Linear RGB radiance or reflectance.
-pub type Color = Vec3;
+pub use crate::color::Color;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {

@@ -2,6 +2,8 @@
 
 use std::path::Path;
 
+use crate::color::srgb_to_linear;
+
 use crate::geometry::{Vec2, Vec3};
 
 /// The largest texture trilux decodes, in bytes of decoded pixels: a bad header cannot make
@@ -66,23 +68,5 @@ impl Texture {
         let top = self.texel(ix, iy) * (1.0 - fx) + self.texel(ix + 1, iy) * fx;
         let bottom = self.texel(ix, iy + 1) * (1.0 - fx) + self.texel(ix + 1, iy + 1) * fx;
         top * (1.0 - fy) + bottom * fy
-    }
-}
-
-/// The sRGB transfer function, decoding.
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// The sRGB transfer function, encoding.
-pub fn linear_to_srgb(c: f32) -> f32 {
-    if c <= 0.0031308 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
     }
 }

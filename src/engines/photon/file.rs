@@ -12,8 +12,8 @@ use std::path::Path;
 
 use super::{PathKind, Photon, PhotonMap, PhotonMaps};
 use crate::engines::RenderSettings;
-use crate::film::{write_atomically, FilmError};
 use crate::geometry::vec3;
+use crate::output::{write_atomically, OutputError};
 use crate::sampling::mix64;
 use crate::scene::Scene;
 
@@ -41,9 +41,9 @@ pub fn fingerprint(scene: &Scene, settings: &RenderSettings) -> u64 {
 }
 
 impl PhotonMaps {
-    pub fn save(&self, path: &Path, fingerprint: u64) -> Result<(), FilmError> {
+    pub fn save(&self, path: &Path, fingerprint: u64) -> Result<(), OutputError> {
         write_atomically(path, |w| {
-            let io = |source| FilmError::Io {
+            let io = |source| OutputError::Io {
                 path: path.to_path_buf(),
                 source,
             };

@@ -7,9 +7,9 @@ use rayon::prelude::*;
 use super::solver::FormFactorSampler;
 use super::Solution;
 use crate::accel::Accel;
+use crate::engines::radiosity::mesh::NONE;
 use crate::engines::{render_pixels, RenderSettings, RenderStats, Visualize};
 use crate::film::Film;
-use crate::geometry::mesh::NONE;
 use crate::geometry::Vec3;
 use crate::scene::{Camera, Color, Scene};
 

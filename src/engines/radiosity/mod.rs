@@ -4,6 +4,7 @@
 //! solved mesh seen from the camera in several visualization modes.
 
 pub mod form_factor;
+pub mod mesh;
 pub mod patch;
 pub mod solver;
 
@@ -17,8 +18,8 @@ use solver::{FormFactorSampler, SolveLimits, SolverState, Stop};
 
 use super::RenderSettings;
 use crate::accel::Accel;
+use crate::engines::radiosity::mesh::{QuadMesh, Rasterization, NONE};
 use crate::film::Film;
-use crate::geometry::mesh::{QuadMesh, Rasterization, NONE};
 use crate::geometry::{RingPart, Vec3};
 use crate::scene::{Color, PrimKind, Scene, SurfaceHit};
 

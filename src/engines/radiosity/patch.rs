@@ -2,7 +2,7 @@
 //! normal, albedo, emission — and points on them, both on the flat patch (for form factors)
 //! and on the primitive it approximates (for visibility rays against the original geometry).
 
-use crate::geometry::mesh::QuadMesh;
+use crate::engines::radiosity::mesh::QuadMesh;
 use crate::geometry::{offset_ray_origin, point_error, vec3, RingPart, Vec3};
 use crate::scene::{Color, PrimKind, PrimRef, Scene};
 

@@ -7,7 +7,7 @@
 
 use std::collections::HashMap;
 
-use super::{quad_normal, vec3, RingPart, Vec3};
+use crate::geometry::{quad_normal, vec3, RingPart, RingShape, SphereShape, Vec3};
 use crate::scene::{PrimKind, PrimRef, Scene};
 
 /// No half-edge (a border edge has no twin).
@@ -403,7 +403,7 @@ fn param_corners([u0, v0, u1, v1]: [f32; 4]) -> [(f32, f32); 4] {
 
 /// The point of a sphere at parameters (u, v) of `SphereShape::uv_at`: longitude u around +y
 /// (from +x towards +z), latitude v from the bottom pole.
-fn sphere_point(s: &super::SphereShape, u: f32, v: f32) -> Vec3 {
+fn sphere_point(s: &SphereShape, u: f32, v: f32) -> Vec3 {
     let (phi, theta) = (std::f32::consts::TAU * u, std::f32::consts::PI * (1.0 - v));
     // The poles exactly, so the faces around them share one vertex.
     let (sin_t, cos_t) = if v <= 0.0 {
@@ -418,7 +418,7 @@ fn sphere_point(s: &super::SphereShape, u: f32, v: f32) -> Vec3 {
 }
 
 /// The point of a ring's surface at parameters (u, v) of `RingShape::uv_at`.
-fn ring_point(r: &super::RingShape, part: RingPart, u: f32, v: f32) -> Vec3 {
+fn ring_point(r: &RingShape, part: RingPart, u: f32, v: f32) -> Vec3 {
     let phi = std::f32::consts::TAU * u;
     let (sin_p, cos_p) = phi.sin_cos();
     let (radius, y) = match part {
@@ -532,11 +532,11 @@ mod tests {
 
     #[test]
     fn rasterized_sphere_and_ring_faces_point_outwards_and_are_found_again() {
-        let sphere = super::super::SphereShape {
+        let sphere = super::SphereShape {
             centre: vec3(1.0, 2.0, 3.0),
             radius: 0.5,
         };
-        let ring = super::super::RingShape {
+        let ring = super::RingShape {
             base: vec3(0.0, 0.0, 0.0),
             height: 0.3,
             r_in: 0.8,
