@@ -79,7 +79,7 @@ pub fn shadow_rays(
     camera: &[Ray],
     seed: u64,
 ) -> Result<Vec<Ray>, accel::AccelError> {
-    let lights = crate::engines::lights::Light::collect(scene);
+    let lights = crate::render::lights::Light::collect(scene);
     if lights.is_empty() {
         return Ok(Vec::new());
     }

@@ -8,8 +8,10 @@ use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
-    #[error("{path}: unknown image format (use .png, .exr or .pfm)")]
+    #[error("{path}: unknown image format (use .png, .jpg, .exr or .pfm)")]
     UnknownFormat { path: PathBuf },
+    #[error("{path}: the folder {folder} does not exist")]
+    NoFolder { path: PathBuf, folder: PathBuf },
     #[error("{path}: cannot write the image: {source}")]
     Io {
         path: PathBuf,

@@ -5,7 +5,7 @@
 use std::fmt;
 
 use crate::accel::AccelKind;
-use crate::engines::{EngineKind, IndirectKind, RenderSettings};
+use crate::engines::{self, EngineKind, RenderSettings};
 use crate::scene::Scene;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -20,30 +20,20 @@ pub struct Plan {
     /// Textures decoded: those of materials some primitive uses.
     pub textures: usize,
     pub emitters: usize,
-    pub photon_map: bool,
-    pub caustic_map: bool,
-    pub radiosity_mesh: bool,
-    /// Patches of the radiosity mesh before adaptive subdivision (0 without a mesh).
-    pub radiosity_patches: u64,
-    /// Whether form factors cast visibility rays, and why (not).
-    pub radiosity_visibility: &'static str,
-    /// Why a stage the settings ask for is not run.
-    pub notes: Vec<String>,
+    /// What the engine builds beyond the image and the Accel, by name, and "no" for what
+    /// the other engines would build (every name any engine reports, in engine order).
+    pub structures: Vec<(&'static str, String)>,
     /// Estimated peak memory, in bytes, and its largest parts (name, bytes).
     pub memory: u64,
     pub memory_parts: Vec<(&'static str, u64)>,
 }
 
 /// Bytes per pixel of the image, and per camera sample in flight (ray, generator, hit; one
-/// chunk of a row per core, `engines::CHUNK_SAMPLES` samples or one pixel's).
+/// chunk of a row per core, `render::CHUNK_SAMPLES` samples or one pixel's).
 const FILM_BYTES_PER_PIXEL: u64 = 12;
 const SAMPLE_BYTES_IN_FLIGHT: u64 = 96;
 /// Bytes per primitive of either Accel (nodes, references, Embree's copies).
 const ACCEL_BYTES_PER_PRIMITIVE: u64 = 256;
-/// Bytes per stored photon: the photon (52) while traced, its copy in a map, the kd-tree.
-const PHOTON_BYTES: u64 = 52 + 52 + 16;
-/// Bytes per radiosity patch: mesh face and its links, patch, solver state, interpolation.
-const PATCH_BYTES: u64 = 640;
 
 impl Plan {
     pub fn new(
@@ -52,7 +42,6 @@ impl Plan {
         accel: AccelKind,
         settings: &RenderSettings,
     ) -> Plan {
-        let used = scene.used_materials();
         let emitters = scene
             .quads
             .iter()
@@ -62,28 +51,19 @@ impl Plan {
             .chain(scene.rings.iter().map(|r| r.material))
             .filter(|&m| scene.materials[m as usize].is_emissive())
             .count();
-        let any_specular = scene
-            .materials
-            .iter()
-            .zip(&used)
-            .any(|(m, &u)| u && m.is_specular());
-        let photon_engine = engine == EngineKind::Photon;
-        let radiosity_mesh = engine == EngineKind::Radiosity
-            || (engine == EngineKind::Raytrace && settings.indirect == IndirectKind::Radiosity);
-        let mut notes = Vec::new();
-        if settings.photon.num_photons_to_shoot > 0 && !photon_engine {
-            notes.push(format!(
-                "-num_photons_to_shoot {} is ignored: the {} engine reads no photon map",
-                settings.photon.num_photons_to_shoot,
-                engine.name()
-            ));
+        let engine_plan = engines::engine(engine).plan(scene, settings);
+        // Every structure some engine can build, so that the plan also says what is not built.
+        let mut structures: Vec<(&'static str, String)> = Vec::new();
+        for other in engines::all() {
+            for &name in other.structures() {
+                if !structures.iter().any(|s| s.0 == name) {
+                    let built = engine_plan.structures.iter().find(|s| s.0 == name);
+                    structures.push((name, built.map_or("no".into(), |s| s.1.clone())));
+                }
+            }
         }
-        let radiosity_patches = if radiosity_mesh {
-            radiosity_patches(scene, settings)
-        } else {
-            0
-        };
-        let memory_parts = memory_parts(scene, settings, photon_engine, radiosity_patches);
+        let mut memory_parts = image_and_accel_memory(scene, settings);
+        memory_parts.extend(engine_plan.memory);
         Plan {
             memory: memory_parts.iter().fold(0u64, |a, p| a.saturating_add(p.1)),
             memory_parts,
@@ -96,93 +76,24 @@ impl Plan {
             rings: scene.rings.len(),
             textures: scene.textures.len(),
             emitters,
-            photon_map: photon_engine && settings.photon.num_photons_to_shoot > 0,
-            caustic_map: photon_engine && settings.photon.num_photons_to_shoot > 0 && any_specular,
-            radiosity_mesh,
-            radiosity_patches,
-            radiosity_visibility: if !radiosity_mesh {
-                "none"
-            } else if settings.num_shadow_samples == 0 {
-                "off (-num_shadow_samples 0)"
-            } else if crate::engines::radiosity::convex_enclosure(scene) {
-                "skipped: the scene is a convex enclosure"
-            } else {
-                "one occlusion ray per point pair"
-            },
-            notes,
+            structures,
         }
     }
 }
 
-/// The memory a render will need, part by part, estimated from the scene and the settings
-/// before anything is allocated (so that a huge request is refused, not killed).
-fn memory_parts(
-    scene: &Scene,
-    settings: &RenderSettings,
-    photon_engine: bool,
-    patches: u64,
-) -> Vec<(&'static str, u64)> {
+/// The memory every render needs, estimated before anything is allocated (so that a huge
+/// request is refused, not killed): the image with the samples in flight, and the Accel.
+fn image_and_accel_memory(scene: &Scene, settings: &RenderSettings) -> Vec<(&'static str, u64)> {
     let (w, h) = (settings.width as u64, settings.height as u64);
     let spp = settings.num_antialias_samples.max(1) as u64;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get() as u64);
-    let in_flight = spp.max(crate::engines::CHUNK_SAMPLES as u64);
+    let in_flight = spp.max(crate::render::CHUNK_SAMPLES as u64);
     let image = w
         .saturating_mul(h)
         .saturating_mul(FILM_BYTES_PER_PIXEL)
         .saturating_add(in_flight.saturating_mul(SAMPLE_BYTES_IN_FLIGHT * cores.min(h.max(1))));
     let accel = (scene.primitive_count() as u64).saturating_mul(ACCEL_BYTES_PER_PRIMITIVE);
-    let mut parts = vec![("image", image), ("acceleration structure", accel)];
-    if photon_engine {
-        let p = &settings.photon;
-        // Photons are stored once per diffuse bounce: about 1/(1 − ρ̄) of them per photon
-        // emitted, ρ̄ the area-weighted mean albedo, within the depth limit.
-        let bounces = (1.0 / (1.0 - mean_albedo(scene).min(0.95)))
-            .min(p.max_photon_depth as f64 + 1.0)
-            .max(1.0);
-        let emitted = p.num_photons_to_shoot.saturating_add(p.caustic_photons());
-        let stored = (emitted as f64 * bounces).min(u64::MAX as f64 / PHOTON_BYTES as f64);
-        parts.push(("photon maps", (stored * PHOTON_BYTES as f64) as u64));
-    }
-    if patches > 0 {
-        let cache = patches
-            .saturating_mul(patches)
-            .saturating_mul(4)
-            .min((settings.radiosity.ff_cache_mb as u64).saturating_mul(1 << 20));
-        parts.push(("radiosity mesh", patches.saturating_mul(PATCH_BYTES)));
-        parts.push(("form-factor cache", cache));
-    }
-    parts
-}
-
-/// Area-weighted mean of the quads' albedos (mean channel; textures count as 0.5).
-fn mean_albedo(scene: &Scene) -> f64 {
-    let (mut sum, mut area) = (0.0f64, 0.0f64);
-    for q in &scene.quads {
-        let m = &scene.materials[q.material as usize];
-        let rho = if m.texture.is_some() {
-            0.5
-        } else {
-            (m.diffuse.x + m.diffuse.y + m.diffuse.z) as f64 / 3.0
-        };
-        sum += rho * q.area() as f64;
-        area += q.area() as f64;
-    }
-    if area > 0.0 {
-        sum / area
-    } else {
-        0.5
-    }
-}
-
-/// Patches of the radiosity mesh: every primitive's top-level faces, times 4 per subdivision.
-fn radiosity_patches(scene: &Scene, settings: &RenderSettings) -> u64 {
-    let r = &settings.radiosity;
-    let (h, v) = r.sphere_rasterization;
-    let top = scene.quads.len() as u64
-        + scene.triangles.len() as u64
-        + scene.spheres.len() as u64 * h.max(3) as u64 * v.max(2) as u64
-        + scene.rings.len() as u64 * 4 * r.cylinder_ring_rasterization.max(3) as u64;
-    top.saturating_mul(4u64.saturating_pow(r.subdivide))
+    vec![("image", image), ("acceleration structure", accel)]
 }
 
 impl Plan {
@@ -247,14 +158,6 @@ pub fn default_max_memory() -> u64 {
     total_kib.map_or(8 << 30, |k| k * 1024 / 10 * 8)
 }
 
-fn yes_no(b: bool) -> &'static str {
-    if b {
-        "yes"
-    } else {
-        "no"
-    }
-}
-
 fn plural(n: usize, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
@@ -308,21 +211,10 @@ impl fmt::Display for Plan {
         }
         writeln!(f, "textures decoded: {}", self.textures)?;
         writeln!(f, "emitters: {}", self.emitters)?;
-        writeln!(f, "photon map: {}", yes_no(self.photon_map))?;
-        writeln!(f, "caustic map: {}", yes_no(self.caustic_map))?;
-        if self.radiosity_mesh {
-            writeln!(
-                f,
-                "radiosity mesh: yes ({} patches; visibility: {})",
-                self.radiosity_patches, self.radiosity_visibility
-            )?;
-        } else {
-            writeln!(f, "radiosity mesh: no")?;
+        for (name, what) in &self.structures {
+            writeln!(f, "{name}: {what}")?;
         }
         writeln!(f, "memory estimate: {}", self.memory_summary())?;
-        for note in &self.notes {
-            writeln!(f, "note: {note}")?;
-        }
         Ok(())
     }
 }

@@ -261,7 +261,7 @@ fn output_formats_are_linear_and_written_atomically() {
     };
     let dir = temp_dir("formats");
     let input = course.join("reflective_spheres.obj");
-    for name in ["a.png", "a.exr", "a.pfm"] {
+    for name in ["a.png", "a.jpg", "a.exr", "a.pfm"] {
         ok(&render(
             &dir,
             &[
@@ -298,7 +298,21 @@ fn output_formats_are_linear_and_written_atomically() {
         names.iter().all(|n| !n.ends_with(".tmp")),
         "no temporary file left: {names:?}"
     );
-    let out = render(&dir, &["-input", input.to_str().unwrap(), "-o", "a.jpg"]);
+    // JPEG is 8-bit sRGB like PNG: the background corner within the codec's error (flat
+    // region, quality 95: a few levels at most).
+    let jpeg = trilux::film::metrics::read_image(&dir.join("a.jpg")).expect("JPEG reads back");
+    let corner = jpeg.get(0, 0);
+    for (got, want) in corner.to_array().iter().zip(expected) {
+        let (g, w) = (
+            trilux::color::linear_to_srgb(*got),
+            trilux::color::linear_to_srgb(want),
+        );
+        assert!(
+            (g - w).abs() < 3.0 / 255.0,
+            "JPEG corner {corner:?}, expected {expected:?}"
+        );
+    }
+    let out = render(&dir, &["-input", input.to_str().unwrap(), "-o", "a.bmp"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("unknown image format"));
     std::fs::remove_dir_all(&dir).ok();

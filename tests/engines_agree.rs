@@ -9,7 +9,7 @@ use common::{backends, course_dir};
 use trilux::accel::{self, closest_surface, Accel, AccelOptions};
 use trilux::engines::photon::PhotonSettings;
 use trilux::engines::radiosity::RadiositySettings;
-use trilux::engines::{path, photon, radiosity, RenderSettings};
+use trilux::engines::{compose, path, radiosity, RenderSettings};
 use trilux::film::Film;
 use trilux::scene::{Camera, PrimKind, Scene};
 
@@ -105,7 +105,7 @@ fn radiosity_photon_and_path_images_agree_on_flat_regions() {
     .0;
     println!("radiosity: {:.1} s", clock.elapsed().as_secs_f64());
     let clock = std::time::Instant::now();
-    let photons = photon::render(
+    let photons = compose::render_photons(
         &scene,
         accel.as_ref(),
         &RenderSettings {
@@ -123,7 +123,8 @@ fn radiosity_photon_and_path_images_agree_on_flat_regions() {
         },
     )
     .expect("renders")
-    .0;
+    .0
+    .film;
     println!("photon: {:.1} s", clock.elapsed().as_secs_f64());
     // The quads of the file: 0 light (front), 1 back wall, 2 ceiling, 3 floor.
     let regions = regions(

@@ -7,7 +7,8 @@ mod common;
 
 use common::{backends, course_dir, furnace};
 use trilux::accel::{self, AccelOptions};
-use trilux::engines::photon::{self, PathKind, PhotonMaps, PhotonSettings};
+use trilux::engines::compose::render_photons;
+use trilux::engines::photon::{PathKind, PhotonMaps, PhotonSettings};
 use trilux::engines::RenderSettings;
 use trilux::scene::Scene;
 
@@ -41,7 +42,8 @@ fn furnace_radiance_is_le_over_one_minus_rho() {
             // Russian roulette alone ends the paths; a depth limit of 10 would lose
             // ρ¹¹/(1−ρ) = 3.1 of the 10 at ρ = 0.9 (measured: −29%).
             s.photon.max_photon_depth = 100_000;
-            let (film, _, maps) = photon::render(&scene, accel.as_ref(), &s).expect("renders");
+            let (rendered, maps) = render_photons(&scene, accel.as_ref(), &s).expect("renders");
+            let film = rendered.film;
             let mean: f64 =
                 film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64;
             println!(
@@ -114,7 +116,10 @@ fn both_accels_give_identical_photon_images() {
             .into_iter()
             .map(|kind| {
                 let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
-                let (film, _, _) = photon::render(&scene, accel.as_ref(), &s).expect("renders");
+                let film = render_photons(&scene, accel.as_ref(), &s)
+                    .expect("renders")
+                    .0
+                    .film;
                 film.pixels.iter().flat_map(|p| p.to_array()).collect()
             })
             .collect();
@@ -221,7 +226,10 @@ fn floor_bleeds_the_colour_of_the_nearest_wall() {
     let mut s = settings(500_000);
     s.width = w;
     s.height = h;
-    let (photons, _, _) = photon::render(&scene, accel.as_ref(), &s).expect("renders");
+    let photons = render_photons(&scene, accel.as_ref(), &s)
+        .expect("renders")
+        .0
+        .film;
     let traced = trilux::engines::raytrace::render(&scene, accel.as_ref(), &s).0;
     let bleed_photons = r_over_b(&photons, &by_red) / r_over_b(&photons, &by_blue);
     let bleed_traced = r_over_b(&traced, &by_red) / r_over_b(&traced, &by_blue);
@@ -323,7 +331,10 @@ fn ring_caustic_stands_out_as_in_the_path_tracer() {
     (s.width, s.height) = (w, h);
     s.num_bounces = 2;
     s.num_shadow_samples = 10;
-    let (with_photons, _, _) = photon::render(&scene, accel.as_ref(), &s).expect("renders");
+    let with_photons = render_photons(&scene, accel.as_ref(), &s)
+        .expect("renders")
+        .0
+        .film;
     let without = trilux::engines::raytrace::render(&scene, accel.as_ref(), &s).0;
     s.num_antialias_samples = 512;
     let reference = trilux::engines::path::render(&scene, accel.as_ref(), &s).0;

@@ -186,7 +186,7 @@ fn furnace_patches_reach_le_over_one_minus_rho() {
         println!(
             "ρ = {rho}: {} patches, {} shots, stop {:?}, residual {:.2e}, worst error solved {:.3}%, shown (with ambient) {:.3}%",
             solution.patches.len(),
-            solution.state.shots,
+            solution.state.iterations,
             solution.stop,
             solution.state.residual,
             100.0 * worst_solved,
@@ -283,7 +283,10 @@ fn both_accels_give_identical_solutions() {
             })
             .collect();
         assert!(solutions[0].rays > 0);
-        assert_eq!(solutions[0].state.shots, solutions[1].state.shots, "{file}");
+        assert_eq!(
+            solutions[0].state.iterations, solutions[1].state.iterations,
+            "{file}"
+        );
         assert_eq!(
             solutions[0].state.radiance, solutions[1].state.radiance,
             "{file}"

@@ -61,7 +61,7 @@ fn stiff_radiosity_furnace_converges_with_automatic_over_relaxation() {
                 .fold(0.0f32, f32::max);
             println!(
                 "{kind}: ρ = {rho}, {relaxation:?}: {} shots, {:?}, worst patch {:.3}%",
-                solution.state.shots,
+                solution.state.iterations,
                 solution.stop,
                 100.0 * worst
             );
@@ -330,14 +330,18 @@ fn huge_requests_are_refused_with_a_clear_message() {
         return;
     };
     let scene = scene.to_string_lossy().into_owned();
+    // The largest image -size accepts (65536², 48 GiB of film) against an explicit limit, so
+    // that the case does not depend on the host's memory.
     let cases: [&[&str]; 3] = [
         &["-num_photons_to_shoot", "1000000000"],
         &["--engine", "radiosity", "--subdivide", "12"],
-        &["-size", "100000", "100000"],
+        &["-size", "65536", "65536", "--max-memory", "8G"],
     ];
+    let never = std::env::temp_dir().join("trilux-never-written.png");
     for extra in cases {
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
-            .args(["-input", &scene, "-o", "/dev/null/never.png", "--quiet"])
+            .args(["-input", &scene, "--quiet", "-o"])
+            .arg(&never)
             .args(extra)
             .output()
             .expect("runs");
@@ -347,6 +351,10 @@ fn huge_requests_are_refused_with_a_clear_message() {
         assert!(
             stderr.contains("would need about") && stderr.contains("--max-memory"),
             "{extra:?}: {stderr}"
+        );
+        assert!(
+            !never.exists(),
+            "{extra:?}: refused, yet an image was written"
         );
     }
     // A small limit refuses an ordinary render too, and names it.

@@ -3,6 +3,7 @@
 
 pub mod bvh;
 #[cfg(feature = "embree")]
+#[allow(unsafe_code)]
 pub mod embree;
 
 use std::fmt;
@@ -127,30 +128,25 @@ pub fn build(
     }
 }
 
-/// Primitive references packed in 32 bits: the kind in the top two bits.
+/// Primitive references packed in 32 bits: the kind in the top `KIND_BITS` bits, the index
+/// below. A kind that does not fit stops the build (the assertion below), rather than being
+/// decoded as another.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct PackedPrim(u32);
 
+/// Bits of a packed primitive that hold its kind.
+const KIND_BITS: u32 = 2;
+const _: () = assert!(PrimKind::ALL.len() <= 1 << KIND_BITS);
+
 impl PackedPrim {
-    pub const MAX_INDEX: u32 = (1 << 30) - 1;
+    pub const MAX_INDEX: u32 = (1 << (32 - KIND_BITS)) - 1;
 
     pub fn new(prim: PrimRef) -> PackedPrim {
-        let kind = match prim.kind {
-            PrimKind::Quad => 0,
-            PrimKind::Triangle => 1,
-            PrimKind::Sphere => 2,
-            PrimKind::Ring => 3,
-        };
-        PackedPrim(kind << 30 | prim.index)
+        PackedPrim((prim.kind as u32) << (32 - KIND_BITS) | prim.index)
     }
     #[inline]
     pub fn kind(self) -> PrimKind {
-        match self.0 >> 30 {
-            0 => PrimKind::Quad,
-            1 => PrimKind::Triangle,
-            2 => PrimKind::Sphere,
-            _ => PrimKind::Ring,
-        }
+        PrimKind::ALL[(self.0 >> (32 - KIND_BITS)) as usize]
     }
     #[inline]
     pub fn index(self) -> u32 {
@@ -161,6 +157,22 @@ impl PackedPrim {
         PrimRef {
             kind: self.kind(),
             index: self.index(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_primitive_kind_packs_and_unpacks_as_itself() {
+        for (k, &kind) in PrimKind::ALL.iter().enumerate() {
+            assert_eq!(kind as usize, k, "PrimKind::ALL is in discriminant order");
+            for index in [0, 1, PackedPrim::MAX_INDEX] {
+                let prim = PrimRef { kind, index };
+                assert_eq!(PackedPrim::new(prim).unpack(), prim);
+            }
         }
     }
 }

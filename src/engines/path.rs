@@ -12,12 +12,13 @@
 
 use std::collections::HashMap;
 
-use super::lights::Light;
+use super::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSettings, Rendered};
 use super::optics::{fresnel_dielectric, glossy_reflection, orthonormal_basis, reflect, refract};
-use super::{render_pixels, Counts, RenderSettings, RenderStats};
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
+use crate::render::lights::Light;
+use crate::render::{render_pixels, Counts, RenderStats};
 use crate::sampling::Rng;
 use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
 
@@ -241,7 +242,64 @@ fn cosine_hemisphere(u: f32, v: f32) -> (Vec3, f32) {
 /// Renders the scene by path tracing; returns the film and the counters of the render.
 pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (Film, RenderStats) {
     let tracer = PathTracer::new(scene, accel);
-    render_pixels(scene, accel, settings, "path", |ray, hit, rng, counts| {
-        tracer.radiance(ray, hit, rng, counts)
-    })
+    render_pixels(
+        scene,
+        accel,
+        &settings.image(),
+        "path",
+        |ray, hit, rng, counts| tracer.radiance(ray, hit, rng, counts),
+    )
+}
+
+/// The path tracer (`--engine path`).
+pub struct PathEngine;
+
+impl Engine for PathEngine {
+    fn kind(&self) -> EngineKind {
+        EngineKind::Path
+    }
+
+    fn unread_flags(&self) -> &'static [&'static str] {
+        // The path tracer follows every bounce and samples the lights itself.
+        &[
+            "num_bounces",
+            "num_shadow_samples",
+            "ambient_light",
+            "light_sampling",
+            "indirect",
+        ]
+    }
+
+    fn plan(&self, _: &Scene, _: &RenderSettings) -> EnginePlan {
+        EnginePlan::default()
+    }
+
+    fn render(
+        &self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+    ) -> Result<Rendered, String> {
+        let (film, stats) = render(scene, accel, settings);
+        Ok(Rendered::plain(film, stats))
+    }
+
+    /// Paths per pixel doubling.
+    fn budget(&self, level: u32, base: &RenderSettings) -> Option<Budget> {
+        if level > 16 {
+            return None;
+        }
+        let spp = 1u32 << level;
+        let mut s = base.clone();
+        s.num_antialias_samples = spp;
+        Some(Budget {
+            counts: "spp",
+            value: spp as u64,
+            settings: s,
+        })
+    }
+
+    fn colour(&self) -> (u8, u8, u8) {
+        (20, 20, 20)
+    }
 }

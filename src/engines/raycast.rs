@@ -2,12 +2,14 @@
 //! plus albedo (texture looked up), or the background. It exercises scene loading, cameras,
 //! textures and closest-hit queries of every backend.
 
-use rayon::prelude::*;
-
 use crate::accel::Accel;
-use crate::engines::RenderSettings;
+use rayon::prelude::*;
+use std::sync::atomic::Ordering::Relaxed;
+
+use super::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::geometry::Ray;
+use crate::render::RenderStats;
 use crate::scene::{Camera, Scene};
 
 /// Renders the MATERIALS view; camera rays of each row go to the Accel as one batch.
@@ -42,4 +44,64 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> Fi
         });
     bar.finish_and_clear();
     film
+}
+
+/// The MATERIALS view (`--engine raycast`).
+pub struct RaycastEngine;
+
+impl Engine for RaycastEngine {
+    fn kind(&self) -> EngineKind {
+        EngineKind::Raycast
+    }
+
+    fn unread_flags(&self) -> &'static [&'static str] {
+        &[
+            "num_bounces",
+            "num_shadow_samples",
+            "ambient_light",
+            "light_sampling",
+            "indirect",
+            "num_antialias_samples",
+            "aperture",
+            "focus_distance",
+        ]
+    }
+
+    fn plan(&self, _: &Scene, _: &RenderSettings) -> EnginePlan {
+        EnginePlan::default()
+    }
+
+    fn render(
+        &self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+    ) -> Result<Rendered, String> {
+        let film = render(scene, accel, settings);
+        let stats = RenderStats::default();
+        stats
+            .camera_rays
+            .store(settings.width as u64 * settings.height as u64, Relaxed);
+        Ok(Rendered::plain(film, stats))
+    }
+
+    /// One camera ray per pixel sample, doubling (the view has no other noise: its curve
+    /// measures antialiasing alone).
+    fn budget(&self, level: u32, base: &RenderSettings) -> Option<Budget> {
+        if level > 10 {
+            return None;
+        }
+        let spp = 1u32 << level;
+        let mut s = base.clone();
+        s.num_antialias_samples = spp;
+        Some(Budget {
+            counts: "spp",
+            value: spp as u64,
+            settings: s,
+        })
+    }
+
+    fn colour(&self) -> (u8, u8, u8) {
+        (31, 119, 180)
+    }
 }

@@ -8,15 +8,14 @@
 //! constant `-ambient_light`, or the radiosity solution's indirect light (`--indirect
 //! radiosity`).
 
-use super::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
+use super::engine::RenderSettings;
 use super::optics::{fresnel_dielectric, glossy_reflection, reflect, refract};
-use super::photon::{IrradianceCache, PhotonMaps};
-use super::radiosity::{PatchField, Solution};
-use super::{render_pixels, CameraSampler, Counts, RenderSettings, RenderStats};
 use crate::accel::Accel;
 use crate::film::ray_tree::{Segment, SegmentKind};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, vec3, Ray, Vec3};
+use crate::render::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
+use crate::render::{render_pixels, Ambient, CameraSampler, Counts, IndirectLight, RenderStats};
 use crate::sampling::{Rng, Strata};
 use crate::scene::{Color, Scene, SurfaceHit};
 
@@ -24,61 +23,9 @@ use crate::scene::{Color, Scene, SurfaceHit};
 /// contribution cannot reach 1e-4 of the pixel.
 const MIN_WEIGHT: f32 = 1e-4;
 
-/// Where diffuse indirect light comes from: what a surface's albedo multiplies besides the
-/// direct light.
-pub enum Indirect<'a> {
-    /// A constant incident radiance (`-ambient_light`).
-    Ambient(Color),
-    /// The indirect incident radiance of a radiosity solution at the patch hit.
-    Radiosity {
-        solution: &'a Solution,
-        field: PatchField,
-    },
-    /// Photon maps: the global map's density estimate (or, with a cache, final gathers at
-    /// the surfaces the camera sees) plus the caustic map's.
-    Photons {
-        maps: &'a PhotonMaps,
-        cache: Option<&'a IrradianceCache>,
-    },
-}
-
-impl<'a> Indirect<'a> {
-    /// The radiosity solution's indirect light, flat or interpolated.
-    pub fn radiosity(solution: &'a Solution, interpolate: bool) -> Indirect<'a> {
-        Indirect::Radiosity {
-            solution,
-            field: solution.field(solution.indirect_incident(), interpolate),
-        }
-    }
-
-    /// Incident radiance averaged over the hemisphere at `s` (unit normal `n` on the lit
-    /// side), `depth` specular bounces from the camera.
-    fn at(&self, tracer: &Tracer, s: &SurfaceHit, n: Vec3, depth: u32, rng: &mut Rng) -> Color {
-        match self {
-            Indirect::Ambient(c) => *c,
-            Indirect::Radiosity { solution, field } => solution
-                .sample(tracer.scene, s, field)
-                .unwrap_or(Vec3::ZERO),
-            Indirect::Photons { maps, cache } => {
-                let global = match cache {
-                    // Final gathering where the camera looks; behind mirrors, the map itself.
-                    Some(c) if depth == 0 => c.irradiance_over_pi(
-                        tracer.scene,
-                        tracer.accel,
-                        maps,
-                        (s.point, n, s.error),
-                        rng,
-                    ),
-                    _ => maps.global_at(s.point, n),
-                };
-                global + maps.caustic_at(s.point, n)
-            }
-        }
-    }
-}
-
 struct Tracer<'a> {
-    indirect: Indirect<'a>,
+    /// Diffuse indirect light: the ambient term, a radiosity solution or photon maps.
+    indirect: &'a dyn IndirectLight,
     scene: &'a Scene,
     accel: &'a dyn Accel,
     settings: &'a RenderSettings,
@@ -113,7 +60,9 @@ impl Tracer<'_> {
         let albedo = self.scene.albedo(&s);
         if albedo.max_elem() > 0.0 {
             let irradiance_over_pi = self.direct(&s, n, rng, counts);
-            let indirect = self.indirect.at(self, &s, n, depth, rng);
+            let indirect = self
+                .indirect
+                .incident(self.scene, self.accel, &s, n, depth, rng);
             radiance += albedo.mul_elem(irradiance_over_pi + indirect);
         }
         if depth >= self.settings.num_bounces {
@@ -362,12 +311,7 @@ fn geometric_term(x: Vec3, n: Vec3, p: &LightPoint) -> Option<f32> {
 
 /// Renders the scene by ray tracing with `-ambient_light` as the indirect light.
 pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (Film, RenderStats) {
-    render_with(
-        scene,
-        accel,
-        settings,
-        Indirect::Ambient(settings.ambient_light),
-    )
+    render_with(scene, accel, settings, &Ambient(settings.ambient_light))
 }
 
 /// Renders the scene by ray tracing with the given indirect light; returns the film and the
@@ -376,7 +320,7 @@ pub fn render_with(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
-    indirect: Indirect,
+    indirect: &dyn IndirectLight,
 ) -> (Film, RenderStats) {
     let tracer = Tracer {
         indirect,
@@ -390,7 +334,7 @@ pub fn render_with(
     render_pixels(
         scene,
         accel,
-        settings,
+        &settings.image(),
         "raytrace",
         |ray, hit, rng, counts| tracer.shade(ray, hit, 0, 1.0, rng, counts),
     )
@@ -407,7 +351,7 @@ pub fn ray_tree(
     y: u32,
 ) -> Vec<Segment> {
     let tracer = Tracer {
-        indirect: Indirect::Ambient(settings.ambient_light),
+        indirect: &Ambient(settings.ambient_light),
         scene,
         accel,
         settings,
@@ -415,7 +359,7 @@ pub fn ray_tree(
         light_strata: Strata::new(settings.light_sampling, settings.num_shadow_samples),
         tree: Some(std::sync::Mutex::new(Vec::new())),
     };
-    let camera = CameraSampler::new(scene, settings);
+    let camera = CameraSampler::new(scene, &settings.image());
     let spp = settings.num_antialias_samples.max(1);
     let mut counts = Counts::default();
     for k in 0..spp {

@@ -45,7 +45,7 @@ pub fn read_image(path: &Path) -> Result<Film, String> {
                 pixels,
             })
         }
-        Some(ImageFormat::Png) => {
+        Some(ImageFormat::Png | ImageFormat::Jpeg) => {
             let img = image::open(path)
                 .map_err(|e| format!("{}: {e}", path.display()))?
                 .to_rgb8();
@@ -66,7 +66,7 @@ pub fn read_image(path: &Path) -> Result<Film, String> {
             })
         }
         None => Err(format!(
-            "{}: unknown image format (use .png, .exr or .pfm)",
+            "{}: unknown image format (use .png, .jpg, .exr or .pfm)",
             path.display()
         )),
     }

@@ -20,9 +20,13 @@ pub struct Film {
     pub pixels: Vec<Color>,
 }
 
+/// Quality of `.jpg` output (1–100): high enough that the 8-bit image shows no blocking.
+const JPEG_QUALITY: u8 = 95;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
     Png,
+    Jpeg,
     Exr,
     Pfm,
 }
@@ -32,9 +36,29 @@ impl ImageFormat {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
             "png" => Some(ImageFormat::Png),
+            "jpg" | "jpeg" => Some(ImageFormat::Jpeg),
             "exr" => Some(ImageFormat::Exr),
             "pfm" => Some(ImageFormat::Pfm),
             _ => None,
+        }
+    }
+}
+
+impl ImageFormat {
+    /// The format of an output path, and that its folder exists: checked before a render
+    /// starts, so that a typo does not cost the render.
+    pub fn check_output(path: &Path) -> Result<ImageFormat, OutputError> {
+        let format = ImageFormat::from_path(path).ok_or_else(|| OutputError::UnknownFormat {
+            path: path.to_path_buf(),
+        })?;
+        match path.parent() {
+            Some(folder) if !folder.as_os_str().is_empty() && !folder.is_dir() => {
+                Err(OutputError::NoFolder {
+                    path: path.to_path_buf(),
+                    folder: folder.to_path_buf(),
+                })
+            }
+            _ => Ok(format),
         }
     }
 }
@@ -86,9 +110,7 @@ impl Film {
 
     /// Writes the film in the format the extension names.
     pub fn write(&self, path: &Path) -> Result<(), OutputError> {
-        let format = ImageFormat::from_path(path).ok_or_else(|| OutputError::UnknownFormat {
-            path: path.to_path_buf(),
-        })?;
+        let format = ImageFormat::check_output(path)?;
         write_atomically(path, |w| self.encode(format, w, path))
     }
 
@@ -107,13 +129,20 @@ impl Film {
             source,
         };
         match format {
-            ImageFormat::Png => {
+            ImageFormat::Png | ImageFormat::Jpeg => {
                 let img = image::RgbImage::from_raw(self.width, self.height, self.to_srgb8())
                     .ok_or_else(|| OutputError::Encode {
                         path: path.to_path_buf(),
                         message: "pixel count does not match the size".into(),
                     })?;
-                img.write_to(w, image::ImageFormat::Png).map_err(encode_err)
+                if format == ImageFormat::Png {
+                    img.write_to(w, image::ImageFormat::Png).map_err(encode_err)
+                } else {
+                    // Quality 95: the 8-bit sRGB image with no visible blocking.
+                    image::codecs::jpeg::JpegEncoder::new_with_quality(w, JPEG_QUALITY)
+                        .encode_image(&img)
+                        .map_err(encode_err)
+                }
             }
             ImageFormat::Exr => {
                 let data: Vec<f32> = self.pixels.iter().flat_map(|c| c.to_array()).collect();

@@ -148,7 +148,12 @@ pub fn run(scene_path: &Path, settings: &ReportSettings) -> Result<Report, Strin
             // their ratio (at least 2: budgets double; radiosity's N² cost grows 16×).
             let (mut last, mut growth) = (0.0f64, 2.0f64);
             for level in 0.. {
-                let Some((budget_kind, budget, mut s)) = ladder(engine, level, &base) else {
+                let Some(engines::Budget {
+                    counts: budget_kind,
+                    value: budget,
+                    settings: mut s,
+                }) = engines::engine(engine).budget(level, &base)
+                else {
                     break;
                 };
                 let predicted = growth * last * settings.seeds as f64;
@@ -224,61 +229,6 @@ fn runs_started(runs: &[Run], accels: &[AccelKind], engines: &[EngineKind]) -> u
         .flat_map(|a| engines.iter().map(move |e| (*a, *e)))
         .filter(|(a, e)| runs.iter().any(|r| r.accel == *a && r.engine == *e))
         .count()
-}
-
-/// The settings of budget `level` (0, 1, 2, …) of an engine, doubling each time, and what the
-/// budget counts; None past the last level.
-fn ladder(
-    engine: EngineKind,
-    level: u32,
-    base: &RenderSettings,
-) -> Option<(&'static str, u64, RenderSettings)> {
-    let mut s = base.clone();
-    let doubling = 1u64 << level.min(30);
-    match engine {
-        // The course's ray tracer: soft shadows and its ambient term, samples per pixel
-        // doubling. The ambient term is a guess, so this curve levels off at its bias.
-        EngineKind::Raytrace | EngineKind::Raycast => {
-            if level > 10 {
-                return None;
-            }
-            s.num_shadow_samples = 4;
-            s.num_antialias_samples = doubling as u32;
-            Some(("spp", doubling, s))
-        }
-        EngineKind::Path => {
-            if level > 16 {
-                return None;
-            }
-            s.num_antialias_samples = doubling as u32;
-            Some(("spp", doubling, s))
-        }
-        EngineKind::Photon => {
-            if level > 10 {
-                return None;
-            }
-            // Photons and pixel samples double together: with the pixel samples fixed, the
-            // error of edges and shadows would hide what more photons buy.
-            let photons = 25_000 * doubling;
-            s.num_shadow_samples = 16;
-            s.num_antialias_samples = doubling.min(256) as u32;
-            s.photon.num_photons_to_shoot = photons;
-            Some(("photons", photons, s))
-        }
-        // Radiosity with visibility and interpolation, the mesh subdivided once more at each
-        // level (4× the patches) and the pixel samples 4× too.
-        EngineKind::Radiosity => {
-            if level > 5 {
-                return None;
-            }
-            s.num_shadow_samples = 1;
-            s.num_antialias_samples = (1u32 << (2 * level)).min(256);
-            s.radiosity.subdivide = level;
-            s.radiosity.interpolate = true;
-            s.radiosity.num_form_factor_samples = 4;
-            Some(("subdivide", level as u64, s))
-        }
-    }
 }
 
 /// The reference image: `--reference`, else the cached path-traced render, else a new one

@@ -43,12 +43,8 @@ fn register_font() -> Result<(), String> {
 }
 
 fn colour(engine: EngineKind) -> RGBColor {
-    match engine {
-        EngineKind::Raytrace | EngineKind::Raycast => RGBColor(31, 119, 180),
-        EngineKind::Radiosity => RGBColor(44, 160, 44),
-        EngineKind::Photon => RGBColor(214, 39, 40),
-        EngineKind::Path => RGBColor(20, 20, 20),
-    }
+    let (r, g, b) = crate::engines::engine(engine).colour();
+    RGBColor(r, g, b)
 }
 
 /// Writes the plot as PNG (atomically).

@@ -141,6 +141,16 @@ pub enum PrimKind {
     Ring,
 }
 
+impl PrimKind {
+    /// Every kind, in the order of their discriminants (`kind as u32` indexes this).
+    pub const ALL: [PrimKind; 4] = [
+        PrimKind::Quad,
+        PrimKind::Triangle,
+        PrimKind::Sphere,
+        PrimKind::Ring,
+    ];
+}
+
 /// One primitive of a scene: its kind and its index in that kind's list.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PrimRef {
@@ -247,6 +257,37 @@ impl Scene {
             h = crate::sampling::mix64(h ^ u64::from_le_bytes(word));
         }
         h
+    }
+
+    /// A hash of everything loaded that light transport depends on: the materials, every
+    /// primitive, the decoded texels of the textures used, and whether quads are two-sided —
+    /// not the camera, and not the file's bytes (an `.mtl` file, a texture or `--two-sided`
+    /// change the light without changing the scene file). What the photon maps saved by
+    /// `--save-photons` are keyed by.
+    pub fn content_hash(&self) -> u64 {
+        use std::fmt::Write;
+        let mut h = ContentHasher::default();
+        // Debug prints every field, floats in their shortest exact form: equal text, equal
+        // values.
+        let _ = write!(
+            h,
+            "{:?}{:?}{:?}{:?}{:?}{}",
+            self.materials,
+            self.quads,
+            self.triangles,
+            self.spheres,
+            self.rings,
+            self.two_sided_quads
+        );
+        for t in &self.textures {
+            let _ = write!(h, "texture {}x{}", t.width, t.height);
+            for texel in &t.texels {
+                for c in texel.to_array() {
+                    h.word(c.to_bits() as u64);
+                }
+            }
+        }
+        h.finish()
     }
 
     pub fn bounds(&self) -> Bounds3 {
@@ -383,6 +424,44 @@ impl Scene {
             })?;
             m.texture = Some(self.textures.len());
             self.textures.push(texture);
+        }
+        Ok(())
+    }
+}
+
+/// A stable 64-bit hash of a stream of text and words (the same in every build, unlike the
+/// standard library's hasher), for `Scene::content_hash`.
+#[derive(Default)]
+struct ContentHasher {
+    state: u64,
+    pending: [u8; 8],
+    len: usize,
+}
+
+impl ContentHasher {
+    fn word(&mut self, w: u64) {
+        self.state = crate::sampling::mix64(self.state ^ w);
+    }
+
+    fn finish(mut self) -> u64 {
+        let mut tail = [0u8; 8];
+        let rest = self.len % 8;
+        tail[..rest].copy_from_slice(&self.pending[..rest]);
+        self.word(u64::from_le_bytes(tail));
+        self.word(self.len as u64);
+        self.state
+    }
+}
+
+impl std::fmt::Write for ContentHasher {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        for &b in s.as_bytes() {
+            self.pending[self.len % 8] = b;
+            self.len += 1;
+            if self.len.is_multiple_of(8) {
+                let w = u64::from_le_bytes(self.pending);
+                self.word(w);
+            }
         }
         Ok(())
     }

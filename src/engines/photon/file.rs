@@ -5,29 +5,31 @@
 //! Layout: magic `TRILUXPM`, version (u32), fingerprint (u64), photons emitted by the main and
 //! by the caustic pass, photon rays, photons cut by the depth limit, global and caustic counts
 //! (u64 each), then each photon: position, direction, power, normal (3 × f32 each) and its path
-//! kind (u8). Version 2 added the caustic pass.
+//! kind (u8). Version 2 added the caustic pass; version 3 keys the file by the loaded scene
+//! (materials, textures, `--two-sided`), not the scene file's bytes.
 
 use std::io::{Read, Write};
 use std::path::Path;
 
 use super::{PathKind, Photon, PhotonMap, PhotonMaps};
-use crate::engines::RenderSettings;
+use crate::engines::engine::RenderSettings;
 use crate::geometry::vec3;
 use crate::output::{write_atomically, OutputError};
 use crate::sampling::mix64;
 use crate::scene::Scene;
 
 const MAGIC: &[u8; 8] = b"TRILUXPM";
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 const HEADER_BYTES: usize = 8 + 4 + 7 * 8;
 const PHOTON_BYTES: usize = 12 * 4 + 1;
 
-/// A hash of the scene file's bytes and of every setting that changes which photons are
-/// stored: their numbers (main and caustic pass), the depth limit, the seed, and whether the
-/// global map keeps all photons (final gathering).
+/// A hash of the loaded scene (materials with their `.mtl` file, textures, `--two-sided`:
+/// `Scene::content_hash`) and of every setting that changes which photons are stored: their
+/// numbers (main and caustic pass), the depth limit, the seed, and whether the global map
+/// keeps all photons (final gathering).
 pub fn fingerprint(scene: &Scene, settings: &RenderSettings) -> u64 {
     let p = &settings.photon;
-    let mut h = scene.file_hash();
+    let mut h = scene.content_hash();
     for v in [
         p.num_photons_to_shoot,
         p.caustic_photons(),

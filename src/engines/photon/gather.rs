@@ -14,8 +14,8 @@ use rayon::prelude::*;
 
 use super::PhotonMaps;
 use crate::accel::Accel;
+use crate::engines::engine::RenderSettings;
 use crate::engines::optics::sample_lobe;
-use crate::engines::RenderSettings;
 use crate::geometry::{spawn_ray, Ray, Vec3};
 use crate::sampling::{Pattern, Rng, Strata};
 use crate::scene::{Camera, Color, Scene};

@@ -7,75 +7,23 @@
 pub mod file;
 pub mod gather;
 pub mod map;
+pub mod settings;
 pub mod trace;
 
 use std::sync::atomic::Ordering::Relaxed;
 
 pub use gather::IrradianceCache;
 pub use map::PhotonMap;
+pub use settings::{Display, PhotonSettings};
 pub use trace::{Aim, PathKind, Photon};
 
-use super::{RenderSettings, Visualize};
+use super::engine::{EnginePlan, RenderSettings};
 use crate::accel::Accel;
 use crate::film::Film;
 use crate::geometry::{Bounds3, Vec3};
-use crate::scene::{Color, Scene};
-
-/// Settings only the photon engine reads.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PhotonSettings {
-    /// Photons emitted (`-num_photons_to_shoot`, default 0: no photon map).
-    pub num_photons_to_shoot: u64,
-    /// Photons aimed at the mirrors and glass for the caustic map (`--caustic-photons`,
-    /// default None: as many as `num_photons_to_shoot`). 0 turns the caustic pass off; the
-    /// caustic map then holds the caustic photons of the main pass.
-    pub caustic_photons: Option<u64>,
-    /// Photons per density estimate (`-num_photons_to_collect`, default 100).
-    pub num_photons_to_collect: u32,
-    /// Bounces a photon may make (`--max-photon-depth`, default 10).
-    pub max_photon_depth: u32,
-    /// Largest radius of a density estimate, as a fraction of the scene's diagonal
-    /// (`--photon-max-radius`, default 0.1).
-    pub max_radius: f32,
-    /// Final gathering for indirect light (`-gather_indirect`, default off: direct lookup).
-    pub gather_indirect: bool,
-    /// Hemisphere rays per final gather (`--final-gather-rays`, default 128).
-    pub final_gather_rays: u32,
-    /// Ward's irradiance cache error a (`--irradiance-cache-error`, default 0.15).
-    pub irradiance_cache_error: f32,
-    /// Write the maps to this file after tracing (`--save-photons`).
-    pub save: Option<std::path::PathBuf>,
-    /// Read the maps from this file instead of tracing (`--load-photons`).
-    pub load: Option<std::path::PathBuf>,
-    /// Cache records are computed at every n-th pixel in x and y (`--irradiance-cache-spacing`,
-    /// default 4); the rest interpolate, or gather afresh where no record is close enough.
-    pub irradiance_cache_spacing: u32,
-}
-
-impl Default for PhotonSettings {
-    fn default() -> Self {
-        PhotonSettings {
-            num_photons_to_shoot: 0,
-            caustic_photons: None,
-            num_photons_to_collect: 100,
-            max_photon_depth: 10,
-            max_radius: 0.1,
-            gather_indirect: false,
-            final_gather_rays: 128,
-            irradiance_cache_error: 0.15,
-            irradiance_cache_spacing: 4,
-            save: None,
-            load: None,
-        }
-    }
-}
-
-impl PhotonSettings {
-    /// Photons of the caustic pass: `--caustic-photons`, else as many as the main pass.
-    pub fn caustic_photons(&self) -> u64 {
-        self.caustic_photons.unwrap_or(self.num_photons_to_shoot)
-    }
-}
+use crate::render::IndirectLight;
+use crate::sampling::Rng;
+use crate::scene::{Color, Scene, SurfaceHit};
 
 /// The two photon maps of a scene and what the lookups need.
 pub struct PhotonMaps {
@@ -264,13 +212,63 @@ fn box_edges(b: &Bounds3) -> [(Vec3, Vec3); 12] {
     pairs.map(|(a, c)| (corner(a), corner(c)))
 }
 
-/// Renders with the photon engine: traces the maps (or loads them), then ray traces with them as the indirect
-/// light (and, with `-gather_indirect`, an irradiance cache of final gathers).
-pub fn render(
+/// Bytes per stored photon: the photon (52) while traced, its copy in a map, the kd-tree.
+const PHOTON_BYTES: u64 = 52 + 52 + 16;
+
+/// What the photon engine builds, for `--plan`: the two maps and their memory.
+pub fn plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
+    let p = &settings.photon;
+    let traced = p.num_photons_to_shoot > 0;
+    let used = scene.used_materials();
+    let any_specular = scene
+        .materials
+        .iter()
+        .zip(&used)
+        .any(|(m, &u)| u && m.is_specular());
+    // Photons are stored once per diffuse bounce: about 1/(1 − ρ̄) of them per photon
+    // emitted, ρ̄ the area-weighted mean albedo, within the depth limit.
+    let bounces = (1.0 / (1.0 - mean_albedo(scene).min(0.95)))
+        .min(p.max_photon_depth as f64 + 1.0)
+        .max(1.0);
+    let emitted = p.num_photons_to_shoot.saturating_add(p.caustic_photons());
+    let stored = (emitted as f64 * bounces).min(u64::MAX as f64 / PHOTON_BYTES as f64);
+    let yes_no = |b: bool| if b { "yes" } else { "no" }.to_string();
+    EnginePlan {
+        structures: vec![
+            ("photon map", yes_no(traced)),
+            ("caustic map", yes_no(traced && any_specular)),
+        ],
+        memory: vec![("photon maps", (stored * PHOTON_BYTES as f64) as u64)],
+    }
+}
+
+/// Area-weighted mean of the quads' albedos (mean channel; textures count as 0.5).
+fn mean_albedo(scene: &Scene) -> f64 {
+    let (mut sum, mut area) = (0.0f64, 0.0f64);
+    for q in &scene.quads {
+        let m = &scene.materials[q.material as usize];
+        let rho = if m.texture.is_some() {
+            0.5
+        } else {
+            (m.diffuse.x + m.diffuse.y + m.diffuse.z) as f64 / 3.0
+        };
+        sum += rho * q.area() as f64;
+        area += q.area() as f64;
+    }
+    if area > 0.0 {
+        sum / area
+    } else {
+        0.5
+    }
+}
+
+/// The photon maps of a render: loaded from `--load-photons`, else traced; written to
+/// `--save-photons` when asked.
+pub fn maps(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
-) -> Result<(Film, super::RenderStats, PhotonMaps), String> {
+) -> Result<PhotonMaps, String> {
     let p = &settings.photon;
     let maps = match &p.load {
         Some(path) => PhotonMaps::load(path, scene, settings)?,
@@ -280,48 +278,97 @@ pub fn render(
         maps.save(path, file::fingerprint(scene, settings))
             .map_err(|e| e.to_string())?;
     }
-    let mode = settings.visualize;
-    if matches!(mode, Visualize::Photons | Visualize::Kdtree) {
-        let stats = super::RenderStats::default();
-        stats.photon_rays.store(maps.rays, Relaxed);
-        let mut film = visualize(scene, &maps, settings);
-        if mode == Visualize::Kdtree {
-            let camera = scene.camera();
-            let green = crate::geometry::vec3(0.0, 1.0, 0.0);
-            let cells = kd_cells(&maps, KD_VIEW_DEPTH);
-            crate::film::draw_lines(
-                &mut film,
-                &camera,
-                cells
-                    .iter()
-                    .flat_map(|b| box_edges(b).map(|(a, c)| (a, c, green))),
-            );
-        }
-        return Ok((film, stats, maps));
+    Ok(maps)
+}
+
+/// The image of a display mode other than `Display::Image` (`--visualize photons|kdtree`),
+/// None for the image itself (the ray tracer renders that with `PhotonIndirect`).
+pub fn display(scene: &Scene, maps: &PhotonMaps, settings: &RenderSettings) -> Option<Film> {
+    let mode = settings.photon.display;
+    if mode == Display::Image {
+        return None;
     }
-    let cache = settings
-        .photon
-        .gather_indirect
-        .then(|| IrradianceCache::build(scene, accel, settings, &maps));
-    let indirect = super::raytrace::Indirect::Photons {
-        maps: &maps,
-        cache: cache.as_ref(),
-    };
-    let (film, stats) = super::raytrace::render_with(scene, accel, settings, indirect);
-    stats.photon_rays.store(maps.rays, Relaxed);
-    if let Some(c) = &cache {
-        stats
-            .secondary_rays
-            .fetch_add(c.rays.load(Relaxed), Relaxed);
-        if !settings.quiet {
-            eprintln!(
-                "irradiance cache: {} records in {:.3} s; lookups interpolated {}, gathered afresh {}",
-                c.records.len(),
-                c.build_seconds,
-                c.interpolated.load(Relaxed),
-                c.fresh.load(Relaxed)
-            );
-        }
+    let mut film = visualize(scene, maps, settings);
+    if mode == Display::Kdtree {
+        let camera = scene.camera();
+        let green = crate::geometry::vec3(0.0, 1.0, 0.0);
+        let cells = kd_cells(maps, KD_VIEW_DEPTH);
+        crate::film::draw_lines(
+            &mut film,
+            &camera,
+            cells
+                .iter()
+                .flat_map(|b| box_edges(b).map(|(a, c)| (a, c, green))),
+        );
     }
-    Ok((film, stats, maps))
+    Some(film)
+}
+
+/// The photon maps as the ray tracer's indirect light: the global map's density estimate (or,
+/// with an irradiance cache, final gathers at the surfaces the camera sees) plus the caustic
+/// map's.
+pub struct PhotonIndirect<'a> {
+    pub maps: &'a PhotonMaps,
+    pub cache: Option<&'a IrradianceCache>,
+}
+
+impl IndirectLight for PhotonIndirect<'_> {
+    fn incident(
+        &self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        s: &SurfaceHit,
+        n: Vec3,
+        depth: u32,
+        rng: &mut Rng,
+    ) -> Color {
+        let global = match self.cache {
+            // Final gathering where the camera looks; behind mirrors, the map itself.
+            Some(c) if depth == 0 => {
+                c.irradiance_over_pi(scene, accel, self.maps, (s.point, n, s.error), rng)
+            }
+            _ => self.maps.global_at(s.point, n),
+        };
+        global + self.maps.caustic_at(s.point, n)
+    }
+}
+
+impl PhotonMaps {
+    /// One line on the maps for the user.
+    pub fn summary(&self) -> String {
+        format!(
+            "photons: {} emitted, {} more aimed at mirrors and glass, {} photon rays in {:.3} s; global map {} photons, caustic map {} (kd-trees built in {:.3} s); {} per estimate within {:.3}",
+            self.emitted,
+            self.caustic_emitted,
+            self.rays,
+            self.trace_seconds,
+            self.global.len(),
+            self.caustic.len(),
+            self.build_seconds,
+            self.collect,
+            self.max_radius
+        )
+    }
+
+    /// A warning when the depth limit cut more than one photon in a thousand short.
+    pub fn truncation_warning(&self, max_photon_depth: u32) -> Option<String> {
+        let emitted = self.emitted + self.caustic_emitted;
+        (self.truncated * 1000 > emitted).then(|| format!(
+            "{} of {emitted} photons were still carrying light when --max-photon-depth {max_photon_depth} stopped them; their light is missing from the image (raise the depth: Russian roulette alone keeps paths finite)",
+            self.truncated
+        ))
+    }
+}
+
+impl IrradianceCache {
+    /// One line on the cache for the user.
+    pub fn summary(&self) -> String {
+        format!(
+            "irradiance cache: {} records in {:.3} s; lookups interpolated {}, gathered afresh {}",
+            self.records.len(),
+            self.build_seconds,
+            self.interpolated.load(Relaxed),
+            self.fresh.load(Relaxed)
+        )
+    }
 }

@@ -12,11 +12,11 @@
 use rayon::prelude::*;
 
 use crate::accel::{closest_surface, Accel};
-use crate::engines::lights::Light;
 use crate::engines::optics::{
     fresnel_dielectric, glossy_reflection, reflect, refract, sample_cone, sample_lobe,
 };
 use crate::geometry::{offset_ray_origin, point_error, Ray, Vec3};
+use crate::render::lights::Light;
 use crate::sampling::Rng;
 use crate::scene::{Color, Scene};
 

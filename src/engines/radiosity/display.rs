@@ -4,13 +4,15 @@
 
 use rayon::prelude::*;
 
+use super::settings::Display;
 use super::solver::FormFactorSampler;
 use super::Solution;
 use crate::accel::Accel;
+use crate::engines::engine::RenderSettings;
 use crate::engines::radiosity::mesh::NONE;
-use crate::engines::{render_pixels, RenderSettings, RenderStats, Visualize};
 use crate::film::Film;
 use crate::geometry::Vec3;
+use crate::render::{render_pixels, RenderStats};
 use crate::scene::{Camera, Color, Scene};
 
 const WIRE: Color = Vec3::ZERO;
@@ -20,7 +22,7 @@ const SOURCE_OUTLINE: Color = Vec3 {
     z: 0.0,
 };
 
-/// Renders a solution in the mode `settings.visualize`.
+/// Renders a solution in the mode `settings.radiosity.display`.
 pub fn render_solution(
     scene: &Scene,
     accel: &dyn Accel,
@@ -30,23 +32,23 @@ pub fn render_solution(
     let r = &settings.radiosity;
     let patches = &solution.patches;
     let source = form_factor_source(solution, r.ff_source);
-    let values: Vec<Color> = match settings.visualize {
-        Visualize::Radiance | Visualize::Photons | Visualize::Kdtree => solution.display_radiance(),
-        Visualize::Materials => patches.iter().map(|p| p.albedo).collect(),
-        Visualize::Lights => patches.iter().map(|p| p.emitted).collect(),
-        Visualize::Undistributed => solution.state.unshot.clone(),
-        Visualize::Absorbed => patches
+    let values: Vec<Color> = match settings.radiosity.display {
+        Display::Radiance => solution.display_radiance(),
+        Display::Materials => patches.iter().map(|p| p.albedo).collect(),
+        Display::Lights => patches.iter().map(|p| p.emitted).collect(),
+        Display::Undistributed => solution.state.undistributed.clone(),
+        Display::Absorbed => patches
             .iter()
             .zip(&solution.state.incident)
             .map(|(p, e)| (Vec3::ONE - p.albedo).mul_elem(*e))
             .collect(),
-        Visualize::FormFactors => form_factor_greys(scene, accel, settings, solution, source),
+        Display::FormFactors => form_factor_greys(scene, accel, settings, solution, source),
     };
     let field = solution.field(values, r.interpolate);
     let (mut film, stats) = render_pixels(
         scene,
         accel,
-        settings,
+        &settings.image(),
         "display",
         |_ray, hit, _rng, _counts| {
             let Some(s) = hit else {
@@ -55,7 +57,7 @@ pub fn render_solution(
             solution.sample(scene, &s, &field).unwrap_or(Vec3::ZERO)
         },
     );
-    let outline_source = settings.visualize == Visualize::FormFactors;
+    let outline_source = settings.radiosity.display == Display::FormFactors;
     if r.wireframe || outline_source {
         let ids = patch_ids(scene, accel, settings, solution);
         let (w, h) = (settings.width as usize, settings.height as usize);
@@ -97,7 +99,7 @@ fn form_factor_source(solution: &Solution, asked: Option<u32>) -> usize {
             power(values[a], patches[a].area).total_cmp(&power(values[b], patches[b].area))
         })
     };
-    let unshot = &solution.state.unshot;
+    let unshot = &solution.state.undistributed;
     let emitted: Vec<Color> = patches.iter().map(|p| p.emitted).collect();
     if unshot.iter().any(|u| u.max_elem() > 0.0) {
         best(unshot).unwrap_or(0)

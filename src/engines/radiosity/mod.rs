@@ -6,86 +6,27 @@
 pub mod form_factor;
 pub mod mesh;
 pub mod patch;
+pub mod progressive;
+pub mod settings;
 pub mod solver;
 
 mod display;
+pub use settings::{Display, RadiositySettings};
 
 use std::sync::atomic::Ordering::Relaxed;
 
 pub use display::render_solution;
 use patch::Patch;
-use solver::{FormFactorSampler, SolveLimits, SolverState, Stop};
+use solver::{FormFactorSampler, PatchLight, RadiositySolver, SolveLimits, Stop};
 
-use super::RenderSettings;
+use super::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSettings, Rendered};
 use crate::accel::Accel;
 use crate::engines::radiosity::mesh::{QuadMesh, Rasterization, NONE};
 use crate::film::Film;
 use crate::geometry::{RingPart, Vec3};
+use crate::render::{IndirectLight, RenderStats};
+use crate::sampling::Rng;
 use crate::scene::{Color, PrimKind, Scene, SurfaceHit};
-
-/// Settings only the radiosity engine reads. Defaults are the course program's where it has one.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RadiositySettings {
-    /// Point pairs per form factor (`-num_form_factor_samples`, default 1: the patch centres).
-    pub num_form_factor_samples: u32,
-    /// Sphere tessellation H V (`-sphere_rasterization`, default 8 6).
-    pub sphere_rasterization: (u32, u32),
-    /// Ring tessellation around the axis (`-cylinder_ring_rasterization`, default 20).
-    pub cylinder_ring_rasterization: u32,
-    /// Split every quad into four this many times (`--subdivide`, default 0).
-    pub subdivide: u32,
-    /// Smooth display: values interpolated from the patches around each vertex
-    /// (`-interpolate`, default off: flat patches).
-    pub interpolate: bool,
-    /// Stop when undistributed power / emitted power falls to this (`--radiosity-tolerance`,
-    /// default 1e-3).
-    pub tolerance: f32,
-    /// Stop after exactly this many shots (`--radiosity-iterations`, default: none).
-    pub iterations: Option<u64>,
-    /// Safety cap on shots per patch when no iteration count is given
-    /// (`--radiosity-max-shots-per-patch`, default 1000); reaching it is reported.
-    pub max_shots_per_patch: u64,
-    /// Over-relaxation of each shot (`--radiosity-relaxation auto|ω`, default auto: ω from
-    /// how much of each shot comes back; 1 is plain progressive refinement; see
-    /// `solver::Relaxation`).
-    pub relaxation: solver::Relaxation,
-    /// Memory for cached form-factor rows, MiB (`--ff-cache-mb`, default 1024).
-    pub ff_cache_mb: usize,
-    /// Split patches whose radiance differs from a neighbour's by more than this (largest
-    /// channel) and solve again (`--adaptive-subdivide`, default: off).
-    pub adaptive_threshold: Option<f32>,
-    /// Rounds of adaptive splitting (`--adaptive-rounds`, default 3).
-    pub adaptive_rounds: u32,
-    /// Patch outlines over the image (`--wireframe`).
-    pub wireframe: bool,
-    /// The patch whose form factors `--visualize form-factors` shows (`--ff-source`,
-    /// default: the patch with the most undistributed light).
-    pub ff_source: Option<u32>,
-    /// Keep a record of every shot (`--log-convergence`).
-    pub log_convergence: bool,
-}
-
-impl Default for RadiositySettings {
-    fn default() -> Self {
-        RadiositySettings {
-            num_form_factor_samples: 1,
-            sphere_rasterization: (8, 6),
-            cylinder_ring_rasterization: 20,
-            subdivide: 0,
-            interpolate: false,
-            tolerance: 1e-3,
-            iterations: None,
-            max_shots_per_patch: 1000,
-            relaxation: solver::Relaxation::Auto,
-            ff_cache_mb: 1024,
-            adaptive_threshold: None,
-            adaptive_rounds: 3,
-            wireframe: false,
-            ff_source: None,
-            log_convergence: false,
-        }
-    }
-}
 
 /// A solved radiosity mesh.
 #[derive(Clone, Debug)]
@@ -94,7 +35,8 @@ pub struct Solution {
     pub patches: Vec<Patch>,
     /// For each mesh face, its patch (`NONE` for faces that were split).
     patch_of_face: Vec<u32>,
-    pub state: SolverState,
+    /// The light the solver found on the patches.
+    pub state: PatchLight,
     pub stop: Stop,
     /// Cohen's ambient term for the light not yet shot.
     pub ambient: Color,
@@ -103,9 +45,8 @@ pub struct Solution {
     pub visibility_reason: &'static str,
     /// Visibility rays cast, over all rounds.
     pub rays: u64,
-    pub cache_hits: u64,
-    pub cache_misses: u64,
-    pub cache_peak_bytes: usize,
+    /// The solver's own counters, for the summary line.
+    pub solver_report: String,
     /// Rounds of adaptive subdivision done.
     pub adaptive_rounds: u32,
 }
@@ -137,6 +78,14 @@ pub fn convex_enclosure(scene: &Scene) -> bool {
                 .iter()
                 .all(|&p| (p - q.vertices[0]).dot(q.normal) >= -1e-5 * scale)
         })
+    })
+}
+
+/// The solver the settings ask for (progressive refinement: the one there is so far).
+fn solver(r: &RadiositySettings) -> Box<dyn RadiositySolver> {
+    Box::new(progressive::Progressive {
+        cache_bytes: r.ff_cache_mb << 20,
+        relaxation: r.relaxation,
     })
 }
 
@@ -180,17 +129,16 @@ impl Solution {
                 tolerance: r.tolerance,
                 iterations: r.iterations,
                 cap: r.max_shots_per_patch.saturating_mul(patches.len() as u64),
-                cache_bytes: r.ff_cache_mb << 20,
                 log: r.log_convergence,
-                relaxation: r.relaxation,
             };
-            let (state, stop, cache) = solver::solve(&sampler, &limits, &on_progress);
+            let solved = solver(r).solve(&sampler, &limits, &on_progress);
+            let (state, stop) = (solved.light, solved.stop);
             rays += sampler.rays.load(Relaxed);
             let mut patch_of_face = vec![NONE; mesh.faces.len()];
             for (k, p) in patches.iter().enumerate() {
                 patch_of_face[p.face as usize] = k as u32;
             }
-            let ambient = solver::ambient(&patches, &state.unshot);
+            let ambient = solver::ambient(&patches, &state.undistributed);
             let solution = Solution {
                 mesh,
                 patches,
@@ -201,9 +149,7 @@ impl Solution {
                 visibility,
                 visibility_reason,
                 rays,
-                cache_hits: cache.hits,
-                cache_misses: cache.misses,
-                cache_peak_bytes: cache.peak_bytes,
+                solver_report: solved.report,
                 adaptive_rounds: round,
             };
             let Some(threshold) = r.adaptive_threshold else {
@@ -412,11 +358,44 @@ pub fn render(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
-) -> (Film, super::RenderStats, Solution) {
+) -> (Film, RenderStats, Solution) {
     let solution = solve_with_progress(scene, accel, settings);
     let (film, stats) = render_solution(scene, accel, settings, &solution);
     stats.form_factor_rays.store(solution.rays, Relaxed);
     (film, stats, solution)
+}
+
+/// A solution's indirect light for the ray tracer (`--indirect radiosity`): the incident
+/// radiance of the light reflected at least once, at the patch a ray hits, flat or
+/// interpolated.
+pub struct RadiosityIndirect<'a> {
+    solution: &'a Solution,
+    field: PatchField,
+}
+
+impl<'a> RadiosityIndirect<'a> {
+    pub fn new(solution: &'a Solution, interpolate: bool) -> RadiosityIndirect<'a> {
+        RadiosityIndirect {
+            solution,
+            field: solution.field(solution.indirect_incident(), interpolate),
+        }
+    }
+}
+
+impl IndirectLight for RadiosityIndirect<'_> {
+    fn incident(
+        &self,
+        scene: &Scene,
+        _: &dyn Accel,
+        s: &SurfaceHit,
+        _: Vec3,
+        _: u32,
+        _: &mut Rng,
+    ) -> Color {
+        self.solution
+            .sample(scene, s, &self.field)
+            .unwrap_or(Vec3::ZERO)
+    }
 }
 
 /// Solves with a progress bar: the bar fills as log(residual) approaches log(tolerance).
@@ -436,6 +415,168 @@ pub fn solve_with_progress(
     });
     bar.finish_and_clear();
     solution
+}
+
+/// Bytes per radiosity patch: mesh face and its links, patch, solver state, interpolation.
+const PATCH_BYTES: u64 = 640;
+
+/// The radiosity engine (`--engine radiosity`): the solution seen from the camera, or one of
+/// its display modes.
+pub struct RadiosityEngine;
+
+impl Engine for RadiosityEngine {
+    fn kind(&self) -> EngineKind {
+        EngineKind::Radiosity
+    }
+
+    fn structures(&self) -> &'static [&'static str] {
+        &["radiosity mesh"]
+    }
+
+    fn unread_flags(&self) -> &'static [&'static str] {
+        // The display reads the camera flags, and -num_shadow_samples turns on visibility in
+        // the form factors.
+        &["num_bounces", "ambient_light", "light_sampling", "indirect"]
+    }
+
+    fn plan(&self, scene: &Scene, settings: &RenderSettings) -> EnginePlan {
+        mesh_plan(scene, settings)
+    }
+
+    fn render(
+        &self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+    ) -> Result<Rendered, String> {
+        let (film, stats, solution) = render(scene, accel, settings);
+        Ok(solution.rendered(film, stats, settings))
+    }
+
+    /// Radiosity with visibility and interpolation, the mesh subdivided once more at each
+    /// level (4× the patches) and the pixel samples 4× too.
+    fn budget(&self, level: u32, base: &RenderSettings) -> Option<Budget> {
+        if level > 5 {
+            return None;
+        }
+        let mut s = base.clone();
+        s.num_shadow_samples = 1;
+        s.num_antialias_samples = (1u32 << (2 * level)).min(256);
+        s.radiosity.subdivide = level;
+        s.radiosity.interpolate = true;
+        s.radiosity.num_form_factor_samples = 4;
+        Some(Budget {
+            counts: "subdivide",
+            value: level as u64,
+            settings: s,
+        })
+    }
+
+    fn colour(&self) -> (u8, u8, u8) {
+        (44, 160, 44)
+    }
+}
+
+/// What a radiosity solve builds, for `--plan`: the mesh (its patches before adaptive
+/// subdivision, and whether form factors cast visibility rays) and the form-factor cache.
+pub fn mesh_plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
+    let patches = planned_patches(scene, &settings.radiosity);
+    let visibility = if settings.num_shadow_samples == 0 {
+        "off (-num_shadow_samples 0)"
+    } else if convex_enclosure(scene) {
+        "skipped: the scene is a convex enclosure"
+    } else {
+        "one occlusion ray per point pair"
+    };
+    let cache = patches
+        .saturating_mul(patches)
+        .saturating_mul(4)
+        .min((settings.radiosity.ff_cache_mb as u64).saturating_mul(1 << 20));
+    EnginePlan {
+        structures: vec![(
+            "radiosity mesh",
+            format!("yes ({patches} patches; visibility: {visibility})"),
+        )],
+        memory: vec![
+            ("radiosity mesh", patches.saturating_mul(PATCH_BYTES)),
+            ("form-factor cache", cache),
+        ],
+    }
+}
+
+/// Patches of the radiosity mesh: every primitive's top-level faces, times 4 per subdivision.
+fn planned_patches(scene: &Scene, r: &RadiositySettings) -> u64 {
+    let (h, v) = r.sphere_rasterization;
+    let top = scene.quads.len() as u64
+        + scene.triangles.len() as u64
+        + scene.spheres.len() as u64 * h.max(3) as u64 * v.max(2) as u64
+        + scene.rings.len() as u64 * 4 * r.cylinder_ring_rasterization.max(3) as u64;
+    top.saturating_mul(4u64.saturating_pow(r.subdivide))
+}
+
+impl Solution {
+    /// The render of an engine that solved this: its summary line, the cap's warning and
+    /// the convergence log.
+    pub fn rendered(&self, film: Film, stats: RenderStats, settings: &RenderSettings) -> Rendered {
+        Rendered {
+            summary: vec![self.summary(settings)],
+            warnings: self.cap_warning(settings).into_iter().collect(),
+            convergence_log: Some(self.convergence_csv()),
+            ..Rendered::plain(film, stats)
+        }
+    }
+
+    /// One paragraph on how the solve went.
+    pub fn summary(&self, settings: &RenderSettings) -> String {
+        let r = &settings.radiosity;
+        let state = &self.state;
+        let stop = match self.stop {
+            Stop::Converged => format!("converged to tolerance {:.1e}", r.tolerance),
+            Stop::Iterations => format!("stopped after {} shots as asked", state.iterations),
+            Stop::NoLight => "nothing emits".to_string(),
+            Stop::Interrupted => format!("interrupted after {} shots", state.iterations),
+            Stop::Cap => String::new(),
+        };
+        let adaptive = if self.adaptive_rounds > 0 {
+            format!(", {} adaptive rounds", self.adaptive_rounds)
+        } else {
+            String::new()
+        };
+        format!(
+            "radiosity: {} patches{adaptive}, {} shots, residual {:.3e}{}{stop}; visibility {}; {} visibility rays; {}",
+            self.patches.len(),
+            state.iterations,
+            state.residual,
+            if stop.is_empty() { "" } else { ", " },
+            self.visibility_reason,
+            self.rays,
+            self.solver_report
+        )
+    }
+
+    /// A solve stopped by the safety cap is a warning (its image still holds the ambient
+    /// estimate of the light not yet shot).
+    pub fn cap_warning(&self, settings: &RenderSettings) -> Option<String> {
+        let r = &settings.radiosity;
+        (self.stop == Stop::Cap).then(|| format!(
+            "radiosity stopped at its cap of {} shots ({} per patch) with residual {:.3e} above the tolerance {:.1e}; the image adds the ambient estimate of the rest (raise --radiosity-max-shots-per-patch to go on)",
+            self.state.iterations, r.max_shots_per_patch, self.state.residual, r.tolerance
+        ))
+    }
+
+    /// `--log-convergence`: one CSV line per shot.
+    pub fn convergence_csv(&self) -> String {
+        use std::fmt::Write;
+        let mut csv = String::from("shot,patch,residual,seconds,rays\n");
+        for r in &self.state.log {
+            let _ = writeln!(
+                csv,
+                "{},{},{:.6e},{:.6},{}",
+                r.shot, r.patch, r.residual, r.seconds, r.rays
+            );
+        }
+        csv
+    }
 }
 
 #[cfg(test)]

@@ -1,19 +1,19 @@
-//! Progressive refinement (Cohen, Chen, Wallace & Greenberg 1988): repeatedly shoot the patch
-//! with the most undistributed power to every other patch. The form factors of one shot are
-//! gathered at the receivers (Wallace, Elmquist & Haines 1989): each receiver averages the
-//! exact point-to-patch form factor over its sample points, which keeps every receiver's
-//! form factors to a closed enclosure summing to one. Rows are computed when a patch shoots
-//! and kept in a cache of bounded size, never as an N×N matrix.
+//! The solver interface of the radiosity engine and what every solver shares: the form factors
+//! between patches (`FormFactorSampler`: exact point-to-patch integration, visibility rays
+//! through the Accel), the solver-neutral result (`PatchLight`, `Stop`), and the ambient term.
+//! The solvers themselves are beside it (`progressive.rs`).
+//!
+//! Form factors are gathered at the receivers (Wallace, Elmquist & Haines 1989): each receiver
+//! averages the exact point-to-patch form factor over its sample points, which keeps every
+//! receiver's form factors to a closed enclosure summing to one.
 
-use std::collections::HashMap;
-use std::rc::Rc;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
-use std::time::Instant;
 
 use rayon::prelude::*;
 
 use super::form_factor::point_to_polygon;
 use super::patch::{on_primitive, Patch};
+pub use super::settings::Relaxation;
 use crate::accel::Accel;
 use crate::geometry::{shadow_ray, Ray, Vec3};
 use crate::sampling::{Pattern, Rng, Strata};
@@ -67,6 +67,11 @@ impl<'a> FormFactorSampler<'a> {
             anchors,
             rays: AtomicU64::new(0),
         }
+    }
+
+    /// The patches the form factors connect.
+    pub fn patches(&self) -> &'a [Patch] {
+        self.patches
     }
 
     /// Point `k` of receiver `j`: the same points whichever patch shoots, so that a receiver's
@@ -184,67 +189,6 @@ fn may_see(r: &Patch, s: &Patch) -> bool {
     in_front(r, s) && in_front(s, r)
 }
 
-/// Rows of form factors kept between shots, within a memory budget. Progressive refinement
-/// revisits its shooters in a roughly cyclic order, which defeats least-recently-used
-/// eviction (measured: 101 hits in 22,249 shots of a 4,820-patch room with room for a fifth
-/// of the rows); the rows kept are instead those of the patches that have shot most often
-/// (least-frequently-used eviction), since a patch that shot often will shoot again.
-pub struct RowCache {
-    rows: HashMap<usize, Rc<[f32]>>,
-    /// Times each patch has asked for its row.
-    uses: Vec<u32>,
-    budget_bytes: usize,
-    bytes: usize,
-    pub hits: u64,
-    pub misses: u64,
-    pub peak_bytes: usize,
-}
-
-impl RowCache {
-    pub fn new(patches: usize, budget_bytes: usize) -> RowCache {
-        RowCache {
-            rows: HashMap::new(),
-            uses: vec![0; patches],
-            budget_bytes,
-            bytes: 0,
-            hits: 0,
-            misses: 0,
-            peak_bytes: 0,
-        }
-    }
-
-    pub fn get_or_insert(&mut self, i: usize, compute: impl FnOnce() -> Vec<f32>) -> Rc<[f32]> {
-        self.uses[i] += 1;
-        if let Some(row) = self.rows.get(&i) {
-            self.hits += 1;
-            return row.clone();
-        }
-        self.misses += 1;
-        let row: Rc<[f32]> = compute().into();
-        let size = std::mem::size_of_val(&*row);
-        if size > self.budget_bytes {
-            return row;
-        }
-        if self.bytes + size > self.budget_bytes {
-            // Replace the least used cached row, if this patch has been used more.
-            let Some((&victim, _)) = self.rows.iter().min_by_key(|(&k, _)| (self.uses[k], k))
-            else {
-                return row;
-            };
-            if self.uses[victim] >= self.uses[i] {
-                return row;
-            }
-            if let Some(r) = self.rows.remove(&victim) {
-                self.bytes -= std::mem::size_of_val(&*r);
-            }
-        }
-        self.bytes += size;
-        self.peak_bytes = self.peak_bytes.max(self.bytes);
-        self.rows.insert(i, row.clone());
-        row
-    }
-}
-
 /// Why the solver stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stop {
@@ -270,170 +214,64 @@ pub struct ShotRecord {
     pub rays: u64,
 }
 
-/// The state of a progressive solve: radiance per patch and what is left to shoot.
+/// What a solver found, in terms every solver gives: per-patch light, what the display
+/// modes and the ray tracer read.
 #[derive(Clone, Debug, Default)]
-pub struct SolverState {
+pub struct PatchLight {
     /// Outgoing radiance L_i = Le_i + ρ_i · incident_i.
     pub radiance: Vec<Color>,
-    /// Radiance received but not yet shot.
-    pub unshot: Vec<Color>,
-    /// Part of `unshot` that is emission (shot once, at the emitter's first shot).
-    unshot_emission: Vec<Color>,
+    /// Radiance received but not yet distributed (progressive refinement's unshot radiance;
+    /// `--visualize undistributed`, and the ambient term of the display).
+    pub undistributed: Vec<Color>,
     /// Incident radiance averaged over the hemisphere (irradiance / π) gathered so far.
     pub incident: Vec<Color>,
     /// The part of `incident` that came straight from emitters.
     pub incident_direct: Vec<Color>,
-    pub shots: u64,
+    /// Steps taken: shots of progressive refinement, sweeps of an iterative solver.
+    pub iterations: u64,
     /// Undistributed power over emitted power.
     pub residual: f32,
+    /// One record per step, when asked (`--log-convergence`).
     pub log: Vec<ShotRecord>,
 }
 
+/// When a solver stops, whatever the solver.
 pub struct SolveLimits {
+    /// Stop when the residual falls to this (`--radiosity-tolerance`).
     pub tolerance: f32,
-    /// Stop after exactly this many shots (as the course's "after the top 16 patches have shot").
+    /// Stop after exactly this many steps (as the course's "after the top 16 patches have
+    /// shot").
     pub iterations: Option<u64>,
-    /// Safety cap when no iteration count is given.
+    /// Safety cap on steps when no iteration count is given.
     pub cap: u64,
-    pub cache_bytes: usize,
+    /// Keep a record of every step.
     pub log: bool,
-    /// Over-relaxation of each shot.
-    pub relaxation: Relaxation,
 }
 
-/// The over-relaxation factor ω of each shot (`--radiosity-relaxation`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Relaxation {
-    /// ω from the solve itself: the fraction μ of a shot's power that comes back as unshot
-    /// power (a running mean over the shots: ρ in a furnace, less where light escapes) gives
-    /// successive over-relaxation's ω = 2 / (1 + √(1 − μ²)), at most 1.95. Open and dark
-    /// scenes get ω near 1 (plain shooting); bright closed rooms get ω near 2.
-    Auto,
-    /// A fixed ω in [1, 2); 1 is plain progressive refinement.
-    Fixed(f32),
+/// What a solve returns: the light, why it stopped, and a line of the solver's own counters.
+pub struct Solved {
+    pub light: PatchLight,
+    pub stop: Stop,
+    /// E.g. "form-factor rows 12 computed, 3 reused (cache peak 0.1 MiB)".
+    pub report: String,
 }
 
-impl std::str::FromStr for Relaxation {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        if s == "auto" {
-            return Ok(Relaxation::Auto);
-        }
-        match s.parse::<f32>() {
-            Ok(w) if (1.0..2.0).contains(&w) => Ok(Relaxation::Fixed(w)),
-            _ => Err(format!("expected auto or a number in [1, 2), found {s}")),
-        }
-    }
+/// A radiosity solver: from the patches and their form factors (through the sampler, which
+/// casts the visibility rays) to the light of every patch. Progressive refinement
+/// (`Progressive`) is the first; the solver-neutral `Solution` holds what any of them found.
+pub trait RadiositySolver {
+    /// Solves until the limits stop it; `on_step` hears the residual after each step.
+    fn solve(
+        &self,
+        sampler: &FormFactorSampler,
+        limits: &SolveLimits,
+        on_step: &dyn Fn(f32),
+    ) -> Solved;
 }
 
-/// Weight of each shot in the running mean of the returned fraction μ.
-const RETURN_MEAN_WEIGHT: f32 = 0.02;
-
-/// Power of a (possibly negative, when over-relaxing) radiance over an area, all channels.
-fn power(c: Color, area: f32) -> f32 {
-    (c.x.abs() + c.y.abs() + c.z.abs()) * area
-}
-
-/// Solves by progressive refinement until the limits stop it.
-pub fn solve(
-    sampler: &FormFactorSampler,
-    limits: &SolveLimits,
-    on_shot: impl Fn(f32),
-) -> (SolverState, Stop, RowCache) {
-    let patches = sampler.patches;
-    let emitted: Vec<Color> = patches.iter().map(|p| p.emitted).collect();
-    let mut s = SolverState {
-        radiance: emitted.clone(),
-        unshot: emitted.clone(),
-        unshot_emission: emitted,
-        incident: vec![Vec3::ZERO; patches.len()],
-        incident_direct: vec![Vec3::ZERO; patches.len()],
-        ..Default::default()
-    };
-    let mut cache = RowCache::new(patches.len(), limits.cache_bytes);
-    let total_emitted: f64 = patches
-        .iter()
-        .map(|p| power(p.emitted, p.area) as f64)
-        .sum();
-    if total_emitted <= 0.0 {
-        return (s, Stop::NoLight, cache);
-    }
-    let start = Instant::now();
-    let mut returned: Option<f32> = None;
-    let stop = loop {
-        let (mut best, mut best_power, mut undistributed) = (0usize, -1.0f32, 0.0f64);
-        for (i, (u, p)) in s.unshot.iter().zip(patches).enumerate() {
-            let pw = power(*u, p.area);
-            undistributed += pw as f64;
-            if pw > best_power {
-                best = i;
-                best_power = pw;
-            }
-        }
-        s.residual = (undistributed / total_emitted) as f32;
-        on_shot(s.residual);
-        if crate::interrupt::requested() {
-            break Stop::Interrupted;
-        }
-        match limits.iterations {
-            Some(k) if s.shots >= k => break Stop::Iterations,
-            None if s.residual <= limits.tolerance => break Stop::Converged,
-            None if s.shots >= limits.cap => break Stop::Cap,
-            _ => {}
-        }
-        if best_power <= 0.0 {
-            break Stop::Converged;
-        }
-        let row = cache.get_or_insert(best, || sampler.row(best));
-        // Over-relaxation (ω > 1) shoots more than the patch holds; what it shot too much
-        // stays behind as negative unshot radiance, shot back later. The patch's own
-        // radiance is what it received, unchanged by shooting.
-        let omega = match (limits.relaxation, returned) {
-            (Relaxation::Fixed(w), _) => w,
-            (Relaxation::Auto, None) => 1.0,
-            (Relaxation::Auto, Some(mu)) => {
-                (2.0 / (1.0 + (1.0 - mu * mu).max(0.0).sqrt())).min(1.95)
-            }
-        };
-        let shot = s.unshot[best] * omega;
-        let mut returned_power = 0.0f64;
-        let shot_emission = s.unshot_emission[best] * omega;
-        s.unshot[best] -= shot;
-        s.unshot_emission[best] *= 1.0 - omega;
-        for (j, &f) in row.iter().enumerate() {
-            if f <= 0.0 {
-                continue;
-            }
-            let arriving = shot * f;
-            s.incident[j] += arriving;
-            s.incident_direct[j] += shot_emission * f;
-            let reflected = patches[j].albedo.mul_elem(arriving);
-            returned_power += power(reflected, patches[j].area) as f64;
-            s.radiance[j] += reflected;
-            s.unshot[j] += reflected;
-        }
-        let shot_power = power(shot, patches[best].area) as f64;
-        if shot_power > 0.0 {
-            let mu = (returned_power / shot_power) as f32;
-            returned = Some(returned.map_or(mu, |m| m + RETURN_MEAN_WEIGHT * (mu - m)));
-        }
-        s.shots += 1;
-        if limits.log {
-            s.log.push(ShotRecord {
-                shot: s.shots,
-                patch: best as u32,
-                residual: s.residual,
-                seconds: start.elapsed().as_secs_f64(),
-                rays: sampler.rays.load(Relaxed),
-            });
-        }
-    };
-    (s, stop, cache)
-}
-
-/// The ambient term of Cohen et al. 1988 for display: the light not yet shot, spread evenly
+/// The ambient term of Cohen et al. 1988 for display: the light not yet distributed, spread evenly
 /// and reflected by the average albedo, ambient = Σ ΔL_j A_j / Σ A_j / (1 − ρ_avg).
-pub fn ambient(patches: &[Patch], unshot: &[Color]) -> Color {
+pub fn ambient(patches: &[Patch], undistributed: &[Color]) -> Color {
     let area: f32 = patches.iter().map(|p| p.area).sum();
     if area <= 0.0 {
         return Vec3::ZERO;
@@ -443,16 +281,16 @@ pub fn ambient(patches: &[Patch], unshot: &[Color]) -> Color {
         .map(|p| p.albedo * p.area)
         .fold(Vec3::ZERO, |a, b| a + b)
         / area;
-    let undistributed = patches
+    let mean = patches
         .iter()
-        .zip(unshot)
+        .zip(undistributed)
         .map(|(p, u)| *u * p.area)
         .fold(Vec3::ZERO, |a, b| a + b)
         / area;
     let r = |rho: f32, u: f32| if rho < 1.0 { u / (1.0 - rho) } else { 0.0 };
     crate::geometry::vec3(
-        r(rho_avg.x, undistributed.x),
-        r(rho_avg.y, undistributed.y),
-        r(rho_avg.z, undistributed.z),
+        r(rho_avg.x, mean.x),
+        r(rho_avg.y, mean.y),
+        r(rho_avg.z, mean.z),
     )
 }

@@ -1,0 +1,531 @@
+//! The render command's flags: one clap group per engine, each converting itself into that
+//! engine's settings. Every default is read from the settings' `Default`, so it is written
+//! once; a flag's help says what it does, clap adds the default.
+//!
+//! Adding a flag to an engine: a field in that engine's group here (with its help line) and
+//! the field it sets in the engine's settings; nothing else. The group a flag is in decides
+//! which engine it implies and when it is reported as having had no effect.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::accel::{AccelKind, AccelOptions, EmbreeQuality};
+use crate::engines::photon::{self, PhotonSettings};
+use crate::engines::radiosity::{self, solver::Relaxation, RadiositySettings};
+use crate::engines::{EngineKind, IndirectKind, RenderSettings};
+use crate::geometry::vec3;
+use crate::sampling::Pattern;
+
+fn rs() -> RenderSettings {
+    RenderSettings::default()
+}
+fn radiosity_defaults() -> RadiositySettings {
+    RadiositySettings::default()
+}
+fn photon_defaults() -> PhotonSettings {
+    PhotonSettings::default()
+}
+
+/// Everything `render -input SCENE …` reads.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub common: CommonArgs,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub ray_trace: RayTraceArgs,
+    #[command(flatten)]
+    pub radiosity: RadiosityArgs,
+    #[command(flatten)]
+    pub photon: PhotonArgs,
+    /// The argument ids given on the command line (filled from clap's value sources after
+    /// parsing), by group.
+    #[arg(skip)]
+    pub given: Vec<(String, String)>,
+}
+
+/// Flags every engine reads.
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Scene, output and run")]
+pub struct CommonArgs {
+    /// The scene file (course dialect or standard OBJ).
+    #[arg(long, required = true)]
+    pub input: Option<PathBuf>,
+    /// Output image: .png or .jpg (sRGB 8-bit), .exr or .pfm (linear float). Default:
+    /// <scene stem>.png.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Image size in pixels.
+    #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [rs().width, rs().height])]
+    pub size: Vec<u32>,
+    /// Lighting engine (default: photon when a photon flag is given, radiosity when a
+    /// radiosity flag is given, else raytrace).
+    #[arg(long, value_enum)]
+    pub engine: Option<EngineKind>,
+    /// What to show instead of the rendered image: a radiosity mode (implies the radiosity
+    /// engine) or photons/kdtree (implies the photon engine) [default: the image].
+    #[arg(long, value_enum)]
+    pub visualize: Option<Visualize>,
+    /// Visibility backend (default: embree when this build has it).
+    #[arg(long, value_enum)]
+    pub accel: Option<AccelKind>,
+    /// Worker threads (0: one per core; at most 1024).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Seed of every random number; the same seed gives the same image at any thread count.
+    #[arg(long, default_value_t = rs().seed)]
+    pub seed: u64,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Print the stages and structures this render would build, and exit.
+    #[arg(long)]
+    pub plan: bool,
+    /// Refuse renders estimated to need more memory than this (e.g. 512M, 8G; default 80% of
+    /// physical memory).
+    #[arg(long, value_name = "SIZE", value_parser = crate::plan::parse_bytes)]
+    pub max_memory: Option<u64>,
+    /// Print counters (rays cast, build and render time) after rendering.
+    #[arg(long)]
+    pub stats: bool,
+    /// Make quads opaque from both sides.
+    #[arg(long)]
+    pub two_sided: bool,
+    /// Embree's build quality.
+    #[arg(long, value_enum, default_value_t = AccelOptions::default().embree_quality)]
+    pub embree_quality: EmbreeQuality,
+    /// Embree's robust (watertight) mode: on by default; `--embree-robust false` trades
+    /// cracks along quad diagonals and shared edges for a little speed.
+    #[arg(long, default_value_t = AccelOptions::default().embree_robust, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub embree_robust: bool,
+}
+
+/// What `--visualize` can show: the radiosity engine's modes and the photon engine's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Visualize {
+    /// The radiosity solution: radiance of each patch plus the ambient term for light not
+    /// yet shot.
+    Radiance,
+    /// Each patch's albedo.
+    Materials,
+    /// Form factors from one patch (`--ff-source`) to every other, grey by relative size.
+    FormFactors,
+    /// Emitted radiance.
+    Lights,
+    /// Radiance received but not yet shot.
+    Undistributed,
+    /// Radiance absorbed: (1 − ρ) × incident.
+    Absorbed,
+    /// The photon engine's photons projected through the camera, coloured by power.
+    Photons,
+    /// The photons with the cells of a balanced kd-tree over them drawn in green.
+    Kdtree,
+}
+
+impl Visualize {
+    /// The radiosity engine's mode, if this is one.
+    fn radiosity(self) -> Option<radiosity::Display> {
+        use radiosity::Display as D;
+        Some(match self {
+            Visualize::Radiance => D::Radiance,
+            Visualize::Materials => D::Materials,
+            Visualize::FormFactors => D::FormFactors,
+            Visualize::Lights => D::Lights,
+            Visualize::Undistributed => D::Undistributed,
+            Visualize::Absorbed => D::Absorbed,
+            Visualize::Photons | Visualize::Kdtree => return None,
+        })
+    }
+
+    /// The photon engine's mode, if this is one.
+    fn photon(self) -> Option<photon::Display> {
+        match self {
+            Visualize::Photons => Some(photon::Display::Photons),
+            Visualize::Kdtree => Some(photon::Display::Kdtree),
+            _ => None,
+        }
+    }
+
+    /// The engine whose mode this is.
+    pub fn engine(self) -> EngineKind {
+        if self.photon().is_some() {
+            EngineKind::Photon
+        } else {
+            EngineKind::Radiosity
+        }
+    }
+}
+
+/// The camera's samples and lens: read by every engine that samples pixels.
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Camera")]
+pub struct CameraArgs {
+    /// Samples per pixel (at least 1).
+    #[arg(long, default_value_t = rs().num_antialias_samples)]
+    pub num_antialias_samples: u32,
+    /// Thin-lens radius for depth of field (0: pinhole).
+    #[arg(long, default_value_t = rs().aperture, allow_negative_numbers = true)]
+    pub aperture: f32,
+    /// Distance of the plane in focus (default: the camera's point of interest).
+    #[arg(long, allow_negative_numbers = true)]
+    pub focus_distance: Option<f32>,
+}
+
+/// The ray tracer's flags (the photon engine and the radiosity display read some of them).
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Ray tracing")]
+pub struct RayTraceArgs {
+    /// Mirror/refraction recursion depth.
+    #[arg(long, default_value_t = rs().num_bounces)]
+    pub num_bounces: u32,
+    /// Shadow rays per light (radiosity: visibility in form factors when > 0).
+    #[arg(long, default_value_t = rs().num_shadow_samples)]
+    pub num_shadow_samples: u32,
+    /// Ambient radiance R G B [default: 0.1 0.1 0.1].
+    #[arg(long, num_args = 3, value_names = ["R", "G", "B"], allow_negative_numbers = true)]
+    pub ambient_light: Option<Vec<f32>>,
+    /// Placement of the points on each light for soft shadows.
+    #[arg(long, value_enum, default_value_t = rs().light_sampling)]
+    pub light_sampling: Pattern,
+    /// Diffuse indirect light: the constant -ambient_light, or the radiosity solution.
+    #[arg(long, value_enum, default_value_t = rs().indirect)]
+    pub indirect: IndirectKind,
+    /// Trace pixel (X, Y) (column from the left, row from the bottom) and write its rays
+    /// beside the image: OUT.raytree.png (eye rays white, reflected/refracted red, shadow
+    /// green) and OUT.raytree.obj (the segments as OBJ lines).
+    #[arg(long, num_args = 2, value_names = ["X", "Y"])]
+    pub ray_tree: Option<Vec<u32>>,
+}
+
+/// The radiosity engine's flags (also read by the ray tracer with `--indirect radiosity`).
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Radiosity")]
+pub struct RadiosityArgs {
+    /// Point pairs per form factor.
+    #[arg(long, default_value_t = radiosity_defaults().num_form_factor_samples)]
+    pub num_form_factor_samples: u32,
+    /// Sphere tessellation H V.
+    #[arg(long, num_args = 2, value_names = ["H", "V"], default_values_t = [radiosity_defaults().sphere_rasterization.0, radiosity_defaults().sphere_rasterization.1])]
+    pub sphere_rasterization: Vec<u32>,
+    /// Ring tessellation around the axis.
+    #[arg(long, default_value_t = radiosity_defaults().cylinder_ring_rasterization)]
+    pub cylinder_ring_rasterization: u32,
+    /// Smooth display: bilinear between values averaged at patch corners.
+    #[arg(long)]
+    pub interpolate: bool,
+    /// Split every quad into four this many times, keeping the parents.
+    #[arg(long, default_value_t = radiosity_defaults().subdivide)]
+    pub subdivide: u32,
+    /// Stop when undistributed / emitted power falls to this.
+    #[arg(long, default_value_t = radiosity_defaults().tolerance, allow_negative_numbers = true)]
+    pub radiosity_tolerance: f32,
+    /// Stop after exactly K shots, e.g. 16 for the course's "after the top 16 patches have
+    /// shot".
+    #[arg(long, value_name = "K")]
+    pub radiosity_iterations: Option<u64>,
+    /// Safety cap: at most this many shots per patch before giving up, reported.
+    #[arg(long, default_value_t = radiosity_defaults().max_shots_per_patch)]
+    pub radiosity_max_shots_per_patch: u64,
+    /// Over-relaxation of each shot: auto (from how much of each shot comes back), or a
+    /// fixed ω in [1, 2), 1 being plain progressive refinement.
+    #[arg(long, default_value_t = radiosity_defaults().relaxation)]
+    pub radiosity_relaxation: Relaxation,
+    /// Memory for cached rows of form factors, MiB.
+    #[arg(long, default_value_t = radiosity_defaults().ff_cache_mb)]
+    pub ff_cache_mb: usize,
+    /// Split patches whose radiance differs from a neighbour's by more than this, and solve
+    /// again.
+    #[arg(long, value_name = "THRESHOLD", allow_negative_numbers = true)]
+    pub adaptive_subdivide: Option<f32>,
+    /// Rounds of adaptive subdivision.
+    #[arg(long, default_value_t = radiosity_defaults().adaptive_rounds)]
+    pub adaptive_rounds: u32,
+    /// Draw patch outlines over the radiosity image.
+    #[arg(long)]
+    pub wireframe: bool,
+    /// The patch whose form factors `--visualize form-factors` shows (default: the one with
+    /// the most undistributed light).
+    #[arg(long, value_name = "PATCH")]
+    pub ff_source: Option<u32>,
+    /// Write one CSV line per radiosity shot: residual, wall time, rays cast.
+    #[arg(long, value_name = "FILE.csv")]
+    pub log_convergence: Option<PathBuf>,
+}
+
+/// The photon engine's flags.
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Photon mapping")]
+pub struct PhotonArgs {
+    /// Photons to emit.
+    #[arg(long, default_value_t = photon_defaults().num_photons_to_shoot)]
+    pub num_photons_to_shoot: u64,
+    /// Photons aimed at the mirrors and glass for the caustic map (default: as many as
+    /// -num_photons_to_shoot; 0: caustics from the main pass only).
+    #[arg(long)]
+    pub caustic_photons: Option<u64>,
+    /// Photons per density estimate.
+    #[arg(long, default_value_t = photon_defaults().num_photons_to_collect)]
+    pub num_photons_to_collect: u32,
+    /// Final gathering for indirect light.
+    #[arg(long)]
+    pub gather_indirect: bool,
+    /// Bounces a photon may make.
+    #[arg(long, default_value_t = photon_defaults().max_photon_depth)]
+    pub max_photon_depth: u32,
+    /// Largest radius of a photon density estimate, as a fraction of the scene's diagonal.
+    #[arg(long, default_value_t = photon_defaults().max_radius, allow_negative_numbers = true)]
+    pub photon_max_radius: f32,
+    /// Hemisphere rays per final gather (-gather_indirect).
+    #[arg(long, default_value_t = photon_defaults().final_gather_rays)]
+    pub final_gather_rays: u32,
+    /// Ward's irradiance-cache error a: records are used where their weight exceeds 1/a.
+    #[arg(long, default_value_t = photon_defaults().irradiance_cache_error, allow_negative_numbers = true)]
+    pub irradiance_cache_error: f32,
+    /// Irradiance-cache records are gathered at every n-th pixel in x and y.
+    #[arg(long, default_value_t = photon_defaults().irradiance_cache_spacing)]
+    pub irradiance_cache_spacing: u32,
+    /// Write both photon maps to FILE (versioned, with a fingerprint of scene and settings).
+    #[arg(long, value_name = "FILE")]
+    pub save_photons: Option<PathBuf>,
+    /// Read the photon maps from FILE instead of tracing them; refused if made for another
+    /// scene or other settings.
+    #[arg(long, value_name = "FILE")]
+    pub load_photons: Option<PathBuf>,
+}
+
+impl RadiosityArgs {
+    fn settings(&self, visualize: Option<Visualize>) -> RadiositySettings {
+        RadiositySettings {
+            num_form_factor_samples: self.num_form_factor_samples,
+            sphere_rasterization: (self.sphere_rasterization[0], self.sphere_rasterization[1]),
+            cylinder_ring_rasterization: self.cylinder_ring_rasterization,
+            subdivide: self.subdivide,
+            interpolate: self.interpolate,
+            tolerance: self.radiosity_tolerance,
+            iterations: self.radiosity_iterations,
+            max_shots_per_patch: self.radiosity_max_shots_per_patch,
+            relaxation: self.radiosity_relaxation,
+            ff_cache_mb: self.ff_cache_mb,
+            adaptive_threshold: self.adaptive_subdivide,
+            adaptive_rounds: self.adaptive_rounds,
+            wireframe: self.wireframe,
+            ff_source: self.ff_source,
+            log_convergence: self.log_convergence.is_some(),
+            display: visualize.and_then(Visualize::radiosity).unwrap_or_default(),
+        }
+    }
+}
+
+impl PhotonArgs {
+    fn settings(&self, visualize: Option<Visualize>) -> PhotonSettings {
+        PhotonSettings {
+            num_photons_to_shoot: self.num_photons_to_shoot,
+            caustic_photons: self.caustic_photons,
+            num_photons_to_collect: self.num_photons_to_collect,
+            max_photon_depth: self.max_photon_depth,
+            max_radius: self.photon_max_radius,
+            gather_indirect: self.gather_indirect,
+            final_gather_rays: self.final_gather_rays,
+            irradiance_cache_error: self.irradiance_cache_error,
+            irradiance_cache_spacing: self.irradiance_cache_spacing,
+            save: self.save_photons.clone(),
+            load: self.load_photons.clone(),
+            display: visualize.and_then(Visualize::photon).unwrap_or_default(),
+        }
+    }
+}
+
+/// The clap group of each engine's own flags, and the engine it implies.
+pub const ENGINE_GROUPS: [(&str, EngineKind); 2] = [
+    ("PhotonArgs", EngineKind::Photon),
+    ("RadiosityArgs", EngineKind::Radiosity),
+];
+
+impl RenderArgs {
+    /// Everything the engines read.
+    pub fn settings(&self) -> RenderSettings {
+        let visualize = self.common.visualize;
+        RenderSettings {
+            width: self.common.size[0],
+            height: self.common.size[1],
+            num_bounces: self.ray_trace.num_bounces,
+            num_shadow_samples: self.ray_trace.num_shadow_samples,
+            num_antialias_samples: self.camera.num_antialias_samples,
+            ambient_light: self
+                .ray_trace
+                .ambient_light
+                .as_ref()
+                .map_or(rs().ambient_light, |a| vec3(a[0], a[1], a[2])),
+            radiosity: self.radiosity.settings(visualize),
+            indirect: self.ray_trace.indirect,
+            photon: self.photon.settings(visualize),
+            light_sampling: self.ray_trace.light_sampling,
+            aperture: self.camera.aperture,
+            focus_distance: self.camera.focus_distance,
+            seed: self.common.seed,
+            quiet: self.common.quiet,
+        }
+    }
+
+    pub fn accel_options(&self) -> AccelOptions {
+        AccelOptions {
+            embree_quality: self.common.embree_quality,
+            embree_robust: self.common.embree_robust,
+        }
+    }
+
+    /// Whether a flag of this clap group was given on the command line.
+    fn group_given(&self, group: &str) -> bool {
+        self.given.iter().any(|(g, _)| g == group)
+    }
+
+    /// The engine asked for, or the one the flags given imply: a photon flag or photon
+    /// display means the photon engine; a radiosity flag or mode (without `--indirect
+    /// radiosity`, which asks the ray tracer for it) the radiosity engine.
+    pub fn engine(&self) -> EngineKind {
+        if let Some(e) = self.common.engine {
+            return e;
+        }
+        let visualize = self.common.visualize.map(Visualize::engine);
+        for (group, engine) in ENGINE_GROUPS {
+            let implied = self.group_given(group) || visualize == Some(engine);
+            let asked_of_ray_tracer = engine == EngineKind::Radiosity
+                && self.ray_trace.indirect == IndirectKind::Radiosity;
+            if implied && !asked_of_ray_tracer {
+                return engine;
+            }
+        }
+        EngineKind::Raytrace
+    }
+
+    /// Flags given that the chosen engine does not read, as the user would type them.
+    pub fn unused_flags(&self) -> Vec<String> {
+        let engine = self.engine();
+        let reads_group = |group: &str| match group {
+            "PhotonArgs" => engine == EngineKind::Photon,
+            "RadiosityArgs" => {
+                engine == EngineKind::Radiosity
+                    || (engine == EngineKind::Raytrace
+                        && self.ray_trace.indirect == IndirectKind::Radiosity)
+            }
+            _ => true,
+        };
+        let unread = crate::engines::engine(engine).unread_flags();
+        self.given
+            .iter()
+            .filter(|(group, id)| !reads_group(group) || unread.contains(&id.as_str()))
+            .map(|(_, id)| super::flag_name(id))
+            .collect()
+    }
+}
+
+/// The most worker threads `--threads` accepts: far above any machine's cores, far below
+/// what would exhaust the process's threads.
+pub const MAX_THREADS: usize = 1024;
+/// The largest image side `-size` accepts (the EXR and PNG encoders' own limits are higher;
+/// `--max-memory` bounds the area).
+pub const MAX_IMAGE_SIDE: u32 = 1 << 16;
+
+/// `value` must be finite and at least `min` (`open`: greater than `min`).
+fn check_number(id: &str, value: f32, min: f32, open: bool) -> Result<(), String> {
+    let ok = value.is_finite() && if open { value > min } else { value >= min };
+    if ok {
+        return Ok(());
+    }
+    let bound = if open { ">" } else { "≥" };
+    Err(format!(
+        "{} {value}: expected a finite number {bound} {min}",
+        super::flag_name(id)
+    ))
+}
+
+/// `value` must lie in `range`.
+fn check_count<T>(id: &str, value: T, range: std::ops::RangeInclusive<T>) -> Result<(), String>
+where
+    T: PartialOrd + std::fmt::Display,
+{
+    if range.contains(&value) {
+        return Ok(());
+    }
+    Err(format!(
+        "{} {value}: expected a whole number from {} to {}",
+        super::flag_name(id),
+        range.start(),
+        range.end()
+    ))
+}
+
+impl RenderArgs {
+    /// Rejects values no engine can use, naming the flag and the allowed range: before the
+    /// scene is read, so that nothing is built for a render that cannot run.
+    pub fn validate(&self) -> Result<(), String> {
+        let c = &self.common;
+        for side in &c.size {
+            check_count("size", *side, 1..=MAX_IMAGE_SIDE)?;
+        }
+        check_count("threads", c.threads, 0..=MAX_THREADS)?;
+        check_count(
+            "num_antialias_samples",
+            self.camera.num_antialias_samples,
+            1..=u32::MAX,
+        )?;
+        check_number("aperture", self.camera.aperture, 0.0, false)?;
+        if let Some(d) = self.camera.focus_distance {
+            check_number("focus_distance", d, 0.0, true)?;
+        }
+        if let Some(a) = &self.ray_trace.ambient_light {
+            if let Some(bad) = a.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+                return Err(format!(
+                    "{} {} {} {}: expected three finite numbers ≥ 0 ({bad} is not)",
+                    super::flag_name("ambient_light"),
+                    a[0],
+                    a[1],
+                    a[2]
+                ));
+            }
+        }
+        let r = &self.radiosity;
+        check_count(
+            "num_form_factor_samples",
+            r.num_form_factor_samples,
+            1..=u32::MAX,
+        )?;
+        check_number("radiosity_tolerance", r.radiosity_tolerance, 0.0, true)?;
+        if let Some(t) = r.adaptive_subdivide {
+            check_number("adaptive_subdivide", t, 0.0, true)?;
+        }
+        let p = &self.photon;
+        check_count(
+            "num_photons_to_collect",
+            p.num_photons_to_collect,
+            1..=u32::MAX,
+        )?;
+        check_number("photon_max_radius", p.photon_max_radius, 0.0, true)?;
+        check_number(
+            "irradiance_cache_error",
+            p.irradiance_cache_error,
+            0.0,
+            true,
+        )?;
+        check_count(
+            "irradiance_cache_spacing",
+            p.irradiance_cache_spacing,
+            1..=u32::MAX,
+        )?;
+        check_count("final_gather_rays", p.final_gather_rays, 1..=u32::MAX)?;
+        if let (Some(xy), &[w, h]) = (&self.ray_trace.ray_tree, &c.size[..]) {
+            if xy[0] >= w || xy[1] >= h {
+                return Err(format!(
+                    "--ray-tree {} {}: the pixel is outside the {w}×{h} image",
+                    xy[0], xy[1]
+                ));
+            }
+        }
+        if let Some(output) = &c.output {
+            crate::film::ImageFormat::check_output(output).map_err(|e| e.to_string())?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,193 @@
+//! The render command: checks the flags, loads the scene, plans, builds the Accel, runs the
+//! engine, writes the image (and the ray tree, the convergence log), reports.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering::Relaxed;
+use std::time::Instant;
+
+use super::{emit, RenderArgs};
+use crate::accel::{self, Accel, AccelKind};
+use crate::engines::{self, raytrace, RenderSettings, Rendered};
+use crate::film::Film;
+use crate::plan::Plan;
+use crate::scene::Scene;
+
+/// `render -input SCENE …`.
+pub fn run(args: &RenderArgs) -> Result<(), String> {
+    let input = args.common.input.as_ref().ok_or("missing -input")?;
+    args.validate()?;
+    let settings = args.settings();
+    let pool = crate::parallel::thread_pool(args.common.threads).map_err(|e| e.to_string())?;
+    crate::parallel::worker_start();
+
+    let load_start = Instant::now();
+    let mut scene = Scene::load(input).map_err(|e| e.to_string())?;
+    scene.two_sided_quads = args.common.two_sided;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    if scene.primitive_count() == 0 {
+        return Err(format!(
+            "{}: the scene has no geometry (no quads, triangles, spheres or rings): nothing to render",
+            input.display()
+        ));
+    }
+    let load_s = load_start.elapsed().as_secs_f64();
+    let kind = args
+        .common
+        .accel
+        .unwrap_or_else(AccelKind::default_available);
+    let engine = args.engine();
+    let plan = Plan::new(&scene, engine, kind, &settings);
+    let unused = args.unused_flags();
+    if args.common.plan {
+        let notes: String = unused
+            .iter()
+            .map(|f| format!("note: {f} is ignored: the {engine} engine does not read it\n"))
+            .collect();
+        return emit(&format!("scene: {}\n{plan}{notes}", input.display()));
+    }
+    let max_memory = args
+        .common
+        .max_memory
+        .unwrap_or_else(crate::plan::default_max_memory);
+    if plan.memory > max_memory {
+        return Err(format!(
+            "this render would need about {}, more than --max-memory {}{}; ask for less (-size, -num_photons_to_shoot, --subdivide) or raise --max-memory",
+            plan.memory_summary(),
+            crate::plan::human_bytes(max_memory),
+            if args.common.max_memory.is_none() { " (80% of this machine's memory)" } else { "" }
+        ));
+    }
+    crate::interrupt::install();
+    for flag in unused {
+        eprintln!(
+            "note: {flag} is accepted but has no effect: the {engine} engine does not read it"
+        );
+    }
+
+    let build_start = Instant::now();
+    let accel = pool
+        .install(|| accel::build(&scene, kind, &args.accel_options()))
+        .map_err(|e| e.to_string())?;
+    let build_s = build_start.elapsed().as_secs_f64();
+    let render_start = Instant::now();
+    let accel = accel.as_ref();
+    let rendered = pool.install(|| engines::render(engine, &scene, accel, &settings))?;
+    let render_s = render_start.elapsed().as_secs_f64();
+    report(&rendered, &settings);
+    if let (Some(path), Some(csv)) = (&args.radiosity.log_convergence, &rendered.convergence_log) {
+        crate::output::write_text_atomically(path, csv).map_err(|e| e.to_string())?;
+    }
+    let Rendered { film, stats, .. } = rendered;
+    let output = args
+        .common
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(input));
+    film.write(&output).map_err(|e| e.to_string())?;
+    if crate::interrupt::requested() {
+        return Err(format!(
+            "interrupted: wrote the image rendered so far to {}",
+            output.display()
+        ));
+    }
+    if let Some(xy) = &args.ray_trace.ray_tree {
+        write_ray_tree(&scene, accel, &settings, &film, &output, (xy[0], xy[1]))?;
+    }
+    if args.common.stats {
+        let rays = stats.total_rays();
+        let non_finite = stats.non_finite_samples.load(Relaxed);
+        eprintln!("stats: scene load {load_s:.3} s, accel build ({kind}) {build_s:.3} s, render {render_s:.3} s");
+        eprintln!(
+            "stats: rays cast {rays} ({:.2} Mrays/s): camera {}, shadow {}, secondary {}, form factor {}, photon {}",
+            rays as f64 / render_s / 1e6,
+            stats.camera_rays.load(Relaxed),
+            stats.shadow_rays.load(Relaxed),
+            stats.secondary_rays.load(Relaxed),
+            stats.form_factor_rays.load(Relaxed),
+            stats.photon_rays.load(Relaxed)
+        );
+        eprintln!("stats: non-finite samples {non_finite}");
+        if let Some(kib) = peak_memory_kib() {
+            eprintln!("stats: peak memory {:.1} MiB", kib as f64 / 1024.0);
+        }
+    }
+    if !args.common.quiet {
+        eprintln!("wrote {}", output.display());
+    }
+    Ok(())
+}
+
+/// What the engine had to say, and the samples that came out NaN or infinite.
+fn report(rendered: &Rendered, settings: &RenderSettings) {
+    for w in &rendered.warnings {
+        eprintln!("warning: {w}");
+    }
+    if !settings.quiet {
+        for line in &rendered.summary {
+            eprintln!("{line}");
+        }
+    }
+    let non_finite = rendered.stats.non_finite_samples.load(Relaxed);
+    if non_finite > 0 {
+        eprintln!(
+            "warning: {non_finite} samples were NaN or infinite and were left out of the image"
+        );
+    }
+}
+
+/// `<scene stem>.png` in the current folder.
+fn default_output(input: &Path) -> PathBuf {
+    let stem = input
+        .file_stem()
+        .map_or("render".into(), |s| s.to_string_lossy().into_owned());
+    PathBuf::from(format!("{stem}.png"))
+}
+
+/// Writes the ray tree of one pixel beside the image (`--ray-tree X Y`; the pixel was
+/// checked to be inside the image before the render).
+fn write_ray_tree(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+    film: &Film,
+    output: &Path,
+    (x, y): (u32, u32),
+) -> Result<(), String> {
+    let segments = raytrace::ray_tree(scene, accel, settings, x, y);
+    let stem = output.with_extension("");
+    let png = PathBuf::from(format!("{}.raytree.png", stem.display()));
+    let obj = PathBuf::from(format!("{}.raytree.obj", stem.display()));
+    crate::film::ray_tree::overlay(film, &scene.camera(), &segments)
+        .write(&png)
+        .map_err(|e| e.to_string())?;
+    crate::film::ray_tree::write_obj(&segments, &obj).map_err(|e| e.to_string())?;
+    if !settings.quiet {
+        eprintln!(
+            "wrote {} and {} ({} rays)",
+            png.display(),
+            obj.display(),
+            segments.len()
+        );
+    }
+    Ok(())
+}
+
+/// The process's peak resident memory (Linux: VmHWM of /proc/self/status), in KiB.
+pub fn peak_memory_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::flag_name;
+
+    #[test]
+    fn flag_names_are_spelled_as_the_user_types_them() {
+        assert_eq!(flag_name("num_bounces"), "-num_bounces");
+        assert_eq!(flag_name("max_photon_depth"), "--max-photon-depth");
+    }
+}

@@ -1,0 +1,194 @@
+//! The subcommands beside rendering: `bench-accel`, `report` and `compare`.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use super::{default_accels, default_report_engines, emit};
+use crate::accel::{AccelKind, AccelOptions};
+use crate::engines::EngineKind;
+use crate::scene::Scene;
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// A scene file, or `terrain:N` for a generated terrain of N triangles.
+    pub scene: String,
+    /// Rays per ray set.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub rays: usize,
+    /// Timings per cell; the median is reported.
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    /// Worker threads for the "all threads" rows (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Embree's robust (watertight) mode, as for rendering.
+    #[arg(long, default_value_t = true, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub embree_robust: bool,
+    /// Backends to measure.
+    #[arg(long, value_delimiter = ',', default_values_t = default_accels())]
+    pub accel: Vec<AccelKind>,
+    /// Ray sets to measure.
+    #[arg(long, value_enum, value_delimiter = ',', default_values = ["camera", "incoherent", "shadow"])]
+    pub sets: Vec<crate::bench::RaySet>,
+    /// Queries to measure.
+    #[arg(long, value_enum, value_delimiter = ',', default_values = ["closest", "occluded"])]
+    pub queries: Vec<crate::bench::Query>,
+    /// Single rays per call, batches, or both.
+    #[arg(long, value_enum, value_delimiter = ',', default_values = ["single", "batched"])]
+    pub modes: Vec<crate::bench::Mode>,
+}
+
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Engines to measure.
+    #[arg(long, value_delimiter = ',', default_values_t = default_report_engines())]
+    pub engines: Vec<EngineKind>,
+    /// Accels to run each engine on.
+    #[arg(long, value_delimiter = ',', default_values_t = default_accels())]
+    pub accel: Vec<AccelKind>,
+    /// Image width and height.
+    #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [96, 96])]
+    pub size: Vec<u32>,
+    /// Seeds per budget; errors are averaged over them, a budget's time is the fastest seed's.
+    #[arg(long, default_value_t = 2)]
+    pub seeds: u32,
+    /// Wall-time limit of the whole report in seconds, reference render included.
+    #[arg(long, default_value_t = 600.0)]
+    pub time_limit: f64,
+    /// Reference image (PFM, EXR or PNG); default: a path-traced render, cached in the
+    /// output directory.
+    #[arg(long, value_name = "FILE")]
+    pub reference: Option<PathBuf>,
+    /// Samples per pixel of the path-traced reference.
+    #[arg(long, default_value_t = 4096)]
+    pub reference_samples: u32,
+    /// Output directory (default: report-<scene name>).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Worker threads (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+pub fn bench_accel(args: &BenchArgs) -> Result<(), String> {
+    let scene = match args.scene.strip_prefix("terrain:") {
+        Some(n) => crate::generate::terrain(
+            n.parse()
+                .map_err(|_| format!("terrain:N needs a number, found {n}"))?,
+        ),
+        None => Scene::load(Path::new(&args.scene)).map_err(|e| e.to_string())?,
+    };
+    let pool = crate::parallel::thread_pool(args.threads).map_err(|e| e.to_string())?;
+    crate::parallel::worker_start();
+    let threads = pool.current_num_threads();
+    let options = AccelOptions {
+        embree_robust: args.embree_robust,
+        ..AccelOptions::default()
+    };
+    let crate::bench::Report { rows, builds } = pool
+        .install(|| {
+            crate::bench::bench_accel(
+                &scene,
+                &args.accel,
+                &options,
+                &crate::bench::Cells {
+                    sets: args.sets.clone(),
+                    queries: args.queries.clone(),
+                    modes: args.modes.clone(),
+                },
+                args.rays,
+                args.repeats,
+                threads,
+            )
+        })
+        .map_err(|e| e.to_string())?;
+    let mut lines = vec![
+        format!(
+            "scene: {} ({} primitives), {} rays per set, median of {} runs, embree robust: {}",
+            args.scene,
+            scene.primitive_count(),
+            args.rays,
+            args.repeats,
+            args.embree_robust
+        ),
+        String::new(),
+        "| backend | build (s) |".into(),
+        "|---|---|".into(),
+    ];
+    lines.extend(
+        builds
+            .iter()
+            .map(|(name, s)| format!("| {name} | {s:.3} |")),
+    );
+    lines.push(String::new());
+    lines.push("| backend | rays | query | mode | threads | Mrays/s |".into());
+    lines.push("|---|---|---|---|---|---|".into());
+    lines.extend(rows.iter().map(|r| {
+        format!(
+            "| {} | {} | {} | {} | {} | {:.2} |",
+            r.backend, r.rays, r.query, r.mode, r.threads, r.mrays_per_s
+        )
+    }));
+    lines.push(String::new());
+    emit(&lines.join("\n"))
+}
+
+pub fn report(args: &ReportArgs) -> Result<(), String> {
+    let stem = args
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let settings = crate::report::ReportSettings {
+        engines: args.engines.clone(),
+        accels: args.accel.clone(),
+        width: args.size[0],
+        height: args.size[1],
+        seeds: args.seeds.max(1),
+        time_limit: args.time_limit,
+        reference: args.reference.clone(),
+        reference_samples: args.reference_samples.max(1),
+        output: args
+            .output
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("report-{stem}"))),
+        quiet: args.quiet,
+    };
+    if settings.width == 0 || settings.height == 0 {
+        return Err("--size: both must be at least 1".into());
+    }
+    let pool = crate::parallel::thread_pool(args.threads).map_err(|e| e.to_string())?;
+    crate::parallel::worker_start();
+    crate::interrupt::install();
+    let report = pool.install(|| crate::report::run(&args.scene, &settings))?;
+    emit(&crate::report::summary(&report, &settings))?;
+    if !args.quiet {
+        eprintln!(
+            "wrote report.csv, report.png and report.md in {}",
+            settings.output.display()
+        );
+    }
+    Ok(())
+}
+
+pub fn compare(image: &Path, reference: &Path, heatmap: Option<&Path>) -> Result<(), String> {
+    use crate::film::metrics;
+    let a = metrics::read_image(image)?;
+    let b = metrics::read_image(reference)?;
+    let m = metrics::compare(&a, &b)?;
+    if let Some(path) = heatmap {
+        metrics::heatmap(&a, &b)
+            .write(path)
+            .map_err(|e| e.to_string())?;
+    }
+    emit(&format!(
+        "rmse {:.6e}\nrelmse {:.6e}\nmape {:.6e}\nmax_error {:.6e}\n",
+        m.rmse, m.relmse, m.mape, m.max_error
+    ))
+}

@@ -1,0 +1,210 @@
+//! The interface every engine implements, and what every engine reads and returns: the
+//! common settings (holding each engine's own settings, leaf modules of their engines), the
+//! plan, the budgets of the report's ladder, the rendered result.
+
+use crate::accel::Accel;
+use crate::film::Film;
+use crate::geometry::Vec3;
+use crate::render::{ImageSettings, RenderStats};
+use crate::scene::Scene;
+
+use super::photon::settings as photon;
+use super::radiosity::settings as radiosity;
+
+/// The engines of trilux (`--engine`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EngineKind {
+    /// The first visible surface's emitted radiance plus its albedo (texture looked up).
+    Raycast,
+    /// Whitted and distribution ray tracing.
+    Raytrace,
+    /// Radiosity on the quad mesh.
+    Radiosity,
+    /// Photon mapping: ray tracing with global and caustic photon maps as indirect light.
+    Photon,
+    /// The unbiased reference path tracer.
+    Path,
+}
+
+impl EngineKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            EngineKind::Raycast => "raycast",
+            EngineKind::Raytrace => "raytrace",
+            EngineKind::Radiosity => "radiosity",
+            EngineKind::Photon => "photon",
+            EngineKind::Path => "path",
+        }
+    }
+}
+
+impl std::fmt::Display for EngineKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// One lighting engine: what `render` runs, what `--plan` and `render report` ask it.
+/// Adding an engine: its module with a type implementing this, a variant of `EngineKind`,
+/// and its line in `engine()`.
+pub trait Engine: Sync {
+    /// Which engine this is.
+    fn kind(&self) -> EngineKind;
+
+    /// The names of the structures it may build beyond the image and the Accel ("photon
+    /// map"), so that `--plan` can say of each whether the chosen engine builds it.
+    fn structures(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// The shared ray-tracing and camera flags this engine does not read, by argument id
+    /// (`num_bounces`), so that the command can say they had no effect.
+    fn unread_flags(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// What the engine would build for this scene and these settings, decided before
+    /// anything is built: its `--plan` lines and its memory estimate.
+    fn plan(&self, scene: &Scene, settings: &RenderSettings) -> EnginePlan;
+
+    /// Renders the scene. Fails only on input the engine reads itself (`--load-photons`).
+    fn render(
+        &self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+    ) -> Result<Rendered, String>;
+
+    /// The settings of budget `level` (0, 1, 2, …) of the report's error-against-time
+    /// ladder, each about twice the work of the one before; None past the last level.
+    fn budget(&self, level: u32, base: &RenderSettings) -> Option<Budget>;
+
+    /// The colour of the engine's curve in the report's plot (sRGB).
+    fn colour(&self) -> (u8, u8, u8);
+}
+
+/// What an engine would build, for `--plan` and `--max-memory`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EnginePlan {
+    /// The structures it builds beyond the image and the Accel, by name ("photon map",
+    /// "radiosity mesh") with what `--plan` says of each ("yes", "yes (224 patches; …)").
+    /// `--plan` prints "no" for the names other engines would build.
+    pub structures: Vec<(&'static str, String)>,
+    /// Estimated peak bytes of those structures, by part.
+    pub memory: Vec<(&'static str, u64)>,
+}
+
+/// One budget of the report's ladder: what it counts, how many, and the settings.
+pub struct Budget {
+    /// What the budget counts ("spp", "photons", "subdivide").
+    pub counts: &'static str,
+    pub value: u64,
+    pub settings: RenderSettings,
+}
+
+/// What one render produced: the image, its counters, and what the engine has to say.
+pub struct Rendered {
+    pub film: Film,
+    pub stats: RenderStats,
+    /// Lines on what was built and how it went ("photons: …", "radiosity: …"), printed
+    /// unless `--quiet`.
+    pub summary: Vec<String>,
+    /// Printed whatever `--quiet` says.
+    pub warnings: Vec<String>,
+    /// The solver's convergence log as CSV, for `--log-convergence`.
+    pub convergence_log: Option<String>,
+}
+
+impl Rendered {
+    /// A render with nothing to report beyond its image and counters.
+    pub fn plain(film: Film, stats: RenderStats) -> Rendered {
+        Rendered {
+            film,
+            stats,
+            summary: Vec::new(),
+            warnings: Vec::new(),
+            convergence_log: None,
+        }
+    }
+}
+
+/// The ray tracer's source of diffuse indirect light (`--indirect`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum IndirectKind {
+    /// The constant `-ambient_light`, as the course program.
+    #[default]
+    Ambient,
+    /// The radiosity solution of the scene (solved first, with the radiosity settings).
+    Radiosity,
+}
+
+/// Everything an engine reads besides the scene. Defaults are those of the course program
+/// where it has one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Image width and height in pixels (`-size W H`, default 256 256).
+    pub width: u32,
+    pub height: u32,
+    /// Mirror/refraction recursion depth (`-num_bounces`, default 0).
+    pub num_bounces: u32,
+    /// Shadow rays per light (`-num_shadow_samples`, default 0: lights unoccluded).
+    pub num_shadow_samples: u32,
+    /// Samples per pixel (`-num_antialias_samples`, default 1).
+    pub num_antialias_samples: u32,
+    /// Constant ambient radiance for diffuse indirect light (`-ambient_light`, default 0.1).
+    pub ambient_light: Vec3,
+    /// What the radiosity engine reads (mesh, form factors, solver, display).
+    pub radiosity: radiosity::RadiositySettings,
+    /// Where the ray tracer's diffuse indirect light comes from (`--indirect`, default
+    /// ambient).
+    pub indirect: IndirectKind,
+    /// What the photon engine reads (photon count, density estimates, final gathering).
+    pub photon: photon::PhotonSettings,
+    /// Placement of points on lights (`--light-sampling`, default jittered).
+    pub light_sampling: crate::sampling::Pattern,
+    /// Thin-lens radius (`--aperture`, default 0: a pinhole camera).
+    pub aperture: f32,
+    /// Distance of the plane in focus (`--focus-distance`, default: the camera's distance
+    /// to its point of interest).
+    pub focus_distance: Option<f32>,
+    /// Seed of every random number (`--seed`, default 0).
+    pub seed: u64,
+    /// No progress bars (`--quiet`).
+    pub quiet: bool,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 256,
+            height: 256,
+            num_bounces: 0,
+            num_shadow_samples: 0,
+            num_antialias_samples: 1,
+            ambient_light: Vec3::splat(0.1),
+            radiosity: Default::default(),
+            indirect: IndirectKind::Ambient,
+            photon: Default::default(),
+            light_sampling: crate::sampling::Pattern::Jittered,
+            aperture: 0.0,
+            focus_distance: None,
+            seed: 0,
+            quiet: false,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// What the pixel loop and the camera read.
+    pub fn image(&self) -> ImageSettings {
+        ImageSettings {
+            width: self.width,
+            height: self.height,
+            num_antialias_samples: self.num_antialias_samples,
+            aperture: self.aperture,
+            focus_distance: self.focus_distance,
+            seed: self.seed,
+            quiet: self.quiet,
+        }
+    }
+}

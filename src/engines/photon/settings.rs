@@ -1,0 +1,74 @@
+//! What the photon engine reads besides the scene and the common settings: its flags' values,
+//! with their defaults. A leaf: it imports nothing of the engines, so the common settings can
+//! hold it.
+
+/// What the photon engine shows (`--visualize`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Display {
+    /// The ray-traced image with the photon maps as its indirect light.
+    #[default]
+    Image,
+    /// The photons projected through the camera, coloured by power.
+    Photons,
+    /// The photons with the cells of a balanced kd-tree over them drawn in green.
+    Kdtree,
+}
+
+/// Settings only the photon engine reads.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhotonSettings {
+    /// Photons emitted (`-num_photons_to_shoot`, default 0: no photon map).
+    pub num_photons_to_shoot: u64,
+    /// Photons aimed at the mirrors and glass for the caustic map (`--caustic-photons`,
+    /// default None: as many as `num_photons_to_shoot`). 0 turns the caustic pass off; the
+    /// caustic map then holds the caustic photons of the main pass.
+    pub caustic_photons: Option<u64>,
+    /// Photons per density estimate (`-num_photons_to_collect`, default 100).
+    pub num_photons_to_collect: u32,
+    /// Bounces a photon may make (`--max-photon-depth`, default 10).
+    pub max_photon_depth: u32,
+    /// Largest radius of a density estimate, as a fraction of the scene's diagonal
+    /// (`--photon-max-radius`, default 0.1).
+    pub max_radius: f32,
+    /// Final gathering for indirect light (`-gather_indirect`, default off: direct lookup).
+    pub gather_indirect: bool,
+    /// Hemisphere rays per final gather (`--final-gather-rays`, default 128).
+    pub final_gather_rays: u32,
+    /// Ward's irradiance cache error a (`--irradiance-cache-error`, default 0.15).
+    pub irradiance_cache_error: f32,
+    /// Write the maps to this file after tracing (`--save-photons`).
+    pub save: Option<std::path::PathBuf>,
+    /// Read the maps from this file instead of tracing (`--load-photons`).
+    pub load: Option<std::path::PathBuf>,
+    /// Cache records are computed at every n-th pixel in x and y (`--irradiance-cache-spacing`,
+    /// default 4); the rest interpolate, or gather afresh where no record is close enough.
+    pub irradiance_cache_spacing: u32,
+    /// What the image shows (`--visualize photons|kdtree`, default the image).
+    pub display: Display,
+}
+
+impl Default for PhotonSettings {
+    fn default() -> Self {
+        PhotonSettings {
+            num_photons_to_shoot: 0,
+            caustic_photons: None,
+            num_photons_to_collect: 100,
+            max_photon_depth: 10,
+            max_radius: 0.1,
+            gather_indirect: false,
+            final_gather_rays: 128,
+            irradiance_cache_error: 0.15,
+            irradiance_cache_spacing: 4,
+            save: None,
+            load: None,
+            display: Display::Image,
+        }
+    }
+}
+
+impl PhotonSettings {
+    /// Photons of the caustic pass: `--caustic-photons`, else as many as the main pass.
+    pub fn caustic_photons(&self) -> u64 {
+        self.caustic_photons.unwrap_or(self.num_photons_to_shoot)
+    }
+}

@@ -1,0 +1,123 @@
+//! What the radiosity engine reads besides the scene and the common settings: its flags'
+//! values, with their defaults (the course program's where it has one). A leaf: it imports
+//! nothing of the engines, so the common settings can hold it.
+
+/// Settings only the radiosity engine reads. Defaults are the course program's where it has one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RadiositySettings {
+    /// Point pairs per form factor (`-num_form_factor_samples`, default 1: the patch centres).
+    pub num_form_factor_samples: u32,
+    /// Sphere tessellation H V (`-sphere_rasterization`, default 8 6).
+    pub sphere_rasterization: (u32, u32),
+    /// Ring tessellation around the axis (`-cylinder_ring_rasterization`, default 20).
+    pub cylinder_ring_rasterization: u32,
+    /// Split every quad into four this many times (`--subdivide`, default 0).
+    pub subdivide: u32,
+    /// Smooth display: values interpolated from the patches around each vertex
+    /// (`-interpolate`, default off: flat patches).
+    pub interpolate: bool,
+    /// Stop when undistributed power / emitted power falls to this (`--radiosity-tolerance`,
+    /// default 1e-3).
+    pub tolerance: f32,
+    /// Stop after exactly this many shots (`--radiosity-iterations`, default: none).
+    pub iterations: Option<u64>,
+    /// Safety cap on shots per patch when no iteration count is given
+    /// (`--radiosity-max-shots-per-patch`, default 1000); reaching it is reported.
+    pub max_shots_per_patch: u64,
+    /// Over-relaxation of each shot (`--radiosity-relaxation auto|ω`, default auto: ω from
+    /// how much of each shot comes back; 1 is plain progressive refinement; see
+    /// `Relaxation`).
+    pub relaxation: Relaxation,
+    /// Memory for cached form-factor rows, MiB (`--ff-cache-mb`, default 1024).
+    pub ff_cache_mb: usize,
+    /// Split patches whose radiance differs from a neighbour's by more than this (largest
+    /// channel) and solve again (`--adaptive-subdivide`, default: off).
+    pub adaptive_threshold: Option<f32>,
+    /// Rounds of adaptive splitting (`--adaptive-rounds`, default 3).
+    pub adaptive_rounds: u32,
+    /// Patch outlines over the image (`--wireframe`).
+    pub wireframe: bool,
+    /// The patch whose form factors `--visualize form-factors` shows (`--ff-source`,
+    /// default: the patch with the most undistributed light).
+    pub ff_source: Option<u32>,
+    /// Keep a record of every shot (`--log-convergence`).
+    pub log_convergence: bool,
+    /// What the image shows (`--visualize`, default radiance: the solution).
+    pub display: Display,
+}
+
+impl Default for RadiositySettings {
+    fn default() -> Self {
+        RadiositySettings {
+            num_form_factor_samples: 1,
+            sphere_rasterization: (8, 6),
+            cylinder_ring_rasterization: 20,
+            subdivide: 0,
+            interpolate: false,
+            tolerance: 1e-3,
+            iterations: None,
+            max_shots_per_patch: 1000,
+            relaxation: Relaxation::Auto,
+            ff_cache_mb: 1024,
+            adaptive_threshold: None,
+            adaptive_rounds: 3,
+            wireframe: false,
+            ff_source: None,
+            log_convergence: false,
+            display: Display::Radiance,
+        }
+    }
+}
+
+/// What the radiosity engine shows (`--visualize`): the solution, or one of the course's
+/// views of the mesh and the solver's state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Display {
+    /// The solution: radiance of each patch plus the ambient term for light not yet shot.
+    #[default]
+    Radiance,
+    /// Each patch's albedo.
+    Materials,
+    /// Form factors from one patch (`--ff-source`) to every other, grey by relative size.
+    FormFactors,
+    /// Emitted radiance.
+    Lights,
+    /// Radiance received but not yet shot.
+    Undistributed,
+    /// Radiance absorbed: (1 − ρ) × incident.
+    Absorbed,
+}
+
+/// The over-relaxation factor ω of each shot (`--radiosity-relaxation`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Relaxation {
+    /// ω from the solve itself: the fraction μ of a shot's power that comes back as unshot
+    /// power (a running mean over the shots: ρ in a furnace, less where light escapes) gives
+    /// successive over-relaxation's ω = 2 / (1 + √(1 − μ²)), at most 1.95. Open and dark
+    /// scenes get ω near 1 (plain shooting); bright closed rooms get ω near 2.
+    Auto,
+    /// A fixed ω in [1, 2); 1 is plain progressive refinement.
+    Fixed(f32),
+}
+
+impl std::fmt::Display for Relaxation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Relaxation::Auto => f.write_str("auto"),
+            Relaxation::Fixed(w) => write!(f, "{w}"),
+        }
+    }
+}
+
+impl std::str::FromStr for Relaxation {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "auto" {
+            return Ok(Relaxation::Auto);
+        }
+        match s.parse::<f32>() {
+            Ok(w) if (1.0..2.0).contains(&w) => Ok(Relaxation::Fixed(w)),
+            _ => Err(format!("expected auto or a number in [1, 2), found {s}")),
+        }
+    }
+}

@@ -1,0 +1,43 @@
+//! Diffuse indirect light as the ray tracer consumes it: whatever can say how much light
+//! arrives at a surface point besides the direct light of the emitters. The constant ambient
+//! term is here; the radiosity solution and the photon maps implement the same trait in their
+//! own engines, so the ray tracer imports neither.
+
+use crate::accel::Accel;
+use crate::color::Color;
+use crate::geometry::Vec3;
+use crate::sampling::Rng;
+use crate::scene::{Scene, SurfaceHit};
+
+/// A source of diffuse indirect light for the ray tracer.
+pub trait IndirectLight: Sync {
+    /// Incident radiance averaged over the hemisphere at `s` (unit normal `n` on the lit
+    /// side), `depth` specular bounces from the camera: what the surface's albedo multiplies
+    /// besides the direct light.
+    fn incident(
+        &self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        s: &SurfaceHit,
+        n: Vec3,
+        depth: u32,
+        rng: &mut Rng,
+    ) -> Color;
+}
+
+/// A constant incident radiance everywhere (`-ambient_light`, the course's stand-in).
+pub struct Ambient(pub Color);
+
+impl IndirectLight for Ambient {
+    fn incident(
+        &self,
+        _: &Scene,
+        _: &dyn Accel,
+        _: &SurfaceHit,
+        _: Vec3,
+        _: u32,
+        _: &mut Rng,
+    ) -> Color {
+        self.0
+    }
+}

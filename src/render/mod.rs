@@ -1,0 +1,214 @@
+//! The floor every engine stands on: the pixel loop and the camera sampler that the sampling
+//! engines share, the counters of a render, the lights as the engines sample them, and the
+//! interface through which the ray tracer asks for diffuse indirect light. Nothing here knows
+//! any engine.
+
+pub mod indirect;
+pub mod lights;
+
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+use rayon::prelude::*;
+
+pub use indirect::{Ambient, IndirectLight};
+
+use crate::accel::Accel;
+use crate::color::Color;
+use crate::film::Film;
+use crate::geometry::Ray;
+use crate::sampling::{Pattern, Rng, Strata};
+use crate::scene::{Camera, Scene, SurfaceHit, View};
+
+/// What the pixel loop and the camera read: the image, its samples, the lens, the seed.
+/// `engines::RenderSettings` holds the same values (defaults there) and makes this with
+/// `image()`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImageSettings {
+    /// Image width and height in pixels (`-size W H`).
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel (`-num_antialias_samples`).
+    pub num_antialias_samples: u32,
+    /// Thin-lens radius (`--aperture`; 0: a pinhole camera).
+    pub aperture: f32,
+    /// Distance of the plane in focus (`--focus-distance`; None: the camera's distance to
+    /// its point of interest).
+    pub focus_distance: Option<f32>,
+    /// Seed of every random number (`--seed`).
+    pub seed: u64,
+    /// No progress bars (`--quiet`).
+    pub quiet: bool,
+}
+
+/// Counters of one render, printed by `--stats`.
+#[derive(Debug, Default)]
+pub struct RenderStats {
+    pub camera_rays: AtomicU64,
+    pub shadow_rays: AtomicU64,
+    pub secondary_rays: AtomicU64,
+    /// Visibility rays between patches (radiosity form factors).
+    pub form_factor_rays: AtomicU64,
+    /// Rays cast by photons.
+    pub photon_rays: AtomicU64,
+    /// Samples that came out NaN or infinite: excluded from the image, and counted here.
+    pub non_finite_samples: AtomicU64,
+}
+
+impl RenderStats {
+    pub fn total_rays(&self) -> u64 {
+        self.camera_rays.load(Relaxed)
+            + self.shadow_rays.load(Relaxed)
+            + self.secondary_rays.load(Relaxed)
+            + self.form_factor_rays.load(Relaxed)
+            + self.photon_rays.load(Relaxed)
+    }
+}
+
+/// Ray counts of one row of pixels, added to the shared counters once per row, and scratch
+/// buffers for shadow rays (reused from one shading point to the next).
+#[derive(Default)]
+pub struct Counts {
+    pub camera: u64,
+    pub shadow: u64,
+    pub secondary: u64,
+    pub non_finite: u64,
+    pub shadow_rays: Vec<Ray>,
+    pub shadow_weights: Vec<f32>,
+    pub blocked: Vec<bool>,
+}
+
+/// The camera samples of an image: the view, the pixel strata and the lens, worked out once.
+pub struct CameraSampler {
+    view: View,
+    pixel_strata: Strata,
+    /// Per pixel, 1 for one ray through the centre.
+    spp: u32,
+    aperture: f32,
+    focus_distance: f32,
+    seed: u64,
+    width: u32,
+    height: u32,
+}
+
+impl CameraSampler {
+    pub fn new(scene: &Scene, settings: &ImageSettings) -> CameraSampler {
+        let camera = scene.camera();
+        let spp = settings.num_antialias_samples.max(1);
+        CameraSampler {
+            view: camera.view(),
+            pixel_strata: Strata::new(Pattern::Jittered, spp),
+            spp,
+            aperture: settings.aperture,
+            focus_distance: settings
+                .focus_distance
+                .unwrap_or_else(|| camera.focus_distance()),
+            seed: settings.seed,
+            width: settings.width,
+            height: settings.height,
+        }
+    }
+
+    /// Camera ray `k` of pixel (i, j) (j from the bottom) and the generator that the rest of
+    /// its path draws from: both depend only on (seed, pixel, sample).
+    #[inline]
+    pub fn sample(&self, (i, j): (u32, u32), k: u32) -> (Ray, Rng) {
+        let (w, h) = (self.width, self.height);
+        let mut rng = Rng::new(self.seed, j as u64 * w as u64 + i as u64, k as u64);
+        let (dx, dy) = if self.spp == 1 {
+            (0.5, 0.5)
+        } else {
+            self.pixel_strata.sample(k, &mut rng)
+        };
+        let screen = Camera::screen_point(i, j, dx, dy, w, h);
+        let lens = (rng.next_f32(), rng.next_f32());
+        let ray = self
+            .view
+            .lens_ray(screen, self.aperture, self.focus_distance, lens);
+        (ray, rng)
+    }
+}
+
+/// Camera samples traced as one batch (a row is cut into chunks of about this many).
+pub const CHUNK_SAMPLES: usize = 4096;
+
+/// The pixel loop every sampling engine shares: rows in parallel, the camera rays of a row
+/// traced as one batch, `-num_antialias_samples` per pixel averaged with a box filter, and
+/// samples that come out NaN or infinite left out and counted. `radiance` gives the radiance
+/// along a camera ray from its closest hit.
+pub fn render_pixels(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &ImageSettings,
+    label: &str,
+    radiance: impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, &mut Counts) -> Color + Sync,
+) -> (Film, RenderStats) {
+    let (w, h) = (settings.width, settings.height);
+    let camera = CameraSampler::new(scene, settings);
+    let spp = settings.num_antialias_samples.max(1) as usize;
+    let stats = RenderStats::default();
+    let mut film = Film::new(w, h);
+    let bar = crate::progress::bar(h as u64, label, settings.quiet);
+    film.pixels
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(row, out)| {
+            let j = h - 1 - row as u32;
+            let mut counts = Counts::default();
+            // A row in chunks of about CHUNK_SAMPLES camera samples: one batch of camera rays
+            // each, memory bounded whatever the samples per pixel, and Ctrl-C heard between
+            // chunks (the pixels not yet rendered stay black).
+            let chunk = (CHUNK_SAMPLES / spp).max(1);
+            for (c, pixels) in out.chunks_mut(chunk).enumerate() {
+                if crate::interrupt::requested() {
+                    break;
+                }
+                let first = (c * chunk) as u32;
+                let mut rngs = Vec::with_capacity(pixels.len() * spp);
+                let mut rays = Vec::with_capacity(pixels.len() * spp);
+                for i in first..first + pixels.len() as u32 {
+                    for k in 0..spp as u32 {
+                        let (ray, rng) = camera.sample((i, j), k);
+                        rays.push(ray);
+                        rngs.push(rng);
+                    }
+                }
+                let mut hits = vec![None; rays.len()];
+                accel.intersect_batch(&rays, &mut hits);
+                counts.camera += rays.len() as u64;
+                for (i, pixel) in pixels.iter_mut().enumerate() {
+                    // Summed in f64: finite samples near f32's largest value must not add up
+                    // to infinity; their mean is again a finite f32.
+                    let mut sum = [0.0f64; 3];
+                    let mut good = 0u32;
+                    for idx in i * spp..(i + 1) * spp {
+                        let ray = &rays[idx];
+                        let hit = hits[idx].map(|h| scene.surface(ray, &h));
+                        let l = radiance(ray, hit, &mut rngs[idx], &mut counts);
+                        if l.is_finite() {
+                            for (s, c) in sum.iter_mut().zip(l.to_array()) {
+                                *s += c as f64;
+                            }
+                            good += 1;
+                        } else {
+                            counts.non_finite += 1;
+                        }
+                    }
+                    let n = good.max(1) as f64;
+                    *pixel = crate::geometry::vec3(
+                        (sum[0] / n) as f32,
+                        (sum[1] / n) as f32,
+                        (sum[2] / n) as f32,
+                    );
+                }
+            }
+            stats.camera_rays.fetch_add(counts.camera, Relaxed);
+            stats.shadow_rays.fetch_add(counts.shadow, Relaxed);
+            stats.secondary_rays.fetch_add(counts.secondary, Relaxed);
+            stats
+                .non_finite_samples
+                .fetch_add(counts.non_finite, Relaxed);
+            bar.inc(1);
+        });
+    bar.finish_and_clear();
+    (film, stats)
+}

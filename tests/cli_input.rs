@@ -1,0 +1,304 @@
+//! Bad input at the command line: each class of bad flag is refused with the flag's name and
+//! what is allowed, bad output paths are refused before any work, an empty scene says so, and
+//! the photon-map fingerprint covers everything that changes the maps. Uses the project's own
+//! scenes only.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn scene(name: &str) -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("trilux-cli-input-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs `render` in `dir`; fails the test if it takes longer than `limit` (a check that
+/// should come before the render would otherwise let it run).
+fn render_within(dir: &Path, args: &[&str], limit: Duration) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_render"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("render runs");
+    let start = Instant::now();
+    while child.try_wait().expect("waits").is_none() {
+        if start.elapsed() > limit {
+            child.kill().ok();
+            panic!("render {args:?} still running after {limit:?}: the check did not come first");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().expect("output")
+}
+
+fn render(dir: &Path, args: &[&str]) -> Output {
+    render_within(dir, args, Duration::from_secs(120))
+}
+
+/// The command failed, and its message names `flag` and contains `expected`.
+fn refused(out: &Output, flag: &str, expected: &str) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "accepted; stderr: {err}");
+    assert!(err.contains(flag), "message does not name {flag}: {err}");
+    assert!(
+        err.contains(expected),
+        "message does not say {expected:?}: {err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+/// A render that would take minutes: a check that must come before the work shows by
+/// returning at once.
+const HEAVY: [&str; 5] = ["-size", "1024", "1024", "-num_antialias_samples", "4096"];
+/// Far less than the heavy render would take (hours), far more than loading the scene.
+const BEFORE_WORK: Duration = Duration::from_secs(20);
+
+#[test]
+fn non_finite_ambient_light_names_the_flag() {
+    let dir = temp_dir("ambient");
+    let out = render(
+        &dir,
+        &[
+            "-input",
+            &scene("cornell_box.obj"),
+            "-ambient_light",
+            "nan",
+            "nan",
+            "nan",
+        ],
+    );
+    refused(&out, "-ambient_light", "finite numbers ≥ 0");
+    let out = render(
+        &dir,
+        &[
+            "-input",
+            &scene("cornell_box.obj"),
+            "-ambient_light",
+            "0.1",
+            "-1",
+            "0.1",
+        ],
+    );
+    refused(&out, "-ambient_light", "finite numbers ≥ 0");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn thread_count_out_of_range_names_the_flag_and_the_range() {
+    let dir = temp_dir("threads");
+    let out = render(
+        &dir,
+        &["-input", &scene("cornell_box.obj"), "--threads", "100000"],
+    );
+    refused(&out, "--threads", "from 0 to 1024");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn zero_samples_per_pixel_names_the_flag() {
+    let dir = temp_dir("spp");
+    let out = render(
+        &dir,
+        &[
+            "-input",
+            &scene("cornell_box.obj"),
+            "-num_antialias_samples",
+            "0",
+        ],
+    );
+    refused(&out, "-num_antialias_samples", "from 1 to");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn negative_or_non_finite_lens_names_the_flag() {
+    let dir = temp_dir("lens");
+    let out = render(
+        &dir,
+        &["-input", &scene("cornell_box.obj"), "--aperture", "-0.5"],
+    );
+    refused(&out, "--aperture", "finite number ≥ 0");
+    let out = render(
+        &dir,
+        &[
+            "-input",
+            &scene("cornell_box.obj"),
+            "--focus-distance",
+            "inf",
+        ],
+    );
+    refused(&out, "--focus-distance", "finite number > 0");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn out_of_range_engine_numbers_name_the_flag() {
+    let dir = temp_dir("engine-numbers");
+    let cases: [(&[&str], &str); 5] = [
+        (&["-size", "0", "10"], "-size"),
+        (&["--photon-max-radius", "-1"], "--photon-max-radius"),
+        (&["--radiosity-tolerance", "nan"], "--radiosity-tolerance"),
+        (
+            &["-num_form_factor_samples", "0"],
+            "-num_form_factor_samples",
+        ),
+        (&["--ray-tree", "300", "1"], "--ray-tree"),
+    ];
+    for (flags, name) in cases {
+        let mut args = vec!["-input".to_string(), scene("cornell_box.obj")];
+        args.extend(flags.iter().map(|s| s.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = render(&dir, &args);
+        refused(&out, name, "");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn an_output_whose_folder_is_missing_is_refused_before_the_render() {
+    let dir = temp_dir("no-folder");
+    let mut args = vec![
+        "-input".to_string(),
+        scene("cornell_box.obj"),
+        "-o".into(),
+        "missing/out.png".into(),
+    ];
+    args.extend(HEAVY.iter().map(|s| s.to_string()));
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = render_within(&dir, &args, BEFORE_WORK);
+    refused(&out, "missing/out.png", "does not exist");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn an_output_of_unknown_format_is_refused_before_the_render() {
+    let dir = temp_dir("format");
+    let mut args = vec![
+        "-input".to_string(),
+        scene("cornell_box.obj"),
+        "-o".into(),
+        "out.gif".into(),
+    ];
+    args.extend(HEAVY.iter().map(|s| s.to_string()));
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = render_within(&dir, &args, BEFORE_WORK);
+    refused(
+        &out,
+        "out.gif",
+        "unknown image format (use .png, .jpg, .exr or .pfm)",
+    );
+    assert!(!dir.join("out.gif").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_scene_without_geometry_is_an_error_that_says_so() {
+    let dir = temp_dir("empty");
+    let path = dir.join("empty.obj");
+    std::fs::write(&path, "# nothing but a comment\n").unwrap();
+    let out = render(&dir, &["-input", path.to_str().unwrap()]);
+    refused(&out, "empty.obj", "the scene has no geometry");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A standard OBJ/MTL scene with a texture: a textured floor under a square light.
+fn write_textured_scene(dir: &Path, albedo: &str, texel: u8) {
+    std::fs::write(
+        dir.join("floor.obj"),
+        "mtllib floor.mtl\n\
+         v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\n\
+         v -0.2 1 -0.2\nv 0.2 1 -0.2\nv 0.2 1 0.2\nv -0.2 1 0.2\n\
+         vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+         usemtl floor\nf 1/1 4/4 3/3 2/2\n\
+         usemtl light\nf 5 6 7 8\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("floor.mtl"),
+        format!("newmtl floor\nKd {albedo}\nmap_Kd floor.ppm\nnewmtl light\nKd 0 0 0\nKe 5 5 5\n"),
+    )
+    .unwrap();
+    let mut ppm = b"P6\n2 2\n255\n".to_vec();
+    ppm.extend([texel; 12]);
+    std::fs::write(dir.join("floor.ppm"), ppm).unwrap();
+}
+
+/// The maps of `--save-photons` are refused by `--load-photons` when anything that shaped
+/// them changed, though the scene file itself did not: `--two-sided`, the `.mtl` file, the
+/// texture. The same files and flags load.
+#[test]
+fn loading_photons_refuses_maps_made_with_another_mtl_texture_or_sidedness() {
+    let dir = temp_dir("fingerprint");
+    write_textured_scene(&dir, "0.5 0.5 0.5", 128);
+    let base = [
+        "-input",
+        "floor.obj",
+        "-num_photons_to_shoot",
+        "2000",
+        "-size",
+        "8",
+        "8",
+        "--quiet",
+    ];
+    let with = |extra: &[&str]| -> Vec<String> {
+        base.iter().chain(extra).map(|s| s.to_string()).collect()
+    };
+    let run = |args: Vec<String>| {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        render(&dir, &args)
+    };
+    let saved = run(with(&["--save-photons", "maps.photons"]));
+    assert!(
+        saved.status.success(),
+        "{}",
+        String::from_utf8_lossy(&saved.stderr)
+    );
+    let loaded = run(with(&["--load-photons", "maps.photons"]));
+    assert!(
+        loaded.status.success(),
+        "{}",
+        String::from_utf8_lossy(&loaded.stderr)
+    );
+
+    let stale = |out: Output, what: &str| {
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{what}: stale maps accepted");
+        assert!(
+            err.contains("maps.photons") && err.contains("made for another scene"),
+            "{what}: {err}"
+        );
+    };
+    stale(
+        run(with(&["--load-photons", "maps.photons", "--two-sided"])),
+        "--two-sided",
+    );
+    write_textured_scene(&dir, "0.8 0.5 0.5", 128);
+    stale(
+        run(with(&["--load-photons", "maps.photons"])),
+        "edited .mtl",
+    );
+    write_textured_scene(&dir, "0.5 0.5 0.5", 200);
+    stale(
+        run(with(&["--load-photons", "maps.photons"])),
+        "edited texture",
+    );
+    write_textured_scene(&dir, "0.5 0.5 0.5", 128);
+    let again = run(with(&["--load-photons", "maps.photons"]));
+    assert!(
+        again.status.success(),
+        "restored files: {}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
