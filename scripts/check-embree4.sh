@@ -4,8 +4,9 @@
 # checkout: everything lives under WORK.
 #
 # Where it gets Embree 4 (package registries only):
-#   * the library: libembree4 4.4.0 and its TBB, from the `embreex` wheel on PyPI;
-#   * the headers: Embree 4.2.0's, from the `embree4-sys` crate on crates.io. Embree 4.3
+#   * the library: libembree4 4.4.0 and its TBB, from the `embreex` wheel, through pip;
+#   * the headers: Embree 4.2.0's, from the `embree4-sys` crate, fetched by cargo through a
+#     throwaway crate that depends on it (`cargo fetch`; nothing is built). Embree 4.3
 #     added instance arrays, and a library built with them (as this one is) writes
 #     `instPrimID` after `instID` in every hit; the 4.2 headers are brought up to that layout
 #     (RTC_GEOMETRY_INSTANCE_ARRAY defined, `instPrimID` added to the hits and the ray query
@@ -30,11 +31,15 @@ if [ ! -e "$prefix/lib/libembree4.so" ]; then
 fi
 
 if [ ! -e "$prefix/include/embree4/rtcore.h" ]; then
-  curl -sSfL -o "$work/download/embree4-sys.crate" \
-    https://static.crates.io/crates/embree4-sys/embree4-sys-0.0.12.crate
-  tar xzf "$work/download/embree4-sys.crate" -C "$work/download"
+  fetcher=$work/download/fetch-embree4-sys
+  mkdir -p "$fetcher/src"
+  printf '[package]\nname = "fetch-embree4-sys"\nversion = "0.0.0"\nedition = "2021"\n\n[dependencies]\nembree4-sys = "=0.0.12"\n' \
+    >"$fetcher/Cargo.toml"
+  : >"$fetcher/src/lib.rs"
+  (cd "$fetcher" && cargo fetch --quiet)
+  sources=$(ls -d "${CARGO_HOME:-$HOME/.cargo}"/registry/src/*/embree4-sys-0.0.12 | head -n 1)
   headers=$prefix/include/embree4
-  cp -r "$work/download/embree4-sys-0.0.12/lib/embree4" "$headers"
+  cp -r "$sources/lib/embree4" "$headers"
   sed -i 's|^#define RTC_MAX_INSTANCE_LEVEL_COUNT 1$|&\n#define RTC_GEOMETRY_INSTANCE_ARRAY|' \
     "$headers/rtcore_config.h"
   sed -i -E 's|^(  unsigned int )instID(\[RTC_MAX_INSTANCE_LEVEL_COUNT\])(\[[0-9]+\])?;.*$|&\n\1instPrimID\2\3;|' \
