@@ -33,6 +33,7 @@ lines=(
   "rttree|$S -input reflective_spheres.obj -num_bounces 3 -num_shadow_samples 1 --ray-tree 100 100"
   "raycast|$S -input textured_plane_reflective_sphere.obj --engine raycast"
   "path|$S -input cornell_box_diffuse_sphere.obj --engine path -num_antialias_samples 16"
+  "pathglass|$S -input glass_sphere_caustic.obj --engine path -num_antialias_samples 16"
   # The course's radiosity lines and the radiosity gallery (rad01–rad11).
   "radc1|$S -input cornell_box.obj"
   "radc2|$S -input cornell_box_diffuse_sphere.obj -sphere_rasterization 16 12"

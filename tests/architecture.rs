@@ -295,8 +295,8 @@ fn the_layers_below_the_engines_import_no_engine() {
 
 #[test]
 fn no_engine_imports_another() {
-    // The pure engines; `compose` wires them, `engine` is their interface, `optics` their
-    // shared specular optics.
+    // The pure engines; `compose` wires them, `engine` is their interface, `scattering` the
+    // materials they share.
     let engines = ["raycast", "raytrace", "radiosity", "photon", "path"];
     let engine_of = |m: &str| -> Option<String> {
         let mut segs = m.split("::");

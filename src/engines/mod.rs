@@ -6,12 +6,12 @@
 
 pub mod compose;
 pub mod engine;
-pub mod optics;
 pub mod path;
 pub mod photon;
 pub mod radiosity;
 pub mod raycast;
 pub mod raytrace;
+pub mod scattering;
 
 pub use engine::{Budget, Engine, EngineKind, EnginePlan, IndirectKind, RenderSettings, Rendered};
 

@@ -13,7 +13,7 @@
 use std::collections::HashMap;
 
 use super::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSettings, Rendered};
-use super::optics::{fresnel_dielectric, glossy_reflection, orthonormal_basis, reflect, refract};
+use super::scattering::{diffuse_sample, glossy_reflection, Dielectric};
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
@@ -188,14 +188,13 @@ impl PathTracer<'_> {
                 radiance += throughput
                     .mul_elem(lobe)
                     .mul_elem(self.sample_light(&s, n, rng, counts));
-                let (dir_local, cos) = cosine_hemisphere(rng.next_f32(), rng.next_f32());
-                let (tx, ty) = orthonormal_basis(n);
-                dir = tx * dir_local.x + ty * dir_local.y + n * dir_local.z;
+                let (sampled, pdf) = diffuse_sample(n, rng.next_f32(), rng.next_f32());
+                dir = sampled;
                 throughput = throughput.mul_elem(lobe);
                 diffuse_bounce = true;
                 previous = Previous {
                     point: s.point,
-                    bsdf_pdf: Some(cos / std::f32::consts::PI),
+                    bsdf_pdf: Some(pdf),
                 };
             } else if choice < d + r {
                 dir = glossy_reflection(
@@ -208,12 +207,7 @@ impl PathTracer<'_> {
                 throughput = throughput.mul_elem(m.reflective * (total / r));
                 previous.bsdf_pdf = None;
             } else {
-                let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
-                let f = fresnel_dielectric(-ray.direction.dot(n), eta_i, eta_t);
-                dir = match refract(ray.direction, n, eta_i, eta_t) {
-                    Some(refracted) if rng.next_f32() >= f => refracted.normalized(),
-                    _ => reflect(ray.direction, n),
-                };
+                dir = Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng);
                 throughput = throughput.mul_elem(m.transmitted * (total / t));
                 previous.bsdf_pdf = None;
             }
@@ -230,13 +224,6 @@ impl PathTracer<'_> {
         }
         radiance
     }
-}
-
-/// A cosine-distributed direction around +z and its cosine.
-fn cosine_hemisphere(u: f32, v: f32) -> (Vec3, f32) {
-    let (x, y) = crate::sampling::sample_disk(u, v);
-    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
-    (Vec3 { x, y, z }, z)
 }
 
 /// Renders the scene by path tracing; returns the film and the counters of the render.

@@ -9,7 +9,7 @@
 //! radiosity`).
 
 use super::engine::RenderSettings;
-use super::optics::{fresnel_dielectric, glossy_reflection, reflect, refract};
+use super::scattering::{glossy_reflection, reflect, Dielectric};
 use crate::accel::Accel;
 use crate::film::ray_tree::{Segment, SegmentKind};
 use crate::film::Film;
@@ -82,10 +82,8 @@ impl Tracer<'_> {
                     .mul_elem(self.trace(&s.spawn_ray(dir), depth + 1, w, rng, counts));
         }
         if m.transmitted.max_elem() > 0.0 && weight * m.transmitted.max_elem() > MIN_WEIGHT {
-            // Entering a closed surface from outside goes from air into the material.
-            let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
-            let cos_i = -ray.direction.dot(n);
-            let f = fresnel_dielectric(cos_i, eta_i, eta_t);
+            let glass = Dielectric::at(m, front, ray.direction, n);
+            let f = glass.reflectance;
             let w = weight * m.transmitted.max_elem();
             let mut through = Vec3::ZERO;
             if f > 0.0 && w * f > MIN_WEIGHT {
@@ -93,8 +91,8 @@ impl Tracer<'_> {
                 through += self.trace(&r, depth + 1, w * f, rng, counts) * f;
             }
             if f < 1.0 && w * (1.0 - f) > MIN_WEIGHT {
-                if let Some(t) = refract(ray.direction, n, eta_i, eta_t) {
-                    let r = s.spawn_ray(t.normalized());
+                if let Some(t) = glass.refracted(ray.direction, n) {
+                    let r = s.spawn_ray(t);
                     through += self.trace(&r, depth + 1, w * (1.0 - f), rng, counts) * (1.0 - f);
                 }
             }

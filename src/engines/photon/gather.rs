@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use super::PhotonMaps;
 use crate::accel::Accel;
 use crate::engines::engine::RenderSettings;
-use crate::engines::optics::sample_lobe;
+use crate::engines::scattering::sample_lobe;
 use crate::geometry::{spawn_ray, Ray, Vec3};
 use crate::sampling::{Pattern, Rng, Strata};
 use crate::scene::{Camera, Color, Scene};

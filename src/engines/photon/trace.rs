@@ -12,9 +12,7 @@
 use rayon::prelude::*;
 
 use crate::accel::{closest_surface, Accel};
-use crate::engines::optics::{
-    fresnel_dielectric, glossy_reflection, reflect, refract, sample_cone, sample_lobe,
-};
+use crate::engines::scattering::{glossy_reflection, sample_cone, sample_lobe, Dielectric};
 use crate::geometry::{offset_ray_origin, point_error, Ray, Vec3};
 use crate::render::lights::Light;
 use crate::sampling::Rng;
@@ -267,12 +265,7 @@ fn trace_one(
             )
         } else if xi < pd + pr + pt {
             power = power.mul_elem(m.transmitted) / pt;
-            let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
-            let f = fresnel_dielectric(-ray.direction.dot(n), eta_i, eta_t);
-            match refract(ray.direction, n, eta_i, eta_t) {
-                Some(t) if rng.next_f32() >= f => t.normalized(),
-                _ => reflect(ray.direction, n),
-            }
+            Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng)
         } else {
             break;
         };

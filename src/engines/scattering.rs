@@ -1,6 +1,67 @@
-//! Specular optics: mirror reflection, refraction and the Fresnel reflectance of dielectrics.
+//! How surfaces scatter light, the one place every engine takes it from: the Lambertian lobe
+//! (cosine-distributed sampling, its density), mirror reflection and the glossy Phong lobe
+//! around it, and smooth dielectrics (glass: refraction, the exact Fresnel reflectance, total
+//! internal reflection, one branch chosen by it or both weighted by it).
+//!
+//! What each engine decides itself is which lobe to follow: the ray tracer follows mirrors
+//! and both branches of glass and takes diffuse light from its indirect source; the path
+//! tracer chooses a lobe in proportion to its largest channel, the photon tracer in proportion
+//! to its mean (so that photon power stays unweighted). The photon tracer samples the diffuse
+//! lobe as a Phong lobe of exponent 1 (`sample_lobe`), the path tracer by the concentric-disk
+//! mapping (`diffuse_sample`): the same distribution through two mappings, kept so that the
+//! images stay as they were; one mapping for both is a change of images to make on purpose.
 
 use crate::geometry::Vec3;
+use crate::sampling::Rng;
+use crate::scene::Material;
+
+/// A cosine-distributed direction about the unit normal `n`, from (u, v) in [0,1)², and its
+/// density in solid angle, cos θ / π.
+pub fn diffuse_sample(n: Vec3, u: f32, v: f32) -> (Vec3, f32) {
+    let (x, y) = crate::sampling::sample_disk(u, v);
+    let cos = (1.0 - x * x - y * y).max(0.0).sqrt();
+    let (tx, ty) = orthonormal_basis(n);
+    (tx * x + ty * y + n * cos, cos / std::f32::consts::PI)
+}
+
+/// A smooth dielectric boundary (glass) met by a ray: the indices on the side it arrives from
+/// and beyond, and the Fresnel reflectance there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Dielectric {
+    pub eta_i: f32,
+    pub eta_t: f32,
+    /// Fresnel reflectance for the ray's angle: 1 under total internal reflection.
+    pub reflectance: f32,
+}
+
+impl Dielectric {
+    /// The boundary of material `m` met by a ray of direction `d` at a surface whose normal
+    /// `n` faces the ray, from the front side (`front`: from the air into the material).
+    pub fn at(m: &Material, front: bool, d: Vec3, n: Vec3) -> Dielectric {
+        // Entering a closed surface from outside goes from air into the material.
+        let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
+        Dielectric {
+            eta_i,
+            eta_t,
+            reflectance: fresnel_dielectric(-d.dot(n), eta_i, eta_t),
+        }
+    }
+
+    /// The refracted direction (unit), None under total internal reflection.
+    pub fn refracted(&self, d: Vec3, n: Vec3) -> Option<Vec3> {
+        refract(d, n, self.eta_i, self.eta_t).map(|t| t.normalized())
+    }
+
+    /// One branch chosen with the Fresnel probability: the refracted direction with
+    /// probability 1 − F, else the mirror direction (always under total internal reflection,
+    /// where no random number is drawn).
+    pub fn sample(&self, d: Vec3, n: Vec3, rng: &mut Rng) -> Vec3 {
+        match refract(d, n, self.eta_i, self.eta_t) {
+            Some(t) if rng.next_f32() >= self.reflectance => t.normalized(),
+            _ => reflect(d, n),
+        }
+    }
+}
 
 /// `d` reflected about the unit normal `n`.
 #[inline]
