@@ -302,3 +302,67 @@ fn loading_photons_refuses_maps_made_with_another_mtl_texture_or_sidedness() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The camera flags: naming the scene's own camera gives its image byte for byte (the
+/// oracle: the camera in the file); moving it changes the image; a camera that cannot be
+/// made is refused naming the flag.
+#[test]
+fn camera_flags_override_the_scenes_camera() {
+    let dir = temp_dir("camera");
+    let input = scene("glass_sphere_caustic.obj");
+    let base = ["-input", input.as_str(), "-size", "24", "24", "--quiet"];
+    let run = |extra: &[&str], out: &str| {
+        let args: Vec<&str> = base
+            .iter()
+            .chain(extra)
+            .chain(&["-o", out])
+            .copied()
+            .collect();
+        let o = render(&dir, &args);
+        assert!(
+            o.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        std::fs::read(dir.join(out)).unwrap()
+    };
+    let own = run(&[], "own.png");
+    // The file's PerspectiveCamera: position 0 4.5 7, point of interest 0 0.6 0, up 0 1 0,
+    // angle 0.7 rad.
+    let fov = 0.7f32.to_degrees().to_string();
+    let same = run(
+        &[
+            "--camera-position",
+            "0",
+            "4.5",
+            "7",
+            "--look-at",
+            "0",
+            "0.6",
+            "0",
+            "--up",
+            "0",
+            "1",
+            "0",
+            "--fov",
+            &fov,
+        ],
+        "same.png",
+    );
+    assert_eq!(own, same, "the scene's own camera given as flags");
+    let moved = run(&["--camera-position", "3", "4.5", "7"], "moved.png");
+    assert_ne!(own, moved, "a moved camera sees another image");
+    for (flags, name) in [
+        (&["--fov", "0"][..], "--fov"),
+        (&["--fov", "180"][..], "--fov"),
+        (&["--up", "0", "0", "0"][..], "--up"),
+        (
+            &["--camera-position", "nan", "0", "0"][..],
+            "--camera-position",
+        ),
+    ] {
+        let args: Vec<&str> = base.iter().chain(flags).copied().collect();
+        refused(&render(&dir, &args), name, "expected");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

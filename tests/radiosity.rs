@@ -340,3 +340,76 @@ fn every_form_factor_is_identical_with_both_accels() {
         assert_eq!(differing, 0, "{file}");
     }
 }
+
+/// `--export-radiosity`: the PLY file, read back by a reader written here from the PLY
+/// specification, holds every patch with its corners and its solved radiance, in the furnace
+/// where that radiance is known (1/(1 − ρ)).
+#[test]
+fn exported_ply_holds_every_patch_with_its_radiance() {
+    let rho = 0.5f32;
+    let scene = furnace(rho);
+    let accel = accel_for(&scene);
+    let settings = RenderSettings {
+        radiosity: RadiositySettings {
+            subdivide: 1,
+            ..Default::default()
+        },
+        ..RenderSettings::default()
+    };
+    let solution = solve(&scene, accel.as_ref(), &settings);
+    let path = std::env::temp_dir().join(format!("trilux-export-{}.ply", std::process::id()));
+    solution.write_ply(&path).expect("writes");
+    let bytes = std::fs::read(&path).expect("reads");
+    std::fs::remove_file(&path).ok();
+    let end = b"end_header\n";
+    let header_len = bytes
+        .windows(end.len())
+        .position(|w| w == end)
+        .expect("a header")
+        + end.len();
+    let header = std::str::from_utf8(&bytes[..header_len]).unwrap();
+    assert!(
+        header.starts_with("ply\nformat binary_little_endian 1.0\n"),
+        "{header}"
+    );
+    let count = |element: &str| -> usize {
+        header
+            .lines()
+            .find_map(|l| l.strip_prefix(&format!("element {element} ")))
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no element {element}: {header}"))
+    };
+    let (vertices, faces) = (count("vertex"), count("face"));
+    assert_eq!(faces, solution.patches.len());
+    let body = &bytes[header_len..];
+    let f32_at = |k: usize| f32::from_le_bytes(body[4 * k..4 * k + 4].try_into().unwrap());
+    // Vertices: x y z r g b (six floats each); every colour the furnace's 1/(1 − ρ) within
+    // the solver's tolerance.
+    let truth = 1.0 / (1.0 - rho);
+    for v in 0..vertices {
+        for c in 3..6 {
+            let value = f32_at(6 * v + c);
+            assert!(
+                (value / truth - 1.0).abs() < 0.01,
+                "vertex {v}: {value} vs {truth}"
+            );
+        }
+    }
+    // Faces: a count (u8) then that many u32 indices, in order.
+    let mut at = 24 * vertices;
+    let mut next = 0u32;
+    for p in &solution.patches {
+        let n = body[at] as usize;
+        assert!(n == 3 || n == 4);
+        for k in 0..n {
+            let i = u32::from_le_bytes(body[at + 1 + 4 * k..at + 5 + 4 * k].try_into().unwrap());
+            assert_eq!(i, next);
+            let corner = [0, 1, 2].map(|c| f32_at(6 * i as usize + c));
+            assert_eq!(corner, p.corners[k].to_array());
+            next += 1;
+        }
+        at += 1 + 4 * n;
+    }
+    assert_eq!(at, body.len(), "nothing after the faces");
+    assert_eq!(next as usize, vertices);
+}

@@ -14,8 +14,9 @@ use crate::accel::{AccelKind, AccelOptions, EmbreeQuality};
 use crate::engines::photon::{self, PhotonSettings};
 use crate::engines::radiosity::{self, solver::Relaxation, RadiositySettings};
 use crate::engines::{EngineKind, IndirectKind, RenderSettings};
-use crate::geometry::vec3;
+use crate::geometry::{vec3, Vec3};
 use crate::sampling::Pattern;
+use crate::scene::{Camera, Projection};
 
 fn rs() -> RenderSettings {
     RenderSettings::default()
@@ -171,6 +172,86 @@ pub struct CameraArgs {
     /// Distance of the plane in focus (default: the camera's point of interest).
     #[arg(long, allow_negative_numbers = true)]
     pub focus_distance: Option<f32>,
+    /// Camera position, overriding (or supplying) the scene's camera [default: the scene's].
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub camera_position: Option<Vec<f32>>,
+    /// The point the camera looks at [default: the scene's point of interest].
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub look_at: Option<Vec<f32>>,
+    /// The camera's up direction [default: the scene's].
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
+    pub up: Option<Vec<f32>>,
+    /// Field of view in degrees across the larger image side (makes the camera perspective)
+    /// [default: the scene's].
+    #[arg(long, value_name = "DEGREES", allow_negative_numbers = true)]
+    pub fov: Option<f32>,
+}
+
+impl CameraArgs {
+    /// The scene's camera with the flags given applied to it.
+    pub fn apply(&self, camera: Camera) -> Camera {
+        let v = |a: &Option<Vec<f32>>, d: Vec3| a.as_ref().map_or(d, |a| vec3(a[0], a[1], a[2]));
+        Camera {
+            position: v(&self.camera_position, camera.position),
+            point_of_interest: v(&self.look_at, camera.point_of_interest),
+            up: v(&self.up, camera.up),
+            projection: self
+                .fov
+                .map_or(camera.projection, |deg| Projection::Perspective {
+                    angle: deg.to_radians(),
+                }),
+        }
+    }
+
+    /// Whether any camera flag was given (then the scene's camera is replaced).
+    pub fn overrides(&self) -> bool {
+        self.camera_position.is_some()
+            || self.look_at.is_some()
+            || self.up.is_some()
+            || self.fov.is_some()
+    }
+
+    /// Camera flags that cannot make a camera: non-finite numbers, a field of view outside
+    /// (0°, 180°), an up direction along the line of sight or of zero length.
+    fn validate(&self, camera: &Camera) -> Result<(), String> {
+        for (id, a) in [
+            ("camera_position", &self.camera_position),
+            ("look_at", &self.look_at),
+            ("up", &self.up),
+        ] {
+            if let Some(a) = a {
+                if a.iter().any(|v| !v.is_finite()) {
+                    return Err(format!(
+                        "{} {} {} {}: expected three finite numbers",
+                        super::flag_name(id),
+                        a[0],
+                        a[1],
+                        a[2]
+                    ));
+                }
+            }
+        }
+        if let Some(f) = self.fov {
+            if !(f > 0.0 && f < 180.0) {
+                return Err(format!("--fov {f}: expected degrees in (0, 180)"));
+            }
+        }
+        let c = self.apply(*camera);
+        let forward = c.point_of_interest - c.position;
+        if forward.length() == 0.0 {
+            return Err(
+                "--camera-position and --look-at: the camera looks at the point it stands on"
+                    .into(),
+            );
+        }
+        if forward.normalized().cross(c.up).length() < 1e-6 {
+            return Err(format!(
+                "--up {} {} {}: expected a direction not along the line of sight",
+                c.up.x, c.up.y, c.up.z
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// The ray tracer's flags (the photon engine and the radiosity display read some of them).
@@ -252,6 +333,10 @@ pub struct RadiosityArgs {
     /// Write one CSV line per radiosity shot: residual, wall time, rays cast.
     #[arg(long, value_name = "FILE.csv")]
     pub log_convergence: Option<PathBuf>,
+    /// Write the solved patches as a binary PLY mesh, their radiosity (linear radiance) as
+    /// vertex colours.
+    #[arg(long, value_name = "FILE.ply")]
+    pub export_radiosity: Option<PathBuf>,
 }
 
 /// The photon engine's flags.
@@ -314,6 +399,7 @@ impl RadiosityArgs {
             ff_source: self.ff_source,
             log_convergence: self.log_convergence.is_some(),
             display: visualize.and_then(Visualize::radiosity).unwrap_or_default(),
+            export: self.export_radiosity.clone(),
         }
     }
 }
@@ -441,6 +527,28 @@ fn check_number(id: &str, value: f32, min: f32, open: bool) -> Result<(), String
     ))
 }
 
+/// A file the render writes besides the image: its extension, and that its folder exists.
+fn check_text_output(id: &str, path: &std::path::Path, extension: &str) -> Result<(), String> {
+    let flag = super::flag_name(id);
+    if !path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case(extension))
+    {
+        return Err(format!(
+            "{flag} {}: expected a .{extension} file",
+            path.display()
+        ));
+    }
+    match path.parent() {
+        Some(folder) if !folder.as_os_str().is_empty() && !folder.is_dir() => Err(format!(
+            "{flag} {}: the folder {} does not exist",
+            path.display(),
+            folder.display()
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// `value` must lie in `range`.
 fn check_count<T>(id: &str, value: T, range: std::ops::RangeInclusive<T>) -> Result<(), String>
 where
@@ -458,6 +566,13 @@ where
 }
 
 impl RenderArgs {
+    /// The camera of the render: the scene's (or its default), with the camera flags applied,
+    /// checked.
+    pub fn camera(&self, scene_camera: Camera) -> Result<Camera, String> {
+        self.camera.validate(&scene_camera)?;
+        Ok(self.camera.apply(scene_camera))
+    }
+
     /// Rejects values no engine can use, naming the flag and the allowed range: before the
     /// scene is read, so that nothing is built for a render that cannot run.
     pub fn validate(&self) -> Result<(), String> {
@@ -525,6 +640,14 @@ impl RenderArgs {
         }
         if let Some(output) = &c.output {
             crate::film::ImageFormat::check_output(output).map_err(|e| e.to_string())?;
+        }
+        for (id, path, extension) in [
+            ("export_radiosity", &r.export_radiosity, "ply"),
+            ("log_convergence", &r.log_convergence, "csv"),
+        ] {
+            if let Some(path) = path {
+                check_text_output(id, path, extension)?;
+            }
         }
         Ok(())
     }

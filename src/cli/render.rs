@@ -26,6 +26,9 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
+    if args.camera.overrides() {
+        scene.camera = Some(args.camera(scene.camera())?);
+    }
     if scene.primitive_count() == 0 {
         return Err(format!(
             "{}: the scene has no geometry (no quads, triangles, spheres or rings): nothing to render",

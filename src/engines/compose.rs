@@ -48,7 +48,7 @@ impl Engine for RayTraceEngine {
                 let indirect = RadiosityIndirect::new(&solution, settings.radiosity.interpolate);
                 let (film, stats) = raytrace::render_with(scene, accel, settings, &indirect);
                 stats.form_factor_rays.store(solution.rays, Relaxed);
-                solution.rendered(film, stats, settings)
+                solution.rendered(film, stats, settings)?
             }
         })
     }

@@ -4,6 +4,7 @@
 mod camera;
 mod dialect;
 mod error;
+mod mgf;
 mod obj;
 mod surface;
 pub mod texture;
@@ -183,14 +184,24 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Loads a scene file: the course dialect or standard OBJ/MTL, decided by content.
+    /// Loads a scene file: MGF by its `.mgf` extension, else the course dialect or standard
+    /// OBJ/MTL, decided by content.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read(path).map_err(|source| SceneError::Io {
-            file: path.to_path_buf(),
-            source,
-        })?;
-        let text = String::from_utf8_lossy(&text);
-        let mut scene = if dialect::is_dialect(&text) {
+        let mgf = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("mgf"));
+        let text = if mgf {
+            String::new()
+        } else {
+            let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+                file: path.to_path_buf(),
+                source,
+            })?;
+            String::from_utf8_lossy(&bytes).into_owned()
+        };
+        let mut scene = if mgf {
+            mgf::load(path)?
+        } else if dialect::is_dialect(&text) {
             dialect::parse(path, &text)?
         } else {
             obj::load(path)?

@@ -11,6 +11,7 @@ pub mod settings;
 pub mod solver;
 
 mod display;
+mod export;
 pub use settings::{Display, RadiositySettings};
 
 use std::sync::atomic::Ordering::Relaxed;
@@ -450,7 +451,7 @@ impl Engine for RadiosityEngine {
         settings: &RenderSettings,
     ) -> Result<Rendered, String> {
         let (film, stats, solution) = render(scene, accel, settings);
-        Ok(solution.rendered(film, stats, settings))
+        solution.rendered(film, stats, settings)
     }
 
     /// Radiosity with visibility and interpolation, the mesh subdivided once more at each
@@ -516,14 +517,28 @@ fn planned_patches(scene: &Scene, r: &RadiositySettings) -> u64 {
 
 impl Solution {
     /// The render of an engine that solved this: its summary line, the cap's warning and
-    /// the convergence log.
-    pub fn rendered(&self, film: Film, stats: RenderStats, settings: &RenderSettings) -> Rendered {
-        Rendered {
-            summary: vec![self.summary(settings)],
+    /// the convergence log; the solution exported first when `--export-radiosity` asks.
+    pub fn rendered(
+        &self,
+        film: Film,
+        stats: RenderStats,
+        settings: &RenderSettings,
+    ) -> Result<Rendered, String> {
+        let mut summary = vec![self.summary(settings)];
+        if let Some(path) = &settings.radiosity.export {
+            self.write_ply(path).map_err(|e| e.to_string())?;
+            summary.push(format!(
+                "wrote {} ({} patches, linear radiance as vertex colours)",
+                path.display(),
+                self.patches.len()
+            ));
+        }
+        Ok(Rendered {
+            summary,
             warnings: self.cap_warning(settings).into_iter().collect(),
             convergence_log: Some(self.convergence_csv()),
             ..Rendered::plain(film, stats)
-        }
+        })
     }
 
     /// One paragraph on how the solve went.

@@ -44,6 +44,8 @@ pub struct RadiositySettings {
     pub log_convergence: bool,
     /// What the image shows (`--visualize`, default radiance: the solution).
     pub display: Display,
+    /// Write the solved patches to this PLY file (`--export-radiosity`, default: none).
+    pub export: Option<std::path::PathBuf>,
 }
 
 impl Default for RadiositySettings {
@@ -65,6 +67,7 @@ impl Default for RadiositySettings {
             ff_source: None,
             log_convergence: false,
             display: Display::Radiance,
+            export: None,
         }
     }
 }
