@@ -70,3 +70,17 @@ pub fn write_atomically(
     }
     result
 }
+
+/// That the folder a file is to be written into exists (checked before the work that writes
+/// it, so that a typo does not cost a render).
+pub fn check_folder(path: &Path) -> Result<(), OutputError> {
+    match path.parent() {
+        Some(folder) if !folder.as_os_str().is_empty() && !folder.is_dir() => {
+            Err(OutputError::NoFolder {
+                path: path.to_path_buf(),
+                folder: folder.to_path_buf(),
+            })
+        }
+        _ => Ok(()),
+    }
+}

@@ -75,14 +75,13 @@ fn code(path: &Path) -> String {
 
 /// Item paths named in a file, absolute (`engines::photon::Photon`): `use` trees expanded
 /// one level of braces at a time, `super`/`self` resolved against the file's module.
-fn paths(module: &str, is_mod_rs: bool, code: &str) -> Vec<String> {
+fn paths(module: &str, code: &str) -> Vec<String> {
     let here: Vec<&str> = if module.is_empty() {
         vec![]
     } else {
         module.split("::").collect()
     };
-    // The module `super`/`self` are relative to: a file `a/b.rs` is module a::b.
-    let _ = is_mod_rs;
+    // `super` and `self` are relative to the file's module: a file `a/b.rs` is module a::b.
     let resolve = |p: &str| -> Option<String> {
         let mut segs: Vec<&str> = p
             .split("::")
@@ -200,7 +199,7 @@ fn graph() -> BTreeMap<String, BTreeSet<String>> {
     for (module, file) in &modules {
         let is_mod_rs = file.ends_with("mod.rs") || file.ends_with("lib.rs");
         let mut targets = BTreeSet::new();
-        for p in paths(module, is_mod_rs, &code(file)) {
+        for p in paths(module, &code(file)) {
             let segs: Vec<&str> = p.split("::").collect();
             let target = (0..=segs.len())
                 .rev()

@@ -46,6 +46,19 @@ fn render(dir: &Path, args: &[&str]) -> Output {
     render_within(dir, args, Duration::from_secs(120))
 }
 
+/// `render -input scenes/cornell_box.obj FLAGS…` in `dir`, within `limit`.
+fn cornell_box(dir: &Path, flags: &[&str], limit: Duration) -> Output {
+    let input = scene("cornell_box.obj");
+    let args: Vec<&str> = ["-input", input.as_str()]
+        .into_iter()
+        .chain(flags.iter().copied())
+        .collect();
+    render_within(dir, &args, limit)
+}
+
+/// Time enough for any of these renders of refused flags (they stop before the work).
+const REFUSED: Duration = Duration::from_secs(120);
+
 /// The command failed, and its message names `flag` and contains `expected`.
 fn refused(out: &Output, flag: &str, expected: &str) {
     let err = String::from_utf8_lossy(&out.stderr);
@@ -67,29 +80,9 @@ const BEFORE_WORK: Duration = Duration::from_secs(20);
 #[test]
 fn non_finite_ambient_light_names_the_flag() {
     let dir = temp_dir("ambient");
-    let out = render(
-        &dir,
-        &[
-            "-input",
-            &scene("cornell_box.obj"),
-            "-ambient_light",
-            "nan",
-            "nan",
-            "nan",
-        ],
-    );
+    let out = cornell_box(&dir, &["-ambient_light", "nan", "nan", "nan"], REFUSED);
     refused(&out, "-ambient_light", "finite numbers ≥ 0");
-    let out = render(
-        &dir,
-        &[
-            "-input",
-            &scene("cornell_box.obj"),
-            "-ambient_light",
-            "0.1",
-            "-1",
-            "0.1",
-        ],
-    );
+    let out = cornell_box(&dir, &["-ambient_light", "0.1", "-1", "0.1"], REFUSED);
     refused(&out, "-ambient_light", "finite numbers ≥ 0");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -97,10 +90,7 @@ fn non_finite_ambient_light_names_the_flag() {
 #[test]
 fn thread_count_out_of_range_names_the_flag_and_the_range() {
     let dir = temp_dir("threads");
-    let out = render(
-        &dir,
-        &["-input", &scene("cornell_box.obj"), "--threads", "100000"],
-    );
+    let out = cornell_box(&dir, &["--threads", "100000"], REFUSED);
     refused(&out, "--threads", "from 0 to 1024");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -108,15 +98,7 @@ fn thread_count_out_of_range_names_the_flag_and_the_range() {
 #[test]
 fn zero_samples_per_pixel_names_the_flag() {
     let dir = temp_dir("spp");
-    let out = render(
-        &dir,
-        &[
-            "-input",
-            &scene("cornell_box.obj"),
-            "-num_antialias_samples",
-            "0",
-        ],
-    );
+    let out = cornell_box(&dir, &["-num_antialias_samples", "0"], REFUSED);
     refused(&out, "-num_antialias_samples", "from 1 to");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -124,20 +106,9 @@ fn zero_samples_per_pixel_names_the_flag() {
 #[test]
 fn negative_or_non_finite_lens_names_the_flag() {
     let dir = temp_dir("lens");
-    let out = render(
-        &dir,
-        &["-input", &scene("cornell_box.obj"), "--aperture", "-0.5"],
-    );
+    let out = cornell_box(&dir, &["--aperture", "-0.5"], REFUSED);
     refused(&out, "--aperture", "finite number ≥ 0");
-    let out = render(
-        &dir,
-        &[
-            "-input",
-            &scene("cornell_box.obj"),
-            "--focus-distance",
-            "inf",
-        ],
-    );
+    let out = cornell_box(&dir, &["--focus-distance", "inf"], REFUSED);
     refused(&out, "--focus-distance", "finite number > 0");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -156,11 +127,7 @@ fn out_of_range_engine_numbers_name_the_flag() {
         (&["--ray-tree", "300", "1"], "--ray-tree"),
     ];
     for (flags, name) in cases {
-        let mut args = vec!["-input".to_string(), scene("cornell_box.obj")];
-        args.extend(flags.iter().map(|s| s.to_string()));
-        let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let out = render(&dir, &args);
-        refused(&out, name, "");
+        refused(&cornell_box(&dir, flags, REFUSED), name, "");
     }
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -168,15 +135,8 @@ fn out_of_range_engine_numbers_name_the_flag() {
 #[test]
 fn an_output_whose_folder_is_missing_is_refused_before_the_render() {
     let dir = temp_dir("no-folder");
-    let mut args = vec![
-        "-input".to_string(),
-        scene("cornell_box.obj"),
-        "-o".into(),
-        "missing/out.png".into(),
-    ];
-    args.extend(HEAVY.iter().map(|s| s.to_string()));
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let out = render_within(&dir, &args, BEFORE_WORK);
+    let flags: Vec<&str> = ["-o", "missing/out.png"].into_iter().chain(HEAVY).collect();
+    let out = cornell_box(&dir, &flags, BEFORE_WORK);
     refused(&out, "missing/out.png", "does not exist");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -184,15 +144,8 @@ fn an_output_whose_folder_is_missing_is_refused_before_the_render() {
 #[test]
 fn an_output_of_unknown_format_is_refused_before_the_render() {
     let dir = temp_dir("format");
-    let mut args = vec![
-        "-input".to_string(),
-        scene("cornell_box.obj"),
-        "-o".into(),
-        "out.gif".into(),
-    ];
-    args.extend(HEAVY.iter().map(|s| s.to_string()));
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let out = render_within(&dir, &args, BEFORE_WORK);
+    let flags: Vec<&str> = ["-o", "out.gif"].into_iter().chain(HEAVY).collect();
+    let out = cornell_box(&dir, &flags, BEFORE_WORK);
     refused(
         &out,
         "out.gif",
@@ -251,13 +204,9 @@ fn loading_photons_refuses_maps_made_with_another_mtl_texture_or_sidedness() {
         "8",
         "--quiet",
     ];
-    let with = |extra: &[&str]| -> Vec<String> {
-        base.iter().chain(extra).map(|s| s.to_string()).collect()
-    };
-    let run = |args: Vec<String>| {
-        let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        render(&dir, &args)
-    };
+    let with =
+        |extra: &[&'static str]| -> Vec<&str> { base.iter().chain(extra).copied().collect() };
+    let run = |args: Vec<&str>| render(&dir, &args);
     let saved = run(with(&["--save-photons", "maps.photons"]));
     assert!(
         saved.status.success(),

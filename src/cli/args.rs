@@ -467,20 +467,33 @@ impl RenderArgs {
         self.given.iter().any(|(g, _)| g == group)
     }
 
-    /// The engine asked for, or the one the flags given imply: a photon flag or photon
-    /// display means the photon engine; a radiosity flag or mode (without `--indirect
-    /// radiosity`, which asks the ray tracer for it) the radiosity engine.
+    /// Whether `engine` reads the flags of clap group `group`: an engine's own group is read
+    /// by that engine, and the radiosity group also by the ray tracer with `--indirect
+    /// radiosity`; the shared groups by every engine.
+    fn reads_group(&self, engine: EngineKind, group: &str) -> bool {
+        match ENGINE_GROUPS.iter().find(|(g, _)| *g == group) {
+            None => true,
+            Some(&(_, owner)) => {
+                owner == engine
+                    || (owner == EngineKind::Radiosity
+                        && engine == EngineKind::Raytrace
+                        && self.ray_trace.indirect == IndirectKind::Radiosity)
+            }
+        }
+    }
+
+    /// The engine asked for, or the one the flags given imply: a flag or `--visualize` mode
+    /// of an engine's own group means that engine, unless the ray tracer reads that group
+    /// too (`--indirect radiosity`).
     pub fn engine(&self) -> EngineKind {
         if let Some(e) = self.common.engine {
             return e;
         }
         let visualize = self.common.visualize.map(Visualize::engine);
-        for (group, engine) in ENGINE_GROUPS {
-            let implied = self.group_given(group) || visualize == Some(engine);
-            let asked_of_ray_tracer = engine == EngineKind::Radiosity
-                && self.ray_trace.indirect == IndirectKind::Radiosity;
-            if implied && !asked_of_ray_tracer {
-                return engine;
+        for (group, owner) in ENGINE_GROUPS {
+            let implied = self.group_given(group) || visualize == Some(owner);
+            if implied && !self.reads_group(EngineKind::Raytrace, group) {
+                return owner;
             }
         }
         EngineKind::Raytrace
@@ -489,19 +502,10 @@ impl RenderArgs {
     /// Flags given that the chosen engine does not read, as the user would type them.
     pub fn unused_flags(&self) -> Vec<String> {
         let engine = self.engine();
-        let reads_group = |group: &str| match group {
-            "PhotonArgs" => engine == EngineKind::Photon,
-            "RadiosityArgs" => {
-                engine == EngineKind::Radiosity
-                    || (engine == EngineKind::Raytrace
-                        && self.ray_trace.indirect == IndirectKind::Radiosity)
-            }
-            _ => true,
-        };
         let unread = crate::engines::engine(engine).unread_flags();
         self.given
             .iter()
-            .filter(|(group, id)| !reads_group(group) || unread.contains(&id.as_str()))
+            .filter(|(group, id)| !self.reads_group(engine, group) || unread.contains(&id.as_str()))
             .map(|(_, id)| super::flag_name(id))
             .collect()
     }
@@ -539,14 +543,7 @@ fn check_text_output(id: &str, path: &std::path::Path, extension: &str) -> Resul
             path.display()
         ));
     }
-    match path.parent() {
-        Some(folder) if !folder.as_os_str().is_empty() && !folder.is_dir() => Err(format!(
-            "{flag} {}: the folder {} does not exist",
-            path.display(),
-            folder.display()
-        )),
-        _ => Ok(()),
-    }
+    crate::output::check_folder(path).map_err(|e| format!("{flag}: {e}"))
 }
 
 /// `value` must lie in `range`.
@@ -650,5 +647,30 @@ impl RenderArgs {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// The engines name the shared flags they do not read by argument id; each must be a
+    /// flag the command has, or a typo would silently keep a note from being printed.
+    #[test]
+    fn every_unread_flag_an_engine_names_is_a_flag() {
+        let command = super::super::Cli::command();
+        let ids: Vec<String> = command
+            .get_arguments()
+            .map(|a| a.get_id().to_string())
+            .collect();
+        for engine in crate::engines::all() {
+            for id in engine.unread_flags() {
+                assert!(
+                    ids.iter().any(|i| i == id),
+                    "{}: no flag {id}",
+                    engine.kind()
+                );
+            }
+        }
     }
 }

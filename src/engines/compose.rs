@@ -56,18 +56,11 @@ impl Engine for RayTraceEngine {
     /// Soft shadows and the ambient term, samples per pixel doubling. The ambient term is a
     /// guess, so this curve levels off at its bias.
     fn budget(&self, level: u32, base: &RenderSettings) -> Option<Budget> {
-        if level > 10 {
-            return None;
-        }
-        let spp = 1u32 << level;
-        let mut s = base.clone();
-        s.num_shadow_samples = 4;
-        s.num_antialias_samples = spp;
-        Some(Budget {
-            counts: "spp",
-            value: spp as u64,
-            settings: s,
-        })
+        let four_shadow_rays = RenderSettings {
+            num_shadow_samples: 4,
+            ..base.clone()
+        };
+        Budget::samples_per_pixel(level, 10, &four_shadow_rays)
     }
 
     fn colour(&self) -> (u8, u8, u8) {

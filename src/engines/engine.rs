@@ -64,8 +64,11 @@ pub trait Engine: Sync {
     }
 
     /// What the engine would build for this scene and these settings, decided before
-    /// anything is built: its `--plan` lines and its memory estimate.
-    fn plan(&self, scene: &Scene, settings: &RenderSettings) -> EnginePlan;
+    /// anything is built: its `--plan` lines and its memory estimate (default: nothing
+    /// beyond the image and the Accel).
+    fn plan(&self, _scene: &Scene, _settings: &RenderSettings) -> EnginePlan {
+        EnginePlan::default()
+    }
 
     /// Renders the scene. Fails only on input the engine reads itself (`--load-photons`).
     fn render(
@@ -100,6 +103,24 @@ pub struct Budget {
     pub counts: &'static str,
     pub value: u64,
     pub settings: RenderSettings,
+}
+
+impl Budget {
+    /// Budget `level` of a ladder of samples per pixel doubling from 1 up to 2^`last`, the
+    /// other settings `base`'s; None past the last level.
+    pub fn samples_per_pixel(level: u32, last: u32, base: &RenderSettings) -> Option<Budget> {
+        (level <= last).then(|| {
+            let spp = 1u32 << level;
+            Budget {
+                counts: "spp",
+                value: spp as u64,
+                settings: RenderSettings {
+                    num_antialias_samples: spp,
+                    ..base.clone()
+                },
+            }
+        })
+    }
 }
 
 /// What one render produced: the image, its counters, and what the engine has to say.

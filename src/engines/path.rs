@@ -12,7 +12,7 @@
 
 use std::collections::HashMap;
 
-use super::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSettings, Rendered};
+use super::engine::{Budget, Engine, EngineKind, RenderSettings, Rendered};
 use super::scattering::{diffuse_sample, glossy_reflection, Dielectric};
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
@@ -257,10 +257,6 @@ impl Engine for PathEngine {
         ]
     }
 
-    fn plan(&self, _: &Scene, _: &RenderSettings) -> EnginePlan {
-        EnginePlan::default()
-    }
-
     fn render(
         &self,
         scene: &Scene,
@@ -273,17 +269,7 @@ impl Engine for PathEngine {
 
     /// Paths per pixel doubling.
     fn budget(&self, level: u32, base: &RenderSettings) -> Option<Budget> {
-        if level > 16 {
-            return None;
-        }
-        let spp = 1u32 << level;
-        let mut s = base.clone();
-        s.num_antialias_samples = spp;
-        Some(Budget {
-            counts: "spp",
-            value: spp as u64,
-            settings: s,
-        })
+        Budget::samples_per_pixel(level, 16, base)
     }
 
     fn colour(&self) -> (u8, u8, u8) {

@@ -6,7 +6,7 @@ use crate::accel::Accel;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering::Relaxed;
 
-use super::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSettings, Rendered};
+use super::engine::{Budget, Engine, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::geometry::Ray;
 use crate::render::RenderStats;
@@ -67,10 +67,6 @@ impl Engine for RaycastEngine {
         ]
     }
 
-    fn plan(&self, _: &Scene, _: &RenderSettings) -> EnginePlan {
-        EnginePlan::default()
-    }
-
     fn render(
         &self,
         scene: &Scene,
@@ -88,17 +84,7 @@ impl Engine for RaycastEngine {
     /// One camera ray per pixel sample, doubling (the view has no other noise: its curve
     /// measures antialiasing alone).
     fn budget(&self, level: u32, base: &RenderSettings) -> Option<Budget> {
-        if level > 10 {
-            return None;
-        }
-        let spp = 1u32 << level;
-        let mut s = base.clone();
-        s.num_antialias_samples = spp;
-        Some(Budget {
-            counts: "spp",
-            value: spp as u64,
-            settings: s,
-        })
+        Budget::samples_per_pixel(level, 10, base)
     }
 
     fn colour(&self) -> (u8, u8, u8) {

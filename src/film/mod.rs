@@ -51,15 +51,8 @@ impl ImageFormat {
         let format = ImageFormat::from_path(path).ok_or_else(|| OutputError::UnknownFormat {
             path: path.to_path_buf(),
         })?;
-        match path.parent() {
-            Some(folder) if !folder.as_os_str().is_empty() && !folder.is_dir() => {
-                Err(OutputError::NoFolder {
-                    path: path.to_path_buf(),
-                    folder: folder.to_path_buf(),
-                })
-            }
-            _ => Ok(format),
-        }
+        crate::output::check_folder(path)?;
+        Ok(format)
     }
 }
 

@@ -46,6 +46,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         material: MaterialDef::default(),
         material_name: String::new(),
         converted: HashMap::new(),
+        current_scene_material: None,
         transforms: Vec::new(),
         including: Vec::new(),
         unknown: HashSet::new(),
@@ -376,7 +377,10 @@ struct Reader {
     /// Scene materials by the MGF definition they were converted from (its text: equal
     /// definitions share one).
     converted: HashMap<String, u32>,
-    /// The transforms of the enclosing `xf` blocks and includes, innermost last.
+    /// The scene material of the current MGF material, until the material changes.
+    current_scene_material: Option<u32>,
+    /// The transforms of the enclosing `xf` blocks and includes, each composed with those
+    /// around it (the last is the one in force).
     transforms: Vec<Affine>,
     /// Files being read (include cycle check).
     including: Vec<PathBuf>,
@@ -433,14 +437,25 @@ fn count(e: &Entity, k: usize, what: &str) -> Result<usize, SceneError> {
 }
 
 impl Reader {
+    /// The transform of the enclosing `xf` blocks and includes, composed.
     fn transform(&self) -> Affine {
-        self.transforms
-            .iter()
-            .rev()
-            .fold(Affine::IDENTITY, |acc, t| acc.then(t))
+        self.transforms.last().copied().unwrap_or(Affine::IDENTITY)
     }
 
-    /// Reads a file, its entities transformed by `args` (an include's transform).
+    /// Runs `f` inside one more transform, `t` applied before the enclosing ones.
+    fn within(
+        &mut self,
+        t: &Affine,
+        f: impl FnOnce(&mut Self) -> Result<(), SceneError>,
+    ) -> Result<(), SceneError> {
+        let composed = t.then(&self.transform());
+        self.transforms.push(composed);
+        let result = f(self);
+        self.transforms.pop();
+        result
+    }
+
+    /// Reads a file (the first, or an include named by `from`) with the transform in force.
     fn file(&mut self, path: &Path, from: Option<(&Entity, &Word)>) -> Result<(), SceneError> {
         let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
         if self.including.contains(&canonical) || self.including.len() >= MAX_INCLUDE_DEPTH {
@@ -480,13 +495,9 @@ impl Reader {
                 let end = matching_end(list, k).ok_or_else(|| {
                     invalid(e, &e.words[0], "this xf has no closing `xf` line".into())
                 })?;
-                let copies = self.array_transforms(e)?;
                 let body = &list[k + 1..end];
-                for t in copies {
-                    self.transforms.push(t);
-                    let r = self.run(body);
-                    self.transforms.pop();
-                    r?;
+                for t in xf_transforms(e, 1)? {
+                    self.within(&t, |r| r.run(body))?;
                 }
                 k = end + 1;
                 continue;
@@ -495,11 +506,6 @@ impl Reader {
             k += 1;
         }
         Ok(())
-    }
-
-    /// The transforms of `xf ARGS` (or an include's ARGS), one per copy of its `-a` arrays.
-    fn array_transforms(&self, e: &Entity) -> Result<Vec<Affine>, SceneError> {
-        xf_transforms(e, 1)
     }
 
     fn entity(&mut self, e: &Entity) -> Result<(), SceneError> {
@@ -703,6 +709,7 @@ impl Reader {
     }
 
     fn material_changed(&mut self) {
+        self.current_scene_material = None;
         if !self.material_name.is_empty() {
             self.materials
                 .insert(self.material_name.clone(), self.material.clone());
@@ -710,6 +717,7 @@ impl Reader {
     }
 
     fn material_entity(&mut self, e: &Entity) -> Result<(), SceneError> {
+        self.current_scene_material = None;
         match (e.words.get(1), e.words.get(2).map(|w| w.text.as_str())) {
             (None, _) => {
                 self.material = MaterialDef::default();
@@ -746,34 +754,44 @@ impl Reader {
     /// material whose reflectances add up to more than 1 in some channel (saturated colours
     /// of high luminance do) is scaled down to 1 there, chromaticity kept, with a warning.
     fn scene_material(&mut self) -> u32 {
-        let key = format!("{:?}", self.material);
-        if let Some(&m) = self.converted.get(&key) {
+        if let Some(m) = self.current_scene_material {
             return m;
         }
+        let key = format!("{:?}", self.material);
+        let index = match self.converted.get(&key) {
+            Some(&m) => m,
+            None => {
+                let m = self.convert_material();
+                self.scene.materials.push(m);
+                let index = self.scene.materials.len() as u32 - 1;
+                self.converted.insert(key, index);
+                index
+            }
+        };
+        self.current_scene_material = Some(index);
+        index
+    }
+
+    /// The current MGF material as a scene material, scaled to conserve energy.
+    fn convert_material(&mut self) -> Material {
         let mut m = self.material.to_material();
         let sum = (m.diffuse + m.reflective + m.transmitted).max_elem();
-        if sum > 1.0 + 1e-3 {
+        if sum > 1.0 {
             let f = 1.0 / sum;
-            self.scene.warnings.push(format!(
-                "{}:{}: material `{}` reflects {sum:.3} of the light in one channel; its reflectances are scaled by {f:.3} to conserve energy",
-                self.scene.path.display(),
-                self.material.line,
-                self.material_name
-            ));
-            m.diffuse *= f;
-            m.reflective *= f;
-            m.transmitted *= f;
-        } else if sum > 1.0 {
-            // Rounding of an exactly white material: not worth a warning.
-            let f = 1.0 / sum;
+            // Below 1.001 it is the rounding of an exactly white material: no warning.
+            if sum > 1.0 + 1e-3 {
+                self.scene.warnings.push(format!(
+                    "{}:{}: material `{}` reflects {sum:.3} of the light in one channel; its reflectances are scaled by {f:.3} to conserve energy",
+                    self.scene.path.display(),
+                    self.material.line,
+                    self.material_name
+                ));
+            }
             m.diffuse *= f;
             m.reflective *= f;
             m.transmitted *= f;
         }
-        self.scene.materials.push(m);
-        let index = self.scene.materials.len() as u32 - 1;
-        self.converted.insert(key, index);
-        index
+        m
     }
 
     /// A named vertex, transformed to where it is used.
@@ -889,37 +907,24 @@ impl Reader {
                 };
                 cone(a.p, r1, b.p, r2)
             }
-            "ring" => {
+            "ring" | "torus" => {
                 let c = vertex(1, "the centre vertex")?;
                 let axis = c.n.ok_or_else(|| {
                     invalid(
                         e,
                         &e.words[1],
-                        "a ring's vertex needs a normal (`n`)".into(),
+                        format!("a {kind}'s vertex needs a normal (`n`) for its axis"),
                     )
                 })?;
-                ring(
-                    c.p,
-                    axis,
+                let (r1, r2) = (
                     number(e, 2, "the inner radius")? * scale,
                     number(e, 3, "the outer radius")? * scale,
-                )
-            }
-            "torus" => {
-                let c = vertex(1, "the centre vertex")?;
-                let axis = c.n.ok_or_else(|| {
-                    invalid(
-                        e,
-                        &e.words[1],
-                        "a torus's vertex needs a normal (`n`)".into(),
-                    )
-                })?;
-                torus(
-                    c.p,
-                    axis,
-                    number(e, 2, "the inner radius")? * scale,
-                    number(e, 3, "the outer radius")? * scale,
-                )
+                );
+                if kind == "ring" {
+                    ring(c.p, axis, r1, r2)
+                } else {
+                    torus(c.p, axis, r1, r2)
+                }
             }
             _ => {
                 // prism V1 … VN LENGTH (the length last, as MGF 2.0 and the shipped files
@@ -949,12 +954,8 @@ impl Reader {
         let name = e.words.get(1).ok_or_else(|| missing(e, "a file name"))?;
         let dir = e.file.parent().map(Path::to_path_buf).unwrap_or_default();
         let path = dir.join(&name.text);
-        let copies = xf_transforms(e, 2)?;
-        for t in copies {
-            self.transforms.push(t);
-            let r = self.file(&path, Some((e, name)));
-            self.transforms.pop();
-            r?;
+        for t in xf_transforms(e, 2)? {
+            self.within(&t, |r| r.file(&path, Some((e, name))))?;
         }
         Ok(())
     }
