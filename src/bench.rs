@@ -36,7 +36,7 @@ pub fn uniform_direction(rng: &mut Rng) -> Vec3 {
 /// uniform on the sphere. Deterministic for a seed.
 pub fn incoherent_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
     let b = scene.bounds();
-    let pad = b.extent().max_elem() * 0.05;
+    let pad = b.extent().max_element() * 0.05;
     let lo = b.min - Vec3::splat(pad);
     let size = b.extent() + Vec3::splat(2.0 * pad);
     (0..n)

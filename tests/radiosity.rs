@@ -234,7 +234,7 @@ fn far_arm_of_the_l_room_gets_no_direct_light_with_visibility() {
         assert_eq!(far.len(), 16);
         let direct: Vec<f32> = far
             .iter()
-            .map(|&k| solution.state.incident_direct[k].max_elem())
+            .map(|&k| solution.state.incident_direct[k].max_element())
             .collect();
         if shadow_samples == 0 {
             assert!(

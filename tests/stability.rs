@@ -209,7 +209,7 @@ fn emitted_radiance_from_1e_minus_30_to_1e30_scales_linearly() {
             scene.background *= factor;
             let mut film = render(engine, &scene, kind, &s);
             assert!(all_finite(&film), "{kind}: {engine} × {factor:e}");
-            film.pixels.iter_mut().for_each(|p| *p = *p / factor);
+            film.pixels.iter_mut().for_each(|p| *p /= factor);
             let m = metrics::compare(&film, &reference).expect("same size");
             println!(
                 "{kind}: {engine}, emitted × {factor:e}: relMSE {:.2e}",
@@ -424,7 +424,7 @@ fn non_finite_samples_are_counted_and_left_out() {
     for m in scene
         .materials
         .iter_mut()
-        .filter(|m| m.emitted.max_elem() > 0.0)
+        .filter(|m| m.emitted.max_element() > 0.0)
     {
         m.emitted = Vec3::splat(3e38);
     }

@@ -244,7 +244,7 @@ impl CameraArgs {
                     .into(),
             );
         }
-        if forward.normalized().cross(c.up).length() < 1e-6 {
+        if forward.normalize_or_zero().cross(c.up).length() < 1e-6 {
             return Err(format!(
                 "--up {} {} {}: expected a direction not along the line of sight",
                 c.up.x, c.up.y, c.up.z

@@ -56,7 +56,7 @@ impl PathTracer<'_> {
         let mut cdf = Vec::with_capacity(lights.len());
         let mut total = 0.0;
         for l in &lights {
-            total += l.emitted.max_elem() * l.area;
+            total += l.emitted.max_element() * l.area;
             cdf.push(total);
         }
         if total > 0.0 {
@@ -155,7 +155,7 @@ impl PathTracer<'_> {
         for vertex in 0..MAX_VERTICES {
             let Some(s) = hit else {
                 if !diffuse_bounce {
-                    radiance += throughput.mul_elem(self.scene.background);
+                    radiance += throughput * self.scene.background;
                 }
                 break;
             };
@@ -169,13 +169,13 @@ impl PathTracer<'_> {
                     }
                     _ => 1.0,
                 };
-                radiance += throughput.mul_elem(m.emitted) * weight;
+                radiance += throughput * m.emitted * weight;
             }
             let albedo = self.scene.albedo(&s);
             let (d, r, t) = (
-                albedo.max_elem(),
-                m.reflective.max_elem(),
-                m.transmitted.max_elem(),
+                albedo.max_element(),
+                m.reflective.max_element(),
+                m.transmitted.max_element(),
             );
             let total = d + r + t;
             if total <= 0.0 {
@@ -185,12 +185,10 @@ impl PathTracer<'_> {
             let dir;
             if choice < d {
                 let lobe = albedo * (total / d);
-                radiance += throughput
-                    .mul_elem(lobe)
-                    .mul_elem(self.sample_light(&s, n, rng, counts));
+                radiance += throughput * lobe * self.sample_light(&s, n, rng, counts);
                 let (sampled, pdf) = diffuse_sample(n, rng.next_f32(), rng.next_f32());
                 dir = sampled;
-                throughput = throughput.mul_elem(lobe);
+                throughput *= lobe;
                 diffuse_bounce = true;
                 previous = Previous {
                     point: s.point,
@@ -204,19 +202,19 @@ impl PathTracer<'_> {
                     rng.next_f32(),
                     rng.next_f32(),
                 );
-                throughput = throughput.mul_elem(m.reflective * (total / r));
+                throughput *= m.reflective * (total / r);
                 previous.bsdf_pdf = None;
             } else {
                 dir = Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng);
-                throughput = throughput.mul_elem(m.transmitted * (total / t));
+                throughput *= m.transmitted * (total / t);
                 previous.bsdf_pdf = None;
             }
             if vertex >= ROULETTE_FROM {
-                let survive = throughput.max_elem().min(MAX_SURVIVAL);
+                let survive = throughput.max_element().min(MAX_SURVIVAL);
                 if rng.next_f32() >= survive {
                     break;
                 }
-                throughput = throughput / survive;
+                throughput *= survive.recip();
             }
             ray = s.spawn_ray(dir);
             counts.secondary += 1;

@@ -58,17 +58,17 @@ impl Tracer<'_> {
             radiance += m.emitted;
         }
         let albedo = self.scene.albedo(&s);
-        if albedo.max_elem() > 0.0 {
+        if albedo.max_element() > 0.0 {
             let irradiance_over_pi = self.direct(&s, n, rng, counts);
             let indirect = self
                 .indirect
                 .incident(self.scene, self.accel, &s, n, depth, rng);
-            radiance += albedo.mul_elem(irradiance_over_pi + indirect);
+            radiance += albedo * (irradiance_over_pi + indirect);
         }
         if depth >= self.settings.num_bounces {
             return radiance;
         }
-        if m.reflective.max_elem() > 0.0 && weight * m.reflective.max_elem() > MIN_WEIGHT {
+        if m.reflective.max_element() > 0.0 && weight * m.reflective.max_element() > MIN_WEIGHT {
             let dir = glossy_reflection(
                 ray.direction,
                 n,
@@ -76,15 +76,13 @@ impl Tracer<'_> {
                 rng.next_f32(),
                 rng.next_f32(),
             );
-            let w = weight * m.reflective.max_elem();
-            radiance +=
-                m.reflective
-                    .mul_elem(self.trace(&s.spawn_ray(dir), depth + 1, w, rng, counts));
+            let w = weight * m.reflective.max_element();
+            radiance += m.reflective * self.trace(&s.spawn_ray(dir), depth + 1, w, rng, counts);
         }
-        if m.transmitted.max_elem() > 0.0 && weight * m.transmitted.max_elem() > MIN_WEIGHT {
+        if m.transmitted.max_element() > 0.0 && weight * m.transmitted.max_element() > MIN_WEIGHT {
             let glass = Dielectric::at(m, front, ray.direction, n);
             let f = glass.reflectance;
-            let w = weight * m.transmitted.max_elem();
+            let w = weight * m.transmitted.max_element();
             let mut through = Vec3::ZERO;
             if f > 0.0 && w * f > MIN_WEIGHT {
                 let r = s.spawn_ray(reflect(ray.direction, n));
@@ -96,7 +94,7 @@ impl Tracer<'_> {
                     through += self.trace(&r, depth + 1, w * (1.0 - f), rng, counts) * (1.0 - f);
                 }
             }
-            radiance += m.transmitted.mul_elem(through);
+            radiance += m.transmitted * through;
         }
         radiance
     }
@@ -397,7 +395,7 @@ mod tests {
                 2.0 * rng.next_f32(),
                 4.0 * rng.next_f32() - 2.0,
             );
-            let n = vec3(rng.next_f32() - 0.5, 1.0, rng.next_f32() - 0.5).normalized();
+            let n = vec3(rng.next_f32() - 0.5, 1.0, rng.next_f32() - 0.5).normalize_or_zero();
             let (u, v): ([f32; LANES], [f32; LANES]) = (
                 std::array::from_fn(|_| rng.next_f32()),
                 std::array::from_fn(|_| rng.next_f32()),

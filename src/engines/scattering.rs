@@ -49,7 +49,7 @@ impl Dielectric {
 
     /// The refracted direction (unit), None under total internal reflection.
     pub fn refracted(&self, d: Vec3, n: Vec3) -> Option<Vec3> {
-        refract(d, n, self.eta_i, self.eta_t).map(|t| t.normalized())
+        refract(d, n, self.eta_i, self.eta_t).map(|t| t.normalize_or_zero())
     }
 
     /// One branch chosen with the Fresnel probability: the refracted direction with
@@ -57,7 +57,7 @@ impl Dielectric {
     /// where no random number is drawn).
     pub fn sample(&self, d: Vec3, n: Vec3, rng: &mut Rng) -> Vec3 {
         match refract(d, n, self.eta_i, self.eta_t) {
-            Some(t) if rng.next_f32() >= self.reflectance => t.normalized(),
+            Some(t) if rng.next_f32() >= self.reflectance => t.normalize_or_zero(),
             _ => reflect(d, n),
         }
     }
@@ -121,7 +121,7 @@ pub fn sample_lobe(axis: Vec3, exponent: f32, u: f32, v: f32) -> Vec3 {
     let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
     let phi = std::f32::consts::TAU * v;
     let (t, b) = orthonormal_basis(axis);
-    (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + axis * cos_t).normalized()
+    (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + axis * cos_t).normalize_or_zero()
 }
 
 /// A direction uniformly distributed over the cone of half-angle acos(`cos_max`) around the
@@ -131,7 +131,7 @@ pub fn sample_cone(axis: Vec3, cos_max: f32, u: f32, v: f32) -> Vec3 {
     let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
     let phi = std::f32::consts::TAU * v;
     let (t, b) = orthonormal_basis(axis);
-    (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + axis * cos_t).normalized()
+    (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + axis * cos_t).normalize_or_zero()
 }
 
 /// Two unit vectors that complete `n` to an orthonormal basis (Duff et al. 2017).

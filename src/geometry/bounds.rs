@@ -1,6 +1,6 @@
 //! Axis-aligned bounding boxes.
 
-use super::vec::Vec3;
+use super::Vec3;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds3 {

@@ -1,6 +1,6 @@
 //! Rays and the robust spawning of secondary rays from surfaces.
 
-use super::vec::Vec3;
+use super::Vec3;
 
 /// A ray `origin + t·direction` for `t` in `(t_min, t_max)`. The layout is the shim's `TxRay`,
 /// so batches of rays go to Embree without copying.

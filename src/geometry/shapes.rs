@@ -4,7 +4,7 @@
 
 use super::bounds::Bounds3;
 use super::ray::Ray;
-use super::vec::{vec3, Vec3};
+use super::{vec3, Vec3};
 
 /// The per-ray constants of the watertight ray–triangle test of Woop, Benthin and Wald
 /// (JCGT 2013): the ray's dominant axis and the shear that maps its direction to +z.
@@ -22,7 +22,7 @@ impl RayShear {
     #[inline]
     pub fn new(ray: &Ray) -> RayShear {
         let d = ray.direction.to_array();
-        let kz = ray.direction.abs().max_axis();
+        let kz = ray.direction.abs().max_position();
         let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
         // Keep the winding: swap when the dominant component is negative.
         if d[kz] < 0.0 {
@@ -183,7 +183,7 @@ impl SphereShape {
     }
 
     pub fn normal_at(&self, p: Vec3) -> Vec3 {
-        (p - self.centre).normalized()
+        (p - self.centre).normalize_or_zero()
     }
 
     /// Spherical parameters in [0,1]²: longitude around +y, latitude from the bottom.
@@ -314,7 +314,7 @@ impl RingShape {
 
     /// Outward normal of the solid on the given part.
     pub fn normal_at(&self, p: Vec3, part: RingPart) -> Vec3 {
-        let radial = vec3(p.x - self.base.x, 0.0, p.z - self.base.z).normalized();
+        let radial = vec3(p.x - self.base.x, 0.0, p.z - self.base.z).normalize_or_zero();
         match part {
             RingPart::Outer => radial,
             RingPart::Inner => -radial,

@@ -100,7 +100,7 @@ impl Light {
         let emitted = |m: u32| scene.materials[m as usize].emitted;
         for (i, q) in scene.quads.iter().enumerate() {
             let e = emitted(q.material);
-            if e.max_elem() > 0.0 {
+            if e.max_element() > 0.0 {
                 let [v0, v1, _, v3] = q.vertices;
                 lights.push(Light {
                     shape: LightShape::Parallelogram(Parallelogram {
@@ -118,7 +118,7 @@ impl Light {
         }
         for i in 0..scene.triangles.len() {
             let e = emitted(scene.triangles.materials[i]);
-            if e.max_elem() > 0.0 {
+            if e.max_element() > 0.0 {
                 let [a, b, c] = scene.triangles.vertices(i);
                 let n = (b - a).cross(c - a);
                 lights.push(Light {
@@ -126,7 +126,7 @@ impl Light {
                         v0: a,
                         e1: b - a,
                         e2: c - a,
-                        normal: n.normalized(),
+                        normal: n.normalize_or_zero(),
                     },
                     emitted: e,
                     area: 0.5 * n.length(),
@@ -136,7 +136,7 @@ impl Light {
         }
         for (i, s) in scene.spheres.iter().enumerate() {
             let e = emitted(s.material);
-            if e.max_elem() > 0.0 {
+            if e.max_element() > 0.0 {
                 let r = s.shape.radius;
                 lights.push(Light {
                     shape: LightShape::Sphere(s.shape),
@@ -148,7 +148,7 @@ impl Light {
         }
         for (i, r) in scene.rings.iter().enumerate() {
             let e = emitted(r.material);
-            if e.max_elem() > 0.0 {
+            if e.max_element() > 0.0 {
                 lights.push(Light {
                     shape: LightShape::Ring(r.shape),
                     emitted: e,
@@ -171,7 +171,7 @@ impl Light {
                 one_sided: false,
             },
             LightShape::Sphere(s) => {
-                let n = (towards - s.centre).normalized();
+                let n = (towards - s.centre).normalize_or_zero();
                 LightPoint {
                     point: s.centre + n * s.radius,
                     normal: n,
@@ -179,7 +179,7 @@ impl Light {
                 }
             }
             LightShape::Ring(r) => {
-                let n = vec3(towards.x - r.base.x, 0.0, towards.z - r.base.z).normalized();
+                let n = vec3(towards.x - r.base.x, 0.0, towards.z - r.base.z).normalize_or_zero();
                 LightPoint {
                     point: vec3(r.base.x, r.base.y + 0.5 * r.height, r.base.z) + n * r.r_out,
                     normal: n,

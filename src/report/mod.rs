@@ -382,7 +382,7 @@ fn compare_accels(runs: &[Run], films: &[Film]) -> Vec<AccelComparison> {
             embree_s += e.seconds;
             bvh_s += runs[j].seconds;
             for (a, b) in films[i].pixels.iter().zip(&films[j].pixels) {
-                let d = (*a - *b).abs().max_elem();
+                let d = (*a - *b).abs().max_element();
                 c.total_pixels += 1;
                 if d > 0.0 {
                     c.differing_pixels += 1;

@@ -28,7 +28,7 @@ impl Camera {
         } else {
             bounds.centre()
         };
-        let extent = bounds.extent().max_elem().max(1e-6);
+        let extent = bounds.extent().max_element().max(1e-6);
         Camera {
             position: centre + vec3(0.0, 0.0, 4.0 * extent),
             point_of_interest: centre,
@@ -41,8 +41,8 @@ impl Camera {
 
     /// The camera's frame and screen worked out once, for generating many rays.
     pub fn view(&self) -> View {
-        let forward = (self.point_of_interest - self.position).normalized();
-        let horizontal = forward.cross(self.up).normalized();
+        let forward = (self.point_of_interest - self.position).normalize_or_zero();
+        let horizontal = forward.cross(self.up).normalize_or_zero();
         let up = horizontal.cross(forward);
         let (perspective, side) = match self.projection {
             Projection::Perspective { angle } => (true, 2.0 * (angle * 0.5).tan()),
@@ -104,7 +104,7 @@ impl View {
         let (h, v) = ((x - 0.5) * self.side, (y - 0.5) * self.side);
         if self.perspective {
             let dir = self.forward + self.horizontal * h + self.up * v;
-            Ray::new(self.position, dir.normalized())
+            Ray::new(self.position, dir.normalize_or_zero())
         } else {
             Ray::new(
                 self.position + self.horizontal * h + self.up * v,
@@ -135,7 +135,7 @@ impl View {
         let focus = ray.at(focus_distance / along);
         let (dx, dy) = crate::sampling::sample_disk(lens_u, lens_v);
         let origin = ray.origin + self.horizontal * (dx * aperture) + self.up * (dy * aperture);
-        Ray::new(origin, (focus - origin).normalized())
+        Ray::new(origin, (focus - origin).normalize_or_zero())
     }
 
     /// Projects a world point to screen coordinates in [0,1]² (None when behind the camera).

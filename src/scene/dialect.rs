@@ -385,7 +385,7 @@ fn check_quad(p: &Parser, tok: Token, v: &[Vec3; 4]) -> Result<(), SceneError> {
     if area2.is_nan() || area2 <= f32::EPSILON * f32::EPSILON * size * size {
         return Err(p.invalid(tok, "degenerate quad: its area is zero".into()));
     }
-    let unit = n / area2;
+    let unit = n * area2.recip();
     let centre = (v[0] + v[1] + v[2] + v[3]) * 0.25;
     let off_plane = v
         .iter()

@@ -284,7 +284,7 @@ impl MaterialDef {
             reflective: self.rs.1.rgb(self.rs.0),
             roughness: self.rs.2,
             transmitted: self.ts.1.rgb(self.ts.0),
-            emitted: self.ed.1.rgb(self.ed.0) / (WHITE_EFFICACY * std::f32::consts::PI),
+            emitted: self.ed.1.rgb(self.ed.0) * (WHITE_EFFICACY * std::f32::consts::PI).recip(),
             ior: self.ior,
             line: self.line,
             ..Material::default()
@@ -775,7 +775,7 @@ impl Reader {
     /// The current MGF material as a scene material, scaled to conserve energy.
     fn convert_material(&mut self) -> Material {
         let mut m = self.material.to_material();
-        let sum = (m.diffuse + m.reflective + m.transmitted).max_elem();
+        let sum = (m.diffuse + m.reflective + m.transmitted).max_element();
         if sum > 1.0 {
             let f = 1.0 / sum;
             // Below 1.001 it is the rounding of an exactly white material: no warning.
@@ -1094,7 +1094,7 @@ fn convex_planar_quad(v: &[Vec3; 4]) -> bool {
     if len.is_nan() || len <= 1e-12 * size * size {
         return false;
     }
-    let unit = n / len;
+    let unit = n * len.recip();
     let centre = (v[0] + v[1] + v[2] + v[3]) * 0.25;
     // The course dialect's tolerance for a quad's planarity.
     let planar = v
@@ -1173,7 +1173,7 @@ fn frame(axis: Vec3) -> (Vec3, Vec3) {
     } else {
         vec3(0.0, 1.0, 0.0)
     };
-    let u = helper.cross(axis).normalized();
+    let u = helper.cross(axis).normalize_or_zero();
     (u, axis.cross(u))
 }
 
@@ -1222,7 +1222,7 @@ fn sphere(c: Vec3, r: f32) -> Vec<Vec<Vec3>> {
 /// The side of a cone (a cylinder when r1 = r2) from `a` to `b`, 16 faces; outward for
 /// positive radii.
 fn cone(a: Vec3, r1: f32, b: Vec3, r2: f32) -> Vec<Vec<Vec3>> {
-    let axis = (b - a).normalized();
+    let axis = (b - a).normalize_or_zero();
     let (u, v) = frame(axis);
     let inward = r1 < 0.0 || r2 < 0.0;
     (0..CIRCLE_DIVISIONS)
@@ -1252,7 +1252,7 @@ fn cone(a: Vec3, r1: f32, b: Vec3, r2: f32) -> Vec<Vec<Vec3>> {
 
 /// An annulus (a disk when r1 = 0) around `axis`, 16 faces, facing along `axis`.
 fn ring(c: Vec3, axis: Vec3, r1: f32, r2: f32) -> Vec<Vec<Vec3>> {
-    let axis = axis.normalized();
+    let axis = axis.normalize_or_zero();
     let (u, v) = frame(axis);
     (0..CIRCLE_DIVISIONS)
         .map(|k| {
@@ -1268,7 +1268,7 @@ fn ring(c: Vec3, axis: Vec3, r1: f32, r2: f32) -> Vec<Vec<Vec3>> {
 
 /// A torus around `axis` between radii r1 and r2 (tube radius (r2 − r1)/2), 16 × 16 faces.
 fn torus(c: Vec3, axis: Vec3, r1: f32, r2: f32) -> Vec<Vec<Vec3>> {
-    let axis = axis.normalized();
+    let axis = axis.normalize_or_zero();
     let (u, v) = frame(axis);
     let (major, minor) = ((r1 + r2) / 2.0, (r2 - r1).abs() / 2.0);
     let point = |i: usize, j: usize| {
@@ -1299,7 +1299,7 @@ fn prism(base: &[Vec3], h: f32) -> Vec<Vec<Vec3>> {
     for k in 0..n {
         normal += (base[k] - base[0]).cross(base[(k + 1) % n] - base[0]);
     }
-    let offset = normal.normalized() * h;
+    let offset = normal.normalize_or_zero() * h;
     let top: Vec<Vec3> = base.iter().map(|&p| p + offset).collect();
     let mut out = vec![base.iter().rev().copied().collect::<Vec<_>>(), top.clone()];
     for k in 0..n {

@@ -59,10 +59,10 @@ impl Default for Material {
 
 impl Material {
     pub fn is_emissive(&self) -> bool {
-        self.emitted.max_elem() > 0.0
+        self.emitted.max_element() > 0.0
     }
     pub fn is_specular(&self) -> bool {
-        self.reflective.max_elem() > 0.0 || self.transmitted.max_elem() > 0.0
+        self.reflective.max_element() > 0.0 || self.transmitted.max_element() > 0.0
     }
 }
 
@@ -83,7 +83,7 @@ impl Quad {
             vertices,
             tex_coords,
             material,
-            normal: quad_normal(&vertices).normalized(),
+            normal: quad_normal(&vertices).normalize_or_zero(),
         }
     }
     pub fn area(&self) -> f32 {
@@ -395,7 +395,7 @@ impl Scene {
                 }
             }
             let sum = m.diffuse + m.reflective + m.transmitted;
-            if sum.max_elem() > 1.0 + 1e-6 {
+            if sum.max_element() > 1.0 + 1e-6 {
                 self.warnings.push(format!(
                     "{}:{}: material {i}: diffuse + reflective + transmitted exceeds 1 ({:.3} {:.3} {:.3}): it does not conserve energy",
                     self.path.display(),

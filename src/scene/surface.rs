@@ -30,7 +30,7 @@ impl SurfaceHit {
 fn max_abs(points: &[Vec3]) -> f32 {
     points
         .iter()
-        .map(|p| p.abs().max_elem())
+        .map(|p| p.abs().max_element())
         .fold(0.0, f32::max)
 }
 
@@ -116,12 +116,12 @@ impl Scene {
                     .unwrap_or((hit.t, hit.u, hit.v));
                 let b0 = 1.0 - b1 - b2;
                 let point = p0 + (p1 - p0) * b1 + (p2 - p0) * b2;
-                let ng = (p1 - p0).cross(p2 - p0).normalized();
+                let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
                 let shading_normal = if mesh.normals.is_empty() {
                     ng
                 } else {
                     let n = mesh.normals[a] * b0 + mesh.normals[b] * b1 + mesh.normals[c] * b2;
-                    let n = n.normalized();
+                    let n = n.normalize_or_zero();
                     if n.length_squared() > 0.0 {
                         n
                     } else {
@@ -159,7 +159,7 @@ impl Scene {
                 SurfaceHit {
                     t,
                     point,
-                    error: point_error(s.shape.centre.abs().max_elem() + s.shape.radius),
+                    error: point_error(s.shape.centre.abs().max_element() + s.shape.radius),
                     geometric_normal: n,
                     shading_normal: n,
                     uv,
@@ -187,7 +187,7 @@ impl Scene {
                             y: 0.0,
                             z: p.z - r.shape.base.z,
                         }
-                        .normalized();
+                        .normalize_or_zero();
                         Vec3 {
                             x: r.shape.base.x + radial.x * radius,
                             y: p.y,
@@ -209,7 +209,7 @@ impl Scene {
                     t,
                     point,
                     error: point_error(
-                        r.shape.base.abs().max_elem() + r.shape.r_out + r.shape.height,
+                        r.shape.base.abs().max_element() + r.shape.r_out + r.shape.height,
                     ),
                     geometric_normal: n,
                     shading_normal: n,

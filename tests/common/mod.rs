@@ -116,7 +116,7 @@ pub fn same_hit(ray: &Ray, x: &Option<PrimHit>, y: &Option<PrimHit>) -> bool {
         (None, None) => true,
         (Some(x), Some(y)) => {
             let origin_ulps =
-                8.0 * f32::EPSILON * ray.origin.abs().max_elem() / ray.direction.length();
+                8.0 * f32::EPSILON * ray.origin.abs().max_element() / ray.direction.length();
             let tolerance = 1e-5 * x.t.abs().max(y.t.abs()) + origin_ulps;
             x.prim == y.prim && (x.t - y.t).abs() <= tolerance
         }

@@ -72,9 +72,9 @@ pub fn final_gather(
         let s = scene.surface(ray, h);
         inverse_distance += 1.0 / (s.t * ray.direction.length()).max(1e-12);
         let albedo = scene.albedo(&s);
-        if albedo.max_elem() > 0.0 {
+        if albedo.max_element() > 0.0 {
             let (_, ny) = s.facing(ray.direction);
-            sum += albedo.mul_elem(maps.global_at(s.point, ny));
+            sum += albedo * maps.global_at(s.point, ny);
         }
     }
     let radius = if inverse_distance > 0.0 {
@@ -82,7 +82,7 @@ pub fn final_gather(
     } else {
         f32::INFINITY
     };
-    (sum / count.max(1) as f32, radius)
+    (sum * (count.max(1) as f32).recip(), radius)
 }
 
 impl IrradianceCache {
@@ -112,7 +112,7 @@ impl IrradianceCache {
                 let (sx, sy) = Camera::screen_point(i, j, 0.5, 0.5, w, h);
                 let ray = view.ray(sx, sy);
                 let s = crate::accel::closest_surface(accel, scene, &ray)?;
-                if scene.albedo(&s).max_elem() <= 0.0 {
+                if scene.albedo(&s).max_element() <= 0.0 {
                     return None;
                 }
                 let (_, n) = s.facing(ray.direction);
@@ -176,7 +176,7 @@ impl IrradianceCache {
             }
             if weights > 0.0 {
                 self.interpolated.fetch_add(1, Relaxed);
-                return sum / weights;
+                return sum * weights.recip();
             }
         }
         self.fresh.fetch_add(1, Relaxed);

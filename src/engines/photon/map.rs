@@ -92,7 +92,7 @@ impl PhotonMap {
         }
         let norm = (1.0 - 2.0 / (3.0 * CONE_K)) * std::f32::consts::PI * r2;
         (
-            sum / (norm * std::f32::consts::PI),
+            sum * (norm * std::f32::consts::PI).recip(),
             Lookup { used, radius: r },
         )
     }

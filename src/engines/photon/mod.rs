@@ -144,10 +144,10 @@ pub fn visualize(scene: &Scene, maps: &PhotonMaps, settings: &RenderSettings) ->
     let brightest = film
         .pixels
         .iter()
-        .map(|c| c.max_elem())
+        .map(|c| c.max_element())
         .fold(0.0f32, f32::max);
     if brightest > 0.0 {
-        film.pixels.iter_mut().for_each(|c| *c = *c / brightest);
+        film.pixels.iter_mut().for_each(|c| *c *= brightest.recip());
     }
     film
 }
@@ -165,7 +165,7 @@ fn kd_cells(maps: &PhotonMaps, depth: u32) -> Vec<Bounds3> {
             out.push(bounds);
             return;
         }
-        let axis = bounds.extent().max_axis();
+        let axis = bounds.extent().max_position();
         let middle = points.len() / 2;
         points.select_nth_unstable_by(middle, |a, b| a[axis].total_cmp(&b[axis]));
         let (low, high) = points.split_at_mut(middle);

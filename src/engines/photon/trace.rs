@@ -136,7 +136,7 @@ pub fn trace_photons(
                     .position(|&c| pick < c)
                     .unwrap_or(lights.len() - 1);
                 let probability = (weights[l] / total) as f32;
-                let power = flux[l] / (probability * count as f32);
+                let power = flux[l] * (probability * count as f32).recip();
                 let (r, cut) = trace_one(
                     scene,
                     accel,
@@ -190,7 +190,7 @@ fn trace_one(
         Aim::Caustics { centre, radius } => {
             let to = centre - p.point;
             let d = to.length();
-            (d > radius).then(|| (to / d, radius / d))
+            (d > radius).then(|| (to * d.recip(), radius / d))
         }
         Aim::Everywhere => None,
     };
@@ -213,7 +213,7 @@ fn trace_one(
         None => sample_lobe(normal, 1.0, u, v),
     };
     let caustics_only = matches!(aim, Aim::Caustics { .. });
-    let origin = offset_ray_origin(p.point, normal, point_error(p.point.abs().max_elem()));
+    let origin = offset_ray_origin(p.point, normal, point_error(p.point.abs().max_element()));
     let mut ray = Ray::new(origin, dir);
     let mut any_diffuse = false;
     let mut rays = 0;
@@ -225,7 +225,7 @@ fn trace_one(
         let m = &scene.materials[s.material as usize];
         let (front, n) = s.facing(ray.direction);
         let albedo = scene.albedo(&s);
-        if albedo.max_elem() > 0.0 && !(caustics_only && depth == 0) {
+        if albedo.max_element() > 0.0 && !(caustics_only && depth == 0) {
             let kind = if depth == 0 {
                 PathKind::Direct
             } else if any_diffuse {
@@ -251,11 +251,11 @@ fn trace_one(
                 // Every later hit would be indirect light: not this pass's business.
                 break;
             }
-            power = power.mul_elem(albedo) / pd;
+            power = power * albedo * pd.recip();
             any_diffuse = true;
             sample_lobe(n, 1.0, rng.next_f32(), rng.next_f32())
         } else if xi < pd + pr {
-            power = power.mul_elem(m.reflective) / pr;
+            power = power * m.reflective * pr.recip();
             glossy_reflection(
                 ray.direction,
                 n,
@@ -264,7 +264,7 @@ fn trace_one(
                 rng.next_f32(),
             )
         } else if xi < pd + pr + pt {
-            power = power.mul_elem(m.transmitted) / pt;
+            power = power * m.transmitted * pt.recip();
             Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng)
         } else {
             break;

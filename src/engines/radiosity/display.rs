@@ -40,7 +40,7 @@ pub fn render_solution(
         Display::Absorbed => patches
             .iter()
             .zip(&solution.state.incident)
-            .map(|(p, e)| (Vec3::ONE - p.albedo).mul_elem(*e))
+            .map(|(p, e)| (Vec3::ONE - p.albedo) * (*e))
             .collect(),
         Display::FormFactors => form_factor_greys(scene, accel, settings, solution, source),
     };
@@ -101,7 +101,7 @@ fn form_factor_source(solution: &Solution, asked: Option<u32>) -> usize {
     };
     let unshot = &solution.state.undistributed;
     let emitted: Vec<Color> = patches.iter().map(|p| p.emitted).collect();
-    if unshot.iter().any(|u| u.max_elem() > 0.0) {
+    if unshot.iter().any(|u| u.max_element() > 0.0) {
         best(unshot).unwrap_or(0)
     } else {
         best(&emitted).unwrap_or(0)

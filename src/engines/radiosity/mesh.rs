@@ -382,7 +382,11 @@ impl QuadMesh {
     pub fn area_normal(&self, face: u32) -> (f32, Vec3) {
         let n = quad_normal(&self.face_vertices(face));
         let len = n.length();
-        let unit = if len > 0.0 { n / len } else { Vec3::ZERO };
+        let unit = if len > 0.0 {
+            n * len.recip()
+        } else {
+            Vec3::ZERO
+        };
         (0.5 * len, unit)
     }
 }

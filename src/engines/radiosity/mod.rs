@@ -177,7 +177,7 @@ impl Solution {
         let radiance = &self.state.radiance;
         let differs = |a: usize, b: u32| {
             let q = self.patch_of_face[b as usize];
-            q != NONE && (radiance[a] - radiance[q as usize]).abs().max_elem() > threshold
+            q != NONE && (radiance[a] - radiance[q as usize]).abs().max_element() > threshold
         };
         self.patches
             .iter()
@@ -200,7 +200,7 @@ impl Solution {
         self.patches
             .iter()
             .zip(&self.state.radiance)
-            .map(|(p, l)| *l + p.albedo.mul_elem(self.ambient))
+            .map(|(p, l)| *l + p.albedo * self.ambient)
             .collect()
     }
 
@@ -296,7 +296,7 @@ impl Solution {
                         }
                     }
                     if weight > 0.0 {
-                        sum / weight
+                        sum * weight.recip()
                     } else {
                         values[self.patch_of_face[p.face as usize] as usize]
                     }
@@ -310,7 +310,7 @@ impl Solution {
 /// q0 + (q1−q0)u + (q3−q0)v + (q0−q1+q2−q3)uv (Quilez), solved in the plane of the quad's
 /// two largest normal-free axes.
 fn inverse_bilinear(q: &[Vec3; 4], normal: Vec3, p: Vec3) -> Option<(f32, f32)> {
-    let axis = normal.abs().max_axis();
+    let axis = normal.abs().max_position();
     let flat = |v: Vec3| {
         let a = v.to_array();
         match axis {

@@ -61,8 +61,8 @@ pub fn patches(scene: &Scene, mesh: &QuadMesh) -> Vec<Patch> {
                     .length();
             let total = area0 + area1;
             let first_share = if total > 0.0 { area0 / total } else { 0.5 };
-            let centroid0 = (corners[0] + corners[1] + corners[2]) / 3.0;
-            let centroid1 = (corners[0] + corners[2] + corners[3]) / 3.0;
+            let centroid0 = (corners[0] + corners[1] + corners[2]) * (1.0 / 3.0);
+            let centroid1 = (corners[0] + corners[2] + corners[3]) * (1.0 / 3.0);
             let centre = centroid0 * first_share + centroid1 * (1.0 - first_share);
             let m = &scene.materials[f.material as usize];
             let albedo = match m.texture {
@@ -103,14 +103,14 @@ pub fn patches(scene: &Scene, mesh: &QuadMesh) -> Vec<Patch> {
 pub fn on_primitive(scene: &Scene, patch: &Patch, p: Vec3, side: Vec3) -> Vec3 {
     let i = patch.prim.index as usize;
     let (point, normal, magnitude) = match patch.prim.kind {
-        PrimKind::Quad | PrimKind::Triangle => (p, patch.normal, p.abs().max_elem()),
+        PrimKind::Quad | PrimKind::Triangle => (p, patch.normal, p.abs().max_element()),
         PrimKind::Sphere => {
             let s = &scene.spheres[i].shape;
             let n = s.normal_at(p);
             (
                 s.centre + n * s.radius,
                 n,
-                s.centre.abs().max_elem() + s.radius,
+                s.centre.abs().max_element() + s.radius,
             )
         }
         PrimKind::Ring => {
@@ -128,7 +128,7 @@ pub fn on_primitive(scene: &Scene, patch: &Patch, p: Vec3, side: Vec3) -> Vec3 {
                 p.y,
                 r.base.z + z / rho * radius,
             );
-            let magnitude = r.base.abs().max_elem() + r.r_out + r.height;
+            let magnitude = r.base.abs().max_element() + r.r_out + r.height;
             (q, r.normal_at(q, part), magnitude)
         }
     };

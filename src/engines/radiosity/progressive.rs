@@ -129,7 +129,7 @@ impl Progressive {
                 let arriving = shot * f;
                 s.incident[j] += arriving;
                 s.incident_direct[j] += shot_emission * f;
-                let reflected = patches[j].albedo.mul_elem(arriving);
+                let reflected = patches[j].albedo * arriving;
                 returned_power += power(reflected, patches[j].area) as f64;
                 s.radiance[j] += reflected;
                 s.undistributed[j] += reflected;

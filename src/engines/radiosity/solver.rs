@@ -280,13 +280,13 @@ pub fn ambient(patches: &[Patch], undistributed: &[Color]) -> Color {
         .iter()
         .map(|p| p.albedo * p.area)
         .fold(Vec3::ZERO, |a, b| a + b)
-        / area;
+        * area.recip();
     let mean = patches
         .iter()
         .zip(undistributed)
         .map(|(p, u)| *u * p.area)
         .fold(Vec3::ZERO, |a, b| a + b)
-        / area;
+        * area.recip();
     let r = |rho: f32, u: f32| if rho < 1.0 { u / (1.0 - rho) } else { 0.0 };
     crate::geometry::vec3(
         r(rho_avg.x, mean.x),
