@@ -39,6 +39,7 @@ lines=(
   "radc2|$S -input cornell_box_diffuse_sphere.obj -sphere_rasterization 16 12"
   "radc3|$S -input cornell_box_diffuse_sphere.obj -sphere_rasterization 16 12 -num_shadow_samples 1"
   "rad01|$S -input cornell_box.obj --engine radiosity --subdivide 3 -interpolate"
+  "radring|$S -input reflective_ring.obj --engine radiosity -num_shadow_samples 1 -num_form_factor_samples 4 --subdivide 1 -interpolate"
   "rad02|-size 300 150 -input l.obj -num_shadow_samples 1 --subdivide 3 -interpolate"
   "rad03|-size 300 150 -input l.obj -num_shadow_samples 1 --subdivide 2 --wireframe"
   "rad04|$S -input cornell_box_diffuse_sphere.obj -sphere_rasterization 16 12 -num_shadow_samples 1 --subdivide 2 -interpolate"

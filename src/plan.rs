@@ -6,6 +6,7 @@ use std::fmt;
 
 use crate::accel::AccelKind;
 use crate::engines::{self, EngineKind, RenderSettings};
+use crate::geometry::Shape;
 use crate::scene::Scene;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -15,8 +16,8 @@ pub struct Plan {
     pub quads: usize,
     pub one_sided_quads: bool,
     pub triangles: usize,
-    pub spheres: usize,
-    pub rings: usize,
+    /// Analytic shapes by kind name ("sphere"), in the order the kinds first appear.
+    pub shapes: Vec<(&'static str, usize)>,
     /// Textures decoded: those of materials some primitive uses.
     pub textures: usize,
     pub emitters: usize,
@@ -47,8 +48,7 @@ impl Plan {
             .iter()
             .map(|q| q.material)
             .chain(scene.triangles.materials.iter().copied())
-            .chain(scene.spheres.iter().map(|s| s.material))
-            .chain(scene.rings.iter().map(|r| r.material))
+            .chain(scene.shapes.iter().map(|s| s.material))
             .filter(|&m| scene.materials[m as usize].is_emissive())
             .count();
         let engine_plan = engines::engine(engine).plan(scene, settings);
@@ -72,8 +72,7 @@ impl Plan {
             quads: scene.quads.len(),
             one_sided_quads: !scene.two_sided_quads,
             triangles: scene.triangles.len(),
-            spheres: scene.spheres.len(),
-            rings: scene.rings.len(),
+            shapes: shape_counts(scene),
             textures: scene.textures.len(),
             emitters,
             structures,
@@ -158,6 +157,18 @@ pub fn default_max_memory() -> u64 {
     total_kib.map_or(8 << 30, |k| k * 1024 / 10 * 8)
 }
 
+fn shape_counts(scene: &Scene) -> Vec<(&'static str, usize)> {
+    let mut counts: Vec<(&'static str, usize)> = Vec::new();
+    for s in &scene.shapes {
+        let name = s.shape.name();
+        match counts.iter_mut().find(|c| c.0 == name) {
+            Some(c) => c.1 += 1,
+            None => counts.push((name, 1)),
+        }
+    }
+    counts
+}
+
 fn plural(n: usize, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
@@ -198,11 +209,8 @@ impl fmt::Display for Plan {
             writeln!(f, "triangle geometry: none")?;
         }
         let mut user = Vec::new();
-        if self.spheres > 0 {
-            user.push(plural(self.spheres, "sphere", "spheres"));
-        }
-        if self.rings > 0 {
-            user.push(plural(self.rings, "ring", "rings"));
+        for &(name, count) in &self.shapes {
+            user.push(plural(count, name, &format!("{name}s")));
         }
         if user.is_empty() {
             writeln!(f, "user geometry: none")?;

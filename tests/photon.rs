@@ -71,7 +71,9 @@ fn mirror_ring_focuses_a_caustic_inside_itself() {
     let scene = Scene::load(&dir.join("reflective_ring.obj")).expect("loads");
     let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
     let maps = PhotonMaps::build(&scene, accel.as_ref(), &settings(200_000));
-    let ring = scene.rings[0].shape;
+    let trilux::geometry::AnalyticShape::Ring(ring) = scene.shapes[0].shape else {
+        panic!("reflective_ring.obj's one shape is a ring");
+    };
     assert!(
         maps.caustic.len() > 1000,
         "{} caustic photons",
@@ -284,7 +286,9 @@ fn ring_caustic_stands_out_as_in_the_path_tracer() {
         m.texture = None;
         m.diffuse = trilux::geometry::vec3(0.5, 0.5, 0.5);
     }
-    let ring = scene.rings[0].shape;
+    let trilux::geometry::AnalyticShape::Ring(ring) = scene.shapes[0].shape else {
+        panic!("reflective_ring.obj's one shape is a ring");
+    };
     let centre = trilux::geometry::vec3(ring.base.x, -1.0, ring.base.z);
     scene.camera = Some(trilux::scene::Camera {
         position: centre + trilux::geometry::vec3(0.0, 30.0, 0.0),

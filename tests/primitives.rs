@@ -7,9 +7,9 @@ mod common;
 use common::{backends, course_scenes};
 use trilux::accel::{self, closest_surface, AccelOptions};
 use trilux::bench::uniform_direction;
-use trilux::geometry::{vec3, Ray, RingPart, RingShape, SphereShape, Vec3};
+use trilux::geometry::{vec3, Ray, RingPart, RingShape, Shape, SphereShape, Vec3};
 use trilux::sampling::Rng;
-use trilux::scene::{Material, PrimKind, Ring, Scene, Sphere};
+use trilux::scene::{Material, PrimKind, Scene, ShapePrim};
 
 fn one_material() -> Vec<Material> {
     vec![Material {
@@ -23,11 +23,12 @@ fn far_sphere_is_hit_accurately() {
     let centre = vec3(1e4, 0.0, 0.0);
     let scene = Scene {
         materials: one_material(),
-        spheres: vec![Sphere {
+        shapes: vec![ShapePrim {
             shape: SphereShape {
                 centre,
                 radius: 1.0,
-            },
+            }
+            .into(),
             material: 0,
         }],
         ..Scene::default()
@@ -60,16 +61,18 @@ fn far_sphere_is_hit_accurately() {
     }
 }
 
+const RING: RingShape = RingShape {
+    base: vec3(0.0, 0.0, 0.0),
+    height: 2.0,
+    r_in: 4.0,
+    r_out: 4.1,
+};
+
 fn ring_scene() -> Scene {
     Scene {
         materials: one_material(),
-        rings: vec![Ring {
-            shape: RingShape {
-                base: vec3(0.0, 0.0, 0.0),
-                height: 2.0,
-                r_in: 4.0,
-                r_out: 4.1,
-            },
+        shapes: vec![ShapePrim {
+            shape: RING.into(),
             material: 0,
         }],
         ..Scene::default()
@@ -118,7 +121,8 @@ fn ring_surfaces_and_hole() {
                         "{kind}: {ray:?}: t {} expected {t}",
                         s.t
                     );
-                    let expected_normal = scene.rings[0].shape.normal_at(s.point, *part);
+                    assert_eq!(s.part, *part as u32, "{kind}: {ray:?}: the part hit");
+                    let expected_normal = RING.normal_at(s.point, *part as u32);
                     assert!(
                         (s.geometric_normal - expected_normal).length() < 1e-4,
                         "{kind}: {ray:?}: normal {:?}, expected that of {part:?}",

@@ -9,19 +9,20 @@ use std::path::Path;
 
 use common::{backends, course_dir, furnace};
 use trilux::accel::{self, Accel, AccelOptions};
-use trilux::engines::radiosity::mesh::{QuadMesh, Rasterization};
+use trilux::engines::radiosity::mesh::QuadMesh;
 use trilux::engines::radiosity::patch::patches;
 use trilux::engines::radiosity::solver::{FormFactorSampler, Stop};
 use trilux::engines::radiosity::{RadiositySettings, Solution};
 use trilux::engines::RenderSettings;
+use trilux::geometry::Tessellation;
 use trilux::scene::Scene;
 
 fn scene(text: &str) -> Scene {
     Scene::parse_dialect(Path::new("test.obj"), text).expect("scene parses")
 }
 
-fn raster() -> Rasterization {
-    Rasterization {
+fn raster() -> Tessellation {
+    Tessellation {
         sphere: (8, 6),
         ring: 20,
     }

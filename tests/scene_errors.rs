@@ -309,8 +309,7 @@ fn own_scenes_match_the_course_scenes() {
         let theirs = Scene::load(&theirs_path).unwrap_or_else(|e| panic!("{e}"));
         let what = path.display();
         assert_eq!(ours.quads, theirs.quads, "{what}: quads");
-        assert_eq!(ours.spheres, theirs.spheres, "{what}: spheres");
-        assert_eq!(ours.rings, theirs.rings, "{what}: rings");
+        assert_eq!(ours.shapes, theirs.shapes, "{what}: spheres and rings");
         assert_eq!(ours.camera, theirs.camera, "{what}: camera");
         assert_eq!(ours.background, theirs.background, "{what}: background");
         assert_eq!(

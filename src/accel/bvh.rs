@@ -5,8 +5,8 @@
 
 use super::{Accel, AccelError, PackedPrim};
 use crate::geometry::{
-    faces_ray, intersect_quad_sheared, intersect_triangle_sheared, Bounds3, Ray, RayShear,
-    RingShape, SphereShape, Vec3,
+    faces_ray, intersect_quad_sheared, intersect_triangle_sheared, AnalyticShape, Bounds3, Ray,
+    RayShear, Shape, Vec3,
 };
 use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
 
@@ -46,8 +46,7 @@ struct LeafPrim {
 pub struct Bvh {
     nodes: Vec<Node>,
     prims: Vec<LeafPrim>,
-    spheres: Vec<SphereShape>,
-    rings: Vec<RingShape>,
+    shapes: Vec<AnalyticShape>,
     one_sided_quads: bool,
 }
 
@@ -106,11 +105,8 @@ impl Bvh {
                 i,
             );
         }
-        for (i, s) in scene.spheres.iter().enumerate() {
-            push(s.shape.bounds(), PrimKind::Sphere, i);
-        }
-        for (i, r) in scene.rings.iter().enumerate() {
-            push(r.shape.bounds(), PrimKind::Ring, i);
+        for (i, s) in scene.shapes.iter().enumerate() {
+            push(s.shape.bounds(), PrimKind::Shape, i);
         }
         // Primitives with non-finite bounds can never be hit; leaving them out keeps every
         // box finite.
@@ -139,8 +135,7 @@ impl Bvh {
         Ok(Bvh {
             nodes,
             prims,
-            spheres: scene.spheres.iter().map(|s| s.shape).collect(),
-            rings: scene.rings.iter().map(|r| r.shape).collect(),
+            shapes: scene.shapes.iter().map(|s| s.shape).collect(),
             one_sided_quads: !scene.two_sided_quads,
         })
     }
@@ -233,10 +228,7 @@ impl Bvh {
                 }
                 intersect_quad_sheared(ray, shear, t_max, &p.v)
             }
-            PrimKind::Sphere => self.spheres[p.prim.index() as usize]
-                .intersect(ray, t_max)
-                .map(|t| (t, 0.0, 0.0)),
-            PrimKind::Ring => self.rings[p.prim.index() as usize]
+            PrimKind::Shape => self.shapes[p.prim.index() as usize]
                 .intersect(ray, t_max)
                 .map(|(t, _)| (t, 0.0, 0.0)),
         }
@@ -405,8 +397,7 @@ fn prim_bounds(scene: &Scene, prim: PrimRef) -> Bounds3 {
     match prim.kind {
         PrimKind::Quad => Bounds3::from_points(&scene.quads[i].vertices),
         PrimKind::Triangle => Bounds3::from_points(&scene.triangles.vertices(i)),
-        PrimKind::Sphere => scene.spheres[i].shape.bounds(),
-        PrimKind::Ring => scene.rings[i].shape.bounds(),
+        PrimKind::Shape => scene.shapes[i].shape.bounds(),
     }
 }
 
@@ -418,7 +409,7 @@ fn leaf_prim(scene: &Scene, prim: PrimRef) -> LeafPrim {
             let [a, b, c] = scene.triangles.vertices(i);
             ([a, b, c, c], Vec3::ZERO)
         }
-        PrimKind::Sphere | PrimKind::Ring => ([Vec3::ZERO; 4], Vec3::ZERO),
+        PrimKind::Shape => ([Vec3::ZERO; 4], Vec3::ZERO),
     };
     LeafPrim {
         v,

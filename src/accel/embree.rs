@@ -6,7 +6,7 @@ use std::mem::{align_of, offset_of, size_of};
 use std::os::raw::c_char;
 
 use super::{Accel, AccelError, AccelOptions, EmbreeQuality};
-use crate::geometry::{Ray, RingShape, SphereShape};
+use crate::geometry::{AnalyticShape, Ray, Shape};
 use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
 
 #[allow(
@@ -61,43 +61,15 @@ fn last_error(context: &str) -> AccelError {
     AccelError::Embree(format!("{context}: {message}"))
 }
 
-/// Shapes handed to Embree as user geometry; Embree calls back into the same exact
-/// intersection routines the built-in BVH uses.
-trait UserShape {
-    fn bounds_of(&self) -> crate::geometry::Bounds3;
-    fn hit(&self, ray: &Ray, t_max: f32) -> Option<f32>;
-}
-
-impl UserShape for SphereShape {
-    fn bounds_of(&self) -> crate::geometry::Bounds3 {
-        self.bounds()
-    }
-    fn hit(&self, ray: &Ray, t_max: f32) -> Option<f32> {
-        self.intersect(ray, t_max)
-    }
-}
-
-impl UserShape for RingShape {
-    fn bounds_of(&self) -> crate::geometry::Bounds3 {
-        self.bounds()
-    }
-    fn hit(&self, ray: &Ray, t_max: f32) -> Option<f32> {
-        self.intersect(ray, t_max).map(|(t, _)| t)
-    }
-}
-
-unsafe extern "C" fn user_bounds<T: UserShape>(
-    user: *const c_void,
-    prim: u32,
-    lower: *mut f32,
-    upper: *mut f32,
-) {
+/// Analytic shapes are handed to Embree as one user geometry; Embree calls back into the same
+/// exact intersection routines the built-in BVH uses.
+unsafe extern "C" fn user_bounds(user: *const c_void, prim: u32, lower: *mut f32, upper: *mut f32) {
     // SAFETY: `user` points to the first of the geometry's shapes (a boxed slice alive as long
     // as the scene); Embree passes prim < the primitive count we gave, and lower/upper point
     // to 3 floats each.
     unsafe {
-        let shape = &*(user as *const T).add(prim as usize);
-        let b = shape.bounds_of();
+        let shape = &*(user as *const AnalyticShape).add(prim as usize);
+        let b = shape.bounds();
         for (k, (lo, hi)) in b
             .min
             .to_array()
@@ -111,7 +83,7 @@ unsafe extern "C" fn user_bounds<T: UserShape>(
     }
 }
 
-unsafe extern "C" fn user_intersect<T: UserShape>(
+unsafe extern "C" fn user_intersect(
     user: *const c_void,
     prim: u32,
     ray: *const sys::TxRay,
@@ -122,10 +94,10 @@ unsafe extern "C" fn user_intersect<T: UserShape>(
     // SAFETY: as in `user_bounds`; `ray` points to a TxRay, laid out as `Ray` (checked above),
     // and t/u/v to writable floats.
     unsafe {
-        let shape = &*(user as *const T).add(prim as usize);
+        let shape = &*(user as *const AnalyticShape).add(prim as usize);
         let ray = &*(ray as *const Ray);
-        match shape.hit(ray, ray.t_max) {
-            Some(hit) => {
+        match shape.intersect(ray, ray.t_max) {
+            Some((hit, _part)) => {
                 *t = hit;
                 *u = 0.0;
                 *v = 0.0;
@@ -144,8 +116,7 @@ pub struct EmbreeAccel {
     kinds: Vec<PrimKind>,
     /// User data of the sphere and ring geometries: Embree holds pointers to their first
     /// elements, which stay put when the struct moves.
-    spheres: Box<[SphereShape]>,
-    rings: Box<[RingShape]>,
+    shapes: Box<[AnalyticShape]>,
 }
 
 // SAFETY: a committed Embree scene may be queried from any number of threads at once, and
@@ -182,8 +153,7 @@ impl EmbreeAccel {
             device,
             scene: tx_scene,
             kinds: Vec::new(),
-            spheres: scene.spheres.iter().map(|s| s.shape).collect(),
-            rings: scene.rings.iter().map(|r| r.shape).collect(),
+            shapes: scene.shapes.iter().map(|s| s.shape).collect(),
         };
         if tx_scene.is_null() {
             // Drop would release a NULL scene: the shim accepts it.
@@ -225,35 +195,15 @@ impl EmbreeAccel {
             };
             accel.register(id, PrimKind::Triangle)?;
         }
-        if !accel.spheres.is_empty() {
-            let user = accel.spheres.as_ptr() as *const c_void;
-            let n = accel.spheres.len() as u32;
+        if !accel.shapes.is_empty() {
+            let user = accel.shapes.as_ptr() as *const c_void;
+            let n = u32::try_from(accel.shapes.len())
+                .map_err(|_| AccelError::TooLarge(accel.shapes.len()))?;
             // SAFETY: `user` points into a boxed slice owned by `accel`, which outlives the scene.
             let id = unsafe {
-                sys::tx_scene_add_user(
-                    tx_scene,
-                    n,
-                    user,
-                    Some(user_bounds::<SphereShape>),
-                    Some(user_intersect::<SphereShape>),
-                )
+                sys::tx_scene_add_user(tx_scene, n, user, Some(user_bounds), Some(user_intersect))
             };
-            accel.register(id, PrimKind::Sphere)?;
-        }
-        if !accel.rings.is_empty() {
-            let user = accel.rings.as_ptr() as *const c_void;
-            let n = accel.rings.len() as u32;
-            // SAFETY: as for spheres.
-            let id = unsafe {
-                sys::tx_scene_add_user(
-                    tx_scene,
-                    n,
-                    user,
-                    Some(user_bounds::<RingShape>),
-                    Some(user_intersect::<RingShape>),
-                )
-            };
-            accel.register(id, PrimKind::Ring)?;
+            accel.register(id, PrimKind::Shape)?;
         }
         // SAFETY: tx_scene is live; every geometry is attached.
         if unsafe { sys::tx_scene_commit(tx_scene) } != 0 {

@@ -1,17 +1,19 @@
 //! Geometry shared by every part of trilux: vectors, rays, boxes and the exact intersection
-//! routines of the four primitive kinds.
+//! routines of polygons, and the analytic shapes.
 
 mod bounds;
+mod polygon;
 mod ray;
-mod shapes;
+mod shape;
 
 pub use bounds::Bounds3;
 /// Points, directions, normals and linear RGB are glam's `Vec3` (`#[repr(C)]`, three `f32`s:
 /// the Embree shim reads rays of them directly); texture coordinates are glam's `Vec2`.
 /// BENCHMARKS.md (session 6) measured our former `Vec3` against it: the same speed.
 pub use glam::{vec2, vec3, Vec2, Vec3};
-pub use ray::{offset_ray_origin, point_error, shadow_ray, spawn_ray, Ray};
-pub use shapes::{
+pub use polygon::{
     faces_ray, intersect_quad, intersect_quad_sheared, intersect_triangle,
-    intersect_triangle_sheared, quad_normal, RayShear, RingPart, RingShape, SphereShape,
+    intersect_triangle_sheared, quad_normal, RayShear,
 };
+pub use ray::{offset_ray_origin, point_error, shadow_ray, spawn_ray, Ray};
+pub use shape::{AnalyticShape, RingPart, RingShape, Shape, SphereShape, Tessellation};

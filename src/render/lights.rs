@@ -1,7 +1,7 @@
 //! The scene's emitters as area lights: every primitive whose material emits. Each can be
 //! sampled uniformly by area, and has a centre for the course's one-shadow-ray mode.
 
-use crate::geometry::{vec3, RingPart, RingShape, SphereShape, Vec3};
+use crate::geometry::{AnalyticShape, Shape, Vec3};
 use crate::scene::{Color, PrimKind, PrimRef, Scene};
 
 /// Points on a light, a block at a time, as a structure of arrays: the loops over a block's
@@ -71,8 +71,8 @@ pub enum LightShape {
         e2: Vec3,
         normal: Vec3,
     },
-    Sphere(SphereShape),
-    Ring(RingShape),
+    /// An analytic shape, emitting outwards.
+    Shape(AnalyticShape),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -134,26 +134,14 @@ impl Light {
                 });
             }
         }
-        for (i, s) in scene.spheres.iter().enumerate() {
+        for (i, s) in scene.shapes.iter().enumerate() {
             let e = emitted(s.material);
             if e.max_element() > 0.0 {
-                let r = s.shape.radius;
                 lights.push(Light {
-                    shape: LightShape::Sphere(s.shape),
+                    shape: LightShape::Shape(s.shape),
                     emitted: e,
-                    area: 4.0 * std::f32::consts::PI * r * r,
-                    prim: prim(PrimKind::Sphere, i),
-                });
-            }
-        }
-        for (i, r) in scene.rings.iter().enumerate() {
-            let e = emitted(r.material);
-            if e.max_element() > 0.0 {
-                lights.push(Light {
-                    shape: LightShape::Ring(r.shape),
-                    emitted: e,
-                    area: ring_part_areas(&r.shape).iter().sum(),
-                    prim: prim(PrimKind::Ring, i),
+                    area: s.shape.area(),
+                    prim: prim(PrimKind::Shape, i),
                 });
             }
         }
@@ -170,19 +158,11 @@ impl Light {
                 normal,
                 one_sided: false,
             },
-            LightShape::Sphere(s) => {
-                let n = (towards - s.centre).normalize_or_zero();
+            LightShape::Shape(shape) => {
+                let (point, normal) = shape.point_towards(towards);
                 LightPoint {
-                    point: s.centre + n * s.radius,
-                    normal: n,
-                    one_sided: true,
-                }
-            }
-            LightShape::Ring(r) => {
-                let n = vec3(towards.x - r.base.x, 0.0, towards.z - r.base.z).normalize_or_zero();
-                LightPoint {
-                    point: vec3(r.base.x, r.base.y + 0.5 * r.height, r.base.z) + n * r.r_out,
-                    normal: n,
+                    point,
+                    normal,
                     one_sided: true,
                 }
             }
@@ -206,18 +186,14 @@ impl Light {
                     one_sided: false,
                 }
             }
-            LightShape::Sphere(s) => {
-                let z = 1.0 - 2.0 * u;
-                let r = (1.0 - z * z).max(0.0).sqrt();
-                let phi = std::f32::consts::TAU * v;
-                let n = vec3(r * phi.cos(), z, r * phi.sin());
+            LightShape::Shape(shape) => {
+                let (point, normal) = shape.sample(u, v);
                 LightPoint {
-                    point: s.centre + n * s.radius,
-                    normal: n,
+                    point,
+                    normal,
                     one_sided: true,
                 }
             }
-            LightShape::Ring(r) => sample_ring(&r, u, v),
         }
     }
 }
@@ -226,52 +202,5 @@ fn prim(kind: PrimKind, index: usize) -> PrimRef {
     PrimRef {
         kind,
         index: index as u32,
-    }
-}
-
-fn ring_part_areas(r: &RingShape) -> [f32; 4] {
-    let tau = std::f32::consts::TAU;
-    let cap = 0.5 * tau * (r.r_out * r.r_out - r.r_in * r.r_in);
-    [tau * r.r_out * r.height, tau * r.r_in * r.height, cap, cap]
-}
-
-/// Uniform by area over the ring's four surfaces: `u` picks the surface in proportion to
-/// its area and is then reused within it.
-fn sample_ring(r: &RingShape, u: f32, v: f32) -> LightPoint {
-    let areas = ring_part_areas(r);
-    let total: f32 = areas.iter().sum();
-    let mut x = u * total;
-    let mut part = 3;
-    for (k, a) in areas.iter().enumerate() {
-        if x < *a {
-            part = k;
-            break;
-        }
-        x -= a;
-    }
-    let w = (x / areas[part]).clamp(0.0, 1.0);
-    let phi = std::f32::consts::TAU * v;
-    let radial = vec3(phi.cos(), 0.0, phi.sin());
-    let part = RingPart::ALL[part];
-    let point = match part {
-        RingPart::Outer | RingPart::Inner => {
-            let radius = if part == RingPart::Outer {
-                r.r_out
-            } else {
-                r.r_in
-            };
-            r.base + radial * radius + vec3(0.0, w * r.height, 0.0)
-        }
-        RingPart::Bottom | RingPart::Top => {
-            // Uniform in the annulus: radius² uniform between r_in² and r_out².
-            let rho = (r.r_in * r.r_in + w * (r.r_out * r.r_out - r.r_in * r.r_in)).sqrt();
-            let y = if part == RingPart::Top { r.height } else { 0.0 };
-            r.base + radial * rho + vec3(0.0, y, 0.0)
-        }
-    };
-    LightPoint {
-        point,
-        normal: r.normal_at(point, part),
-        one_sided: true,
     }
 }

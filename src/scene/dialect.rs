@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use super::camera::{Camera, Projection};
 use super::error::SceneError;
-use super::{Material, Quad, Ring, Scene, Sphere};
+use super::{Material, Quad, Scene, ShapePrim};
 use crate::color::srgb_to_linear;
 use crate::geometry::{quad_normal, vec2, vec3, RingShape, SphereShape, Vec2, Vec3};
 
@@ -309,8 +309,8 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 if radius <= 0.0 {
                     return Err(p.invalid(tok, format!("sphere radius must be > 0, found {radius}")));
                 }
-                scene.spheres.push(Sphere {
-                    shape: SphereShape { centre, radius },
+                scene.shapes.push(ShapePrim {
+                    shape: SphereShape { centre, radius }.into(),
                     material,
                 });
             }
@@ -328,13 +328,14 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                         format!("ring radii must satisfy 0 < r_in < r_out, found r_in {r_in}, r_out {r_out}"),
                     ));
                 }
-                scene.rings.push(Ring {
+                scene.shapes.push(ShapePrim {
                     shape: RingShape {
                         base,
                         height,
                         r_in,
                         r_out,
-                    },
+                    }
+                    .into(),
                     material,
                 });
             }

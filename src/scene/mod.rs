@@ -16,7 +16,7 @@ pub use error::SceneError;
 pub use surface::{bilinear, PrimHit, QuadNeighbours, SurfaceHit};
 pub use texture::Texture;
 
-use crate::geometry::{quad_normal, Bounds3, RingShape, SphereShape, Vec2, Vec3};
+use crate::geometry::{quad_normal, AnalyticShape, Bounds3, Shape, Vec2, Vec3};
 
 pub use crate::color::Color;
 
@@ -121,15 +121,10 @@ impl TriangleMesh {
     }
 }
 
+/// An analytic shape (sphere, ring) with its material.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sphere {
-    pub shape: SphereShape,
-    pub material: u32,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ring {
-    pub shape: RingShape,
+pub struct ShapePrim {
+    pub shape: AnalyticShape,
     pub material: u32,
 }
 
@@ -138,18 +133,13 @@ pub struct Ring {
 pub enum PrimKind {
     Quad,
     Triangle,
-    Sphere,
-    Ring,
+    /// One of `Scene::shapes`: whichever analytic kind it is, the `Shape` trait answers.
+    Shape,
 }
 
 impl PrimKind {
     /// Every kind, in the order of their discriminants (`kind as u32` indexes this).
-    pub const ALL: [PrimKind; 4] = [
-        PrimKind::Quad,
-        PrimKind::Triangle,
-        PrimKind::Sphere,
-        PrimKind::Ring,
-    ];
+    pub const ALL: [PrimKind; 3] = [PrimKind::Quad, PrimKind::Triangle, PrimKind::Shape];
 }
 
 /// One primitive of a scene: its kind and its index in that kind's list.
@@ -168,8 +158,8 @@ pub struct Scene {
     pub textures: Vec<Texture>,
     pub quads: Vec<Quad>,
     pub triangles: TriangleMesh,
-    pub spheres: Vec<Sphere>,
-    pub rings: Vec<Ring>,
+    /// Spheres and rings, in the order of the scene file.
+    pub shapes: Vec<ShapePrim>,
     pub camera: Option<Camera>,
     /// Linear radiance of rays that leave the scene.
     pub background: Color,
@@ -225,15 +215,8 @@ impl Scene {
             *q = Quad::new(q.vertices.map(map), q.tex_coords, q.material);
         }
         s.triangles.positions.iter_mut().for_each(|p| *p = map(*p));
-        for sp in &mut s.spheres {
-            sp.shape.centre = map(sp.shape.centre);
-            sp.shape.radius *= scale;
-        }
-        for r in &mut s.rings {
-            r.shape.base = map(r.shape.base);
-            r.shape.height *= scale;
-            r.shape.r_in *= scale;
-            r.shape.r_out *= scale;
+        for sp in &mut s.shapes {
+            sp.shape = sp.shape.scaled(scale, offset);
         }
         let camera = self.camera();
         s.camera = Some(Camera {
@@ -282,13 +265,8 @@ impl Scene {
         // values.
         let _ = write!(
             h,
-            "{:?}{:?}{:?}{:?}{:?}{}",
-            self.materials,
-            self.quads,
-            self.triangles,
-            self.spheres,
-            self.rings,
-            self.two_sided_quads
+            "{:?}{:?}{:?}{:?}{}",
+            self.materials, self.quads, self.triangles, self.shapes, self.two_sided_quads
         );
         for t in &self.textures {
             let _ = write!(h, "texture {}x{}", t.width, t.height);
@@ -322,17 +300,14 @@ impl Scene {
         for i in (0..self.triangles.len()).filter(|&i| keep(self.triangles.materials[i])) {
             b = b.union(Bounds3::from_points(&self.triangles.vertices(i)));
         }
-        for s in self.spheres.iter().filter(|s| keep(s.material)) {
+        for s in self.shapes.iter().filter(|s| keep(s.material)) {
             b = b.union(s.shape.bounds());
-        }
-        for r in self.rings.iter().filter(|r| keep(r.material)) {
-            b = b.union(r.shape.bounds());
         }
         b
     }
 
     pub fn primitive_count(&self) -> usize {
-        self.quads.len() + self.triangles.len() + self.spheres.len() + self.rings.len()
+        self.quads.len() + self.triangles.len() + self.shapes.len()
     }
 
     pub fn material_of(&self, prim: PrimRef) -> u32 {
@@ -340,8 +315,7 @@ impl Scene {
         match prim.kind {
             PrimKind::Quad => self.quads[i].material,
             PrimKind::Triangle => self.triangles.materials[i],
-            PrimKind::Sphere => self.spheres[i].material,
-            PrimKind::Ring => self.rings[i].material,
+            PrimKind::Shape => self.shapes[i].material,
         }
     }
 
@@ -364,8 +338,7 @@ impl Scene {
         };
         self.quads.iter().for_each(|q| mark(q.material));
         self.triangles.materials.iter().for_each(|&m| mark(m));
-        self.spheres.iter().for_each(|s| mark(s.material));
-        self.rings.iter().for_each(|r| mark(r.material));
+        self.shapes.iter().for_each(|s| mark(s.material));
         used
     }
 

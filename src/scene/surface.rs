@@ -4,7 +4,7 @@
 
 use super::{PrimKind, PrimRef, Scene};
 use crate::geometry::{
-    faces_ray, intersect_quad, point_error, spawn_ray, vec2, Ray, RingPart, Vec2, Vec3,
+    faces_ray, intersect_quad, point_error, spawn_ray, vec2, Ray, Shape, Vec2, Vec3,
 };
 
 impl SurfaceHit {
@@ -61,6 +61,8 @@ pub struct SurfaceHit {
     /// Texture coordinates (the primitive's `vt`, or its parameters when it has none).
     pub tex_coords: Vec2,
     pub prim: PrimRef,
+    /// The part of an analytic shape the point lies on (see `Shape`); 0 on polygons.
+    pub part: u32,
     pub material: u32,
 }
 
@@ -68,7 +70,7 @@ impl Scene {
     /// Whether a ray travelling along `dir` sees the emission of the surface it hit: quads
     /// emit from their front side only (unless `--two-sided`), closed surfaces from all sides.
     pub fn sees_emission(&self, s: &SurfaceHit, dir: Vec3) -> bool {
-        let closed = matches!(s.prim.kind, PrimKind::Sphere | PrimKind::Ring);
+        let closed = s.prim.kind == PrimKind::Shape;
         self.materials[s.material as usize].is_emissive()
             && (closed || self.two_sided_quads || s.facing(dir).0)
     }
@@ -105,6 +107,7 @@ impl Scene {
                         kind: PrimKind::Quad,
                         index: index as u32,
                     },
+                    part: 0,
                     material: q.material,
                 }
             }
@@ -146,77 +149,30 @@ impl Scene {
                     uv: (b1, b2),
                     tex_coords,
                     prim: hit.prim,
+                    part: 0,
                     material: mesh.materials[i],
                 }
             }
-            PrimKind::Sphere => {
-                let s = &self.spheres[i];
-                let t = s.shape.intersect(ray, t_max).unwrap_or(hit.t);
-                // Reprojected onto the sphere: the point's error is that of the radius.
-                let n = s.shape.normal_at(ray.at(t));
-                let point = s.shape.centre + n * s.shape.radius;
-                let uv = s.shape.uv_at(point);
-                SurfaceHit {
-                    t,
-                    point,
-                    error: point_error(s.shape.centre.abs().max_element() + s.shape.radius),
-                    geometric_normal: n,
-                    shading_normal: n,
-                    uv,
-                    tex_coords: vec2(uv.0, uv.1),
-                    prim: hit.prim,
-                    material: s.material,
-                }
-            }
-            PrimKind::Ring => {
-                let r = &self.rings[i];
-                let (t, part) = r
-                    .shape
+            PrimKind::Shape => {
+                let prim = &self.shapes[i];
+                let shape = &prim.shape;
+                let (t, part) = shape
                     .intersect(ray, t_max)
-                    .unwrap_or((hit.t, nearest_part(&r.shape, ray.at(hit.t))));
-                let p = ray.at(t);
-                let point = match part {
-                    RingPart::Outer | RingPart::Inner => {
-                        let radius = if part == RingPart::Outer {
-                            r.shape.r_out
-                        } else {
-                            r.shape.r_in
-                        };
-                        let radial = Vec3 {
-                            x: p.x - r.shape.base.x,
-                            y: 0.0,
-                            z: p.z - r.shape.base.z,
-                        }
-                        .normalize_or_zero();
-                        Vec3 {
-                            x: r.shape.base.x + radial.x * radius,
-                            y: p.y,
-                            z: r.shape.base.z + radial.z * radius,
-                        }
-                    }
-                    RingPart::Bottom => Vec3 {
-                        y: r.shape.base.y,
-                        ..p
-                    },
-                    RingPart::Top => Vec3 {
-                        y: r.shape.base.y + r.shape.height,
-                        ..p
-                    },
-                };
-                let n = r.shape.normal_at(point, part);
-                let uv = r.shape.uv_at(point, part);
+                    .unwrap_or_else(|| (hit.t, shape.nearest_part(ray.at(hit.t))));
+                // Moved onto the surface: the point's error is then that of the shape's size.
+                let (point, n) = shape.project(ray.at(t), part);
+                let uv = shape.uv_at(point, part);
                 SurfaceHit {
                     t,
                     point,
-                    error: point_error(
-                        r.shape.base.abs().max_element() + r.shape.r_out + r.shape.height,
-                    ),
+                    error: point_error(shape.magnitude()),
                     geometric_normal: n,
                     shading_normal: n,
                     uv,
                     tex_coords: vec2(uv.0, uv.1),
                     prim: hit.prim,
-                    material: r.material,
+                    part,
+                    material: prim.material,
                 }
             }
         }
@@ -333,20 +289,4 @@ pub fn bilinear(tc: &[Vec2; 4], u: f32, v: f32) -> Vec2 {
         tc.iter().zip(w).map(|(t, w)| t.x * w).sum(),
         tc.iter().zip(w).map(|(t, w)| t.y * w).sum(),
     )
-}
-
-/// The ring surface nearest to a point (used only when the exact routine misses a hit the
-/// backend reported, at the very edge of a surface).
-fn nearest_part(ring: &crate::geometry::RingShape, p: Vec3) -> RingPart {
-    let rho = ((p.x - ring.base.x).powi(2) + (p.z - ring.base.z).powi(2)).sqrt();
-    let distances = [
-        (rho - ring.r_out).abs(),
-        (rho - ring.r_in).abs(),
-        (p.y - ring.base.y).abs(),
-        (p.y - ring.base.y - ring.height).abs(),
-    ];
-    let k = (0..4)
-        .min_by(|&a, &b| distances[a].total_cmp(&distances[b]))
-        .unwrap_or(0);
-    RingPart::ALL[k]
 }

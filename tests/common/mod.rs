@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use trilux::accel::{Accel, AccelKind, PrimHit};
-use trilux::geometry::{faces_ray, intersect_quad, intersect_triangle, Ray};
+use trilux::geometry::{faces_ray, intersect_quad, intersect_triangle, Ray, Shape};
 use trilux::scene::{PrimKind, PrimRef, Scene};
 
 /// The course's scene folder, beside the checkout (present in CI).
@@ -69,8 +69,7 @@ impl BruteForce<'_> {
                 let [a, b, c] = s.triangles.vertices(i);
                 intersect_triangle(ray, t_max, a, b, c).map(|h| h.0)
             }
-            PrimKind::Sphere => s.spheres[i].shape.intersect(ray, t_max),
-            PrimKind::Ring => s.rings[i].shape.intersect(ray, t_max).map(|h| h.0),
+            PrimKind::Shape => s.shapes[i].shape.intersect(ray, t_max).map(|h| h.0),
         }
     }
 
@@ -79,8 +78,7 @@ impl BruteForce<'_> {
         let of = |kind, n: usize| (0..n as u32).map(move |index| PrimRef { kind, index });
         of(PrimKind::Quad, s.quads.len())
             .chain(of(PrimKind::Triangle, s.triangles.len()))
-            .chain(of(PrimKind::Sphere, s.spheres.len()))
-            .chain(of(PrimKind::Ring, s.rings.len()))
+            .chain(of(PrimKind::Shape, s.shapes.len()))
     }
 }
 

@@ -7,7 +7,7 @@
 
 use std::collections::HashMap;
 
-use crate::geometry::{quad_normal, vec3, RingPart, RingShape, SphereShape, Vec3};
+use crate::geometry::{quad_normal, Shape, Tessellation, Vec3};
 use crate::scene::{PrimKind, PrimRef, Scene};
 
 /// No half-edge (a border edge has no twin).
@@ -32,7 +32,8 @@ pub struct Face {
     pub material: u32,
     pub prim: PrimRef,
     /// For rings: which of the four surfaces the face lies on.
-    pub ring_part: Option<RingPart>,
+    /// The part of an analytic shape the face lies on (see `Shape`); 0 on polygons.
+    pub part: u32,
     /// (u0, v0, u1, v1): the rectangle of the primitive's parameters the face covers; its
     /// corners in half-edge order are (u0,v0), (u1,v0), (u1,v1), (u0,v1).
     pub param: [f32; 4],
@@ -59,7 +60,7 @@ pub struct QuadMesh {
 }
 
 /// The top-level faces of one primitive: `count` consecutive faces from `first`, a grid of
-/// `cols` × `rows` cells of its parameter space.
+/// `cols` × `rows` cells of the parameter space of each of its parts, part after part.
 #[derive(Clone, Copy, Debug)]
 struct Roots {
     first: u32,
@@ -68,18 +69,9 @@ struct Roots {
     rows: u32,
 }
 
-/// How finely curved primitives are rasterized.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Rasterization {
-    /// Sphere: faces around the axis and from pole to pole (`-sphere_rasterization H V`).
-    pub sphere: (u32, u32),
-    /// Ring: faces around the axis on each of its four surfaces (`-cylinder_ring_rasterization`).
-    pub ring: u32,
-}
-
 impl QuadMesh {
     /// The mesh of every primitive of the scene.
-    pub fn from_scene(scene: &Scene, raster: Rasterization) -> QuadMesh {
+    pub fn from_scene(scene: &Scene, raster: Tessellation) -> QuadMesh {
         let mut mesh = QuadMesh::default();
         let unit = [0.0, 0.0, 1.0, 1.0];
         for (i, q) in scene.quads.iter().enumerate() {
@@ -87,7 +79,7 @@ impl QuadMesh {
                 kind: PrimKind::Quad,
                 index: i as u32,
             };
-            mesh.add_root(prim, q.material, None, q.vertices, unit, (1, 1));
+            mesh.add_root(prim, q.material, 0, q.vertices, unit, (1, 1));
         }
         for i in 0..scene.triangles.len() {
             let prim = PrimRef {
@@ -96,36 +88,23 @@ impl QuadMesh {
             };
             let [a, b, c] = scene.triangles.vertices(i);
             let material = scene.triangles.materials[i];
-            mesh.add_root(prim, material, None, [a, b, c, c], unit, (1, 1));
+            mesh.add_root(prim, material, 0, [a, b, c, c], unit, (1, 1));
         }
-        let (h, v) = (raster.sphere.0.max(3), raster.sphere.1.max(2));
-        for (i, s) in scene.spheres.iter().enumerate() {
+        for (i, s) in scene.shapes.iter().enumerate() {
             let prim = PrimRef {
-                kind: PrimKind::Sphere,
+                kind: PrimKind::Shape,
                 index: i as u32,
             };
             let shape = s.shape;
-            for row in 0..v {
-                for col in 0..h {
-                    let point = |pu, pv| sphere_point(&shape, pu, pv);
-                    let (param, corners) =
-                        oriented(cell(col, row, h, v), point, |p| p - shape.centre);
-                    mesh.add_root(prim, s.material, None, corners, param, (h, v));
-                }
-            }
-        }
-        let n = raster.ring.max(3);
-        for (i, r) in scene.rings.iter().enumerate() {
-            let prim = PrimRef {
-                kind: PrimKind::Ring,
-                index: i as u32,
-            };
-            for part in RingPart::ALL {
-                for col in 0..n {
-                    let point = |pu, pv| ring_point(&r.shape, part, pu, pv);
-                    let outward = |p| r.shape.normal_at(p, part);
-                    let (param, corners) = oriented(cell(col, 0, n, 1), point, outward);
-                    mesh.add_root(prim, r.material, Some(part), corners, param, (n, 4));
+            let (cols, rows) = shape.grid(&raster);
+            for part in 0..shape.part_count() {
+                for row in 0..rows {
+                    for col in 0..cols {
+                        let point = |pu, pv| shape.point_at(part, pu, pv);
+                        let outward = |p| shape.normal_at(p, part);
+                        let (param, corners) = oriented(cell(col, row, cols, rows), point, outward);
+                        mesh.add_root(prim, s.material, part, corners, param, (cols, rows));
+                    }
                 }
             }
         }
@@ -139,7 +118,7 @@ impl QuadMesh {
         &mut self,
         prim: PrimRef,
         material: u32,
-        ring_part: Option<RingPart>,
+        part: u32,
         corners: [Vec3; 4],
         param: [f32; 4],
         grid: (u32, u32),
@@ -156,7 +135,7 @@ impl QuadMesh {
             })
             .count += 1;
         let ids = corners.map(|p| self.weld(p));
-        self.push_face_ids(prim, material, ring_part, ids, param, NONE, 0);
+        self.push_face_ids(prim, material, part, ids, param, NONE, 0);
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -164,7 +143,7 @@ impl QuadMesh {
         &mut self,
         prim: PrimRef,
         material: u32,
-        ring_part: Option<RingPart>,
+        part: u32,
         ids: [u32; 4],
         param: [f32; 4],
         parent: u32,
@@ -184,7 +163,7 @@ impl QuadMesh {
             half_edge: first,
             material,
             prim,
-            ring_part,
+            part,
             param,
             parent,
             children: NONE,
@@ -244,15 +223,7 @@ impl QuadMesh {
         ];
         let first = self.faces.len() as u32;
         for (ids, param) in children {
-            self.push_face_ids(
-                f.prim,
-                f.material,
-                f.ring_part,
-                ids,
-                param,
-                face,
-                f.level + 1,
-            );
+            self.push_face_ids(f.prim, f.material, f.part, ids, param, face, f.level + 1);
         }
         self.faces[face as usize].children = first;
     }
@@ -333,15 +304,9 @@ impl QuadMesh {
         around
     }
 
-    /// The leaf under parameters (u, v) of a primitive (and ring part), with the point's
-    /// parameters within that leaf in [0,1]².
-    pub fn locate(
-        &self,
-        prim: PrimRef,
-        part: Option<RingPart>,
-        u: f32,
-        v: f32,
-    ) -> Option<(u32, f32, f32)> {
+    /// The leaf under parameters (u, v) of a primitive's part, with the point's parameters
+    /// within that leaf in [0,1]².
+    pub fn locate(&self, prim: PrimRef, part: u32, u: f32, v: f32) -> Option<(u32, f32, f32)> {
         let &Roots {
             first,
             count,
@@ -349,10 +314,7 @@ impl QuadMesh {
             rows,
         } = self.roots.get(&prim)?;
         let col = ((u * cols as f32) as u32).min(cols - 1);
-        let row = match part {
-            Some(p) => RingPart::ALL.iter().position(|&q| q == p)? as u32,
-            None => ((v * rows as f32) as u32).min(rows - 1),
-        };
+        let row = part * rows + ((v * rows as f32) as u32).min(rows - 1);
         let root = first + row * cols + col;
         if root >= first + count {
             return None;
@@ -405,35 +367,6 @@ fn param_corners([u0, v0, u1, v1]: [f32; 4]) -> [(f32, f32); 4] {
     [(u0, v0), (u1, v0), (u1, v1), (u0, v1)]
 }
 
-/// The point of a sphere at parameters (u, v) of `SphereShape::uv_at`: longitude u around +y
-/// (from +x towards +z), latitude v from the bottom pole.
-fn sphere_point(s: &SphereShape, u: f32, v: f32) -> Vec3 {
-    let (phi, theta) = (std::f32::consts::TAU * u, std::f32::consts::PI * (1.0 - v));
-    // The poles exactly, so the faces around them share one vertex.
-    let (sin_t, cos_t) = if v <= 0.0 {
-        (0.0, -1.0)
-    } else if v >= 1.0 {
-        (0.0, 1.0)
-    } else {
-        theta.sin_cos()
-    };
-    let dir = vec3(sin_t * phi.cos(), cos_t, sin_t * phi.sin());
-    s.centre + dir * s.radius
-}
-
-/// The point of a ring's surface at parameters (u, v) of `RingShape::uv_at`.
-fn ring_point(r: &RingShape, part: RingPart, u: f32, v: f32) -> Vec3 {
-    let phi = std::f32::consts::TAU * u;
-    let (sin_p, cos_p) = phi.sin_cos();
-    let (radius, y) = match part {
-        RingPart::Outer => (r.r_out, r.height * v),
-        RingPart::Inner => (r.r_in, r.height * v),
-        RingPart::Bottom => (r.r_in + (r.r_out - r.r_in) * v, 0.0),
-        RingPart::Top => (r.r_in + (r.r_out - r.r_in) * v, r.height),
-    };
-    r.base + vec3(radius * cos_p, y, radius * sin_p)
-}
-
 /// The corners of a rasterized cell, counter-clockwise around the surface's outward normal
 /// (`outward` at a point): when the cell's (u, v) corners run the other way, its rectangle is
 /// reversed in u so that its corners, children and parameters all follow the outward order.
@@ -455,7 +388,8 @@ fn oriented(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Material, Quad, Ring, Sphere};
+    use crate::geometry::vec3;
+    use crate::scene::{Material, Quad, ShapePrim};
 
     fn cube() -> Scene {
         let v = |x: f32, y: f32, z: f32| vec3(x, y, z);
@@ -504,8 +438,8 @@ mod tests {
         }
     }
 
-    fn raster() -> Rasterization {
-        Rasterization {
+    fn raster() -> Tessellation {
+        Tessellation {
             sphere: (8, 6),
             ring: 12,
         }
@@ -536,11 +470,11 @@ mod tests {
 
     #[test]
     fn rasterized_sphere_and_ring_faces_point_outwards_and_are_found_again() {
-        let sphere = super::SphereShape {
+        let sphere = crate::geometry::SphereShape {
             centre: vec3(1.0, 2.0, 3.0),
             radius: 0.5,
         };
-        let ring = super::RingShape {
+        let ring = crate::geometry::RingShape {
             base: vec3(0.0, 0.0, 0.0),
             height: 0.3,
             r_in: 0.8,
@@ -548,14 +482,16 @@ mod tests {
         };
         let scene = Scene {
             materials: vec![Material::default()],
-            spheres: vec![Sphere {
-                shape: sphere,
-                material: 0,
-            }],
-            rings: vec![Ring {
-                shape: ring,
-                material: 0,
-            }],
+            shapes: vec![
+                ShapePrim {
+                    shape: sphere.into(),
+                    material: 0,
+                },
+                ShapePrim {
+                    shape: ring.into(),
+                    material: 0,
+                },
+            ],
             ..Default::default()
         };
         let mut mesh = QuadMesh::from_scene(&scene, raster());
@@ -565,17 +501,16 @@ mod tests {
             let face = mesh.faces[f as usize];
             let (area, n) = mesh.area_normal(f);
             let c = mesh.face_vertices(f).iter().fold(Vec3::ZERO, |a, &b| a + b) * 0.25;
-            let outward = match face.ring_part {
-                None => c - sphere.centre,
-                Some(part) => ring.normal_at(c, part),
-            };
+            let outward = scene.shapes[face.prim.index as usize]
+                .shape
+                .normal_at(c, face.part);
             assert!(
                 area == 0.0 || n.dot(outward) > 0.0,
                 "face {f} faces inwards"
             );
             let [u0, v0, u1, v1] = face.param;
             let (u, v) = (0.5 * (u0 + u1), 0.5 * (v0 + v1));
-            let (found, s, t) = mesh.locate(face.prim, face.ring_part, u, v).unwrap();
+            let (found, s, t) = mesh.locate(face.prim, face.part, u, v).unwrap();
             assert_eq!(found, f);
             assert!((s - 0.5).abs() < 1e-4 && (t - 0.5).abs() < 1e-4);
         }

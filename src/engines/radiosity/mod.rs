@@ -22,9 +22,9 @@ use solver::{FormFactorSampler, PatchLight, RadiositySolver, SolveLimits, Stop};
 
 use super::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSettings, Rendered};
 use crate::accel::Accel;
-use crate::engines::radiosity::mesh::{QuadMesh, Rasterization, NONE};
+use crate::engines::radiosity::mesh::{QuadMesh, NONE};
 use crate::film::Film;
-use crate::geometry::{RingPart, Vec3};
+use crate::geometry::{Shape, Vec3};
 use crate::render::{IndirectLight, RenderStats};
 use crate::sampling::Rng;
 use crate::scene::{Color, PrimKind, Scene, SurfaceHit};
@@ -65,8 +65,7 @@ pub struct PatchField {
 pub fn convex_enclosure(scene: &Scene) -> bool {
     const LIMIT: usize = 4096;
     if !scene.triangles.is_empty()
-        || !scene.spheres.is_empty()
-        || !scene.rings.is_empty()
+        || !scene.shapes.is_empty()
         || scene.quads.is_empty()
         || scene.quads.len() > LIMIT
     {
@@ -99,13 +98,7 @@ impl Solution {
         on_progress: impl Fn(f32),
     ) -> Solution {
         let r = &settings.radiosity;
-        let mut mesh = QuadMesh::from_scene(
-            scene,
-            Rasterization {
-                sphere: r.sphere_rasterization,
-                ring: r.cylinder_ring_rasterization,
-            },
-        );
+        let mut mesh = QuadMesh::from_scene(scene, r.tessellation());
         mesh.subdivide(r.subdivide);
         let (visibility, visibility_reason) = if settings.num_shadow_samples == 0 {
             (false, "off (-num_shadow_samples 0)")
@@ -222,29 +215,14 @@ impl Solution {
             PrimKind::Quad => {
                 let q = &scene.quads[hit.prim.index as usize];
                 let (u, v) = inverse_bilinear(&q.vertices, q.normal, hit.point).unwrap_or(hit.uv);
-                (u, v, None)
+                (u, v, 0)
             }
             PrimKind::Triangle => {
                 let (b1, b2) = hit.uv;
                 let u = if b2 < 1.0 { b1 / (1.0 - b2) } else { 0.0 };
-                (u, b2, None)
+                (u, b2, 0)
             }
-            PrimKind::Sphere => (hit.uv.0, hit.uv.1, None),
-            PrimKind::Ring => {
-                let r = &scene.rings[hit.prim.index as usize].shape;
-                let n = hit.geometric_normal;
-                let radial = (hit.point - r.base).dot(n);
-                let part = if n.y > 0.5 {
-                    RingPart::Top
-                } else if n.y < -0.5 {
-                    RingPart::Bottom
-                } else if radial > 0.0 {
-                    RingPart::Outer
-                } else {
-                    RingPart::Inner
-                };
-                (hit.uv.0, hit.uv.1, Some(part))
-            }
+            PrimKind::Shape => (hit.uv.0, hit.uv.1, hit.part),
         };
         let (face, s, t) = self.mesh.locate(hit.prim, part, u, v)?;
         let k = self.patch_of_face[face as usize];
@@ -507,11 +485,17 @@ pub fn mesh_plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
 
 /// Patches of the radiosity mesh: every primitive's top-level faces, times 4 per subdivision.
 fn planned_patches(scene: &Scene, r: &RadiositySettings) -> u64 {
-    let (h, v) = r.sphere_rasterization;
+    let tessellation = r.tessellation();
     let top = scene.quads.len() as u64
         + scene.triangles.len() as u64
-        + scene.spheres.len() as u64 * h.max(3) as u64 * v.max(2) as u64
-        + scene.rings.len() as u64 * 4 * r.cylinder_ring_rasterization.max(3) as u64;
+        + scene
+            .shapes
+            .iter()
+            .map(|s| {
+                let (cols, rows) = s.shape.grid(&tessellation);
+                s.shape.part_count() as u64 * cols as u64 * rows as u64
+            })
+            .sum::<u64>();
     top.saturating_mul(4u64.saturating_pow(r.subdivide))
 }
 

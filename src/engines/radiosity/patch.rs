@@ -3,7 +3,7 @@
 //! and on the primitive it approximates (for visibility rays against the original geometry).
 
 use crate::engines::radiosity::mesh::QuadMesh;
-use crate::geometry::{offset_ray_origin, point_error, vec3, RingPart, Vec3};
+use crate::geometry::{offset_ray_origin, point_error, Shape, Vec3};
 use crate::scene::{Color, PrimKind, PrimRef, Scene};
 
 #[derive(Clone, Debug)]
@@ -20,7 +20,8 @@ pub struct Patch {
     pub albedo: Color,
     pub emitted: Color,
     pub prim: PrimRef,
-    pub ring_part: Option<RingPart>,
+    /// The part of an analytic shape the patch lies on (see `Shape`); 0 on polygons.
+    pub part: u32,
 }
 
 impl Patch {
@@ -91,7 +92,7 @@ pub fn patches(scene: &Scene, mesh: &QuadMesh) -> Vec<Patch> {
                 albedo,
                 emitted: m.emitted,
                 prim: f.prim,
-                ring_part: f.ring_part,
+                part: f.part,
             }
         })
         .collect()
@@ -104,32 +105,10 @@ pub fn on_primitive(scene: &Scene, patch: &Patch, p: Vec3, side: Vec3) -> Vec3 {
     let i = patch.prim.index as usize;
     let (point, normal, magnitude) = match patch.prim.kind {
         PrimKind::Quad | PrimKind::Triangle => (p, patch.normal, p.abs().max_element()),
-        PrimKind::Sphere => {
-            let s = &scene.spheres[i].shape;
-            let n = s.normal_at(p);
-            (
-                s.centre + n * s.radius,
-                n,
-                s.centre.abs().max_element() + s.radius,
-            )
-        }
-        PrimKind::Ring => {
-            let r = &scene.rings[i].shape;
-            let (x, z) = (p.x - r.base.x, p.z - r.base.z);
-            let rho = (x * x + z * z).sqrt().max(f32::MIN_POSITIVE);
-            let part = patch.ring_part.unwrap_or(RingPart::Outer);
-            let radius = match part {
-                RingPart::Outer => r.r_out,
-                RingPart::Inner => r.r_in,
-                RingPart::Bottom | RingPart::Top => rho.clamp(r.r_in, r.r_out),
-            };
-            let q = vec3(
-                r.base.x + x / rho * radius,
-                p.y,
-                r.base.z + z / rho * radius,
-            );
-            let magnitude = r.base.abs().max_element() + r.r_out + r.height;
-            (q, r.normal_at(q, part), magnitude)
+        PrimKind::Shape => {
+            let shape = &scene.shapes[i].shape;
+            let (q, n) = shape.project(p, patch.part);
+            (q, n, shape.magnitude())
         }
     };
     let n = if normal.dot(side) < 0.0 {

@@ -48,6 +48,16 @@ pub struct RadiositySettings {
     pub export: Option<std::path::PathBuf>,
 }
 
+impl RadiositySettings {
+    /// How finely the mesh approximates the scene's analytic shapes.
+    pub fn tessellation(&self) -> crate::geometry::Tessellation {
+        crate::geometry::Tessellation {
+            sphere: self.sphere_rasterization,
+            ring: self.cylinder_ring_rasterization,
+        }
+    }
+}
+
 impl Default for RadiositySettings {
     fn default() -> Self {
         RadiositySettings {
