@@ -12,7 +12,9 @@ use clap::Args;
 
 use crate::accel::{AccelKind, AccelOptions, EmbreeQuality};
 use crate::engines::photon::{self, PhotonSettings};
-use crate::engines::radiosity::{self, solver::Relaxation, RadiositySettings};
+use crate::engines::radiosity::{
+    self, settings::SolverKind, solver::Relaxation, RadiositySettings,
+};
 use crate::engines::{EngineKind, IndirectKind, RenderSettings};
 use crate::geometry::{vec3, Vec3};
 use crate::sampling::Pattern;
@@ -313,6 +315,17 @@ pub struct RadiosityArgs {
     /// fixed ω in [1, 2), 1 being plain progressive refinement.
     #[arg(long, default_value_t = radiosity_defaults().relaxation)]
     pub radiosity_relaxation: Relaxation,
+    /// The solver: progressive refinement (shooting), or hierarchical radiosity (links
+    /// between element quadtrees, refined by the power they carry).
+    #[arg(long, default_value_t = radiosity_defaults().solver)]
+    pub radiosity_solver: SolverKind,
+    /// Hierarchical: refine a link carrying more than this fraction of the largest emitted
+    /// power.
+    #[arg(long, default_value_t = radiosity_defaults().link_error)]
+    pub link_error: f32,
+    /// Hierarchical: do not split elements smaller than this fraction of the scene's area.
+    #[arg(long, default_value_t = radiosity_defaults().min_element_area)]
+    pub min_element_area: f32,
     /// Memory for cached rows of form factors, MiB.
     #[arg(long, default_value_t = radiosity_defaults().ff_cache_mb)]
     pub ff_cache_mb: usize,
@@ -389,6 +402,9 @@ impl RadiosityArgs {
             subdivide: self.subdivide,
             interpolate: self.interpolate,
             tolerance: self.radiosity_tolerance,
+            solver: self.radiosity_solver,
+            link_error: self.link_error,
+            min_element_area: self.min_element_area,
             iterations: self.radiosity_iterations,
             max_shots_per_patch: self.radiosity_max_shots_per_patch,
             relaxation: self.radiosity_relaxation,
@@ -605,6 +621,8 @@ impl RenderArgs {
             1..=u32::MAX,
         )?;
         check_number("radiosity_tolerance", r.radiosity_tolerance, 0.0, true)?;
+        check_number("link_error", r.link_error, 0.0, true)?;
+        check_number("min_element_area", r.min_element_area, 0.0, false)?;
         if let Some(t) = r.adaptive_subdivide {
             check_number("adaptive_subdivide", t, 0.0, true)?;
         }

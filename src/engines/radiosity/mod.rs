@@ -4,6 +4,7 @@
 //! solved mesh seen from the camera in several visualization modes.
 
 pub mod form_factor;
+pub mod hierarchical;
 pub mod mesh;
 pub mod patch;
 pub mod progressive;
@@ -12,7 +13,7 @@ pub mod solver;
 
 mod display;
 mod export;
-pub use settings::{Display, RadiositySettings};
+pub use settings::{Display, RadiositySettings, SolverKind};
 
 use std::sync::atomic::Ordering::Relaxed;
 
@@ -83,10 +84,16 @@ pub fn convex_enclosure(scene: &Scene) -> bool {
 
 /// The solver the settings ask for (progressive refinement: the one there is so far).
 fn solver(r: &RadiositySettings) -> Box<dyn RadiositySolver> {
-    Box::new(progressive::Progressive {
-        cache_bytes: r.ff_cache_mb << 20,
-        relaxation: r.relaxation,
-    })
+    match r.solver {
+        SolverKind::Progressive => Box::new(progressive::Progressive {
+            cache_bytes: r.ff_cache_mb << 20,
+            relaxation: r.relaxation,
+        }),
+        SolverKind::Hierarchical => Box::new(hierarchical::Hierarchical {
+            link_error: r.link_error,
+            min_element_area: r.min_element_area,
+        }),
+    }
 }
 
 impl Solution {

@@ -46,6 +46,35 @@ pub struct RadiositySettings {
     pub display: Display,
     /// Write the solved patches to this PLY file (`--export-radiosity`, default: none).
     pub export: Option<std::path::PathBuf>,
+    /// Which solver (`--radiosity-solver`, default progressive).
+    pub solver: SolverKind,
+    /// Hierarchical: refine a link that carries more than this fraction of the largest
+    /// emitted power (`--link-error`, default 1e-4).
+    pub link_error: f32,
+    /// Hierarchical: elements smaller than this fraction of the scene's area are not split
+    /// (`--min-element-area`, default 1e-5).
+    pub min_element_area: f32,
+}
+
+/// The radiosity solvers (`--radiosity-solver`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum SolverKind {
+    /// Progressive refinement: shoot the patch with the most undistributed power, N² form
+    /// factors at most; the course's solver.
+    #[default]
+    Progressive,
+    /// Hierarchical radiosity: links between element quadtrees refined by the power they
+    /// carry, Jacobi sweeps over them (no clustering yet: k² initial links).
+    Hierarchical,
+}
+
+impl std::fmt::Display for SolverKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            SolverKind::Progressive => "progressive",
+            SolverKind::Hierarchical => "hierarchical",
+        })
+    }
 }
 
 impl RadiositySettings {
@@ -78,6 +107,9 @@ impl Default for RadiositySettings {
             log_convergence: false,
             display: Display::Radiance,
             export: None,
+            solver: SolverKind::Progressive,
+            link_error: 1e-4,
+            min_element_area: 1e-5,
         }
     }
 }

@@ -74,6 +74,25 @@ impl<'a> FormFactorSampler<'a> {
         self.patches
     }
 
+    pub fn scene(&self) -> &'a Scene {
+        self.scene
+    }
+
+    /// What visibility rays are cast against.
+    pub fn accel(&self) -> &'a dyn Accel {
+        self.accel
+    }
+
+    /// Whether form factors are tested for occlusion.
+    pub fn visibility(&self) -> bool {
+        self.visibility
+    }
+
+    /// The seed of every sample point.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
     /// Point `k` of receiver `j`: the same points whichever patch shoots, so that a receiver's
     /// form factors to a closed enclosure sum to exactly one.
     fn receiver_point(&self, j: usize, k: u32) -> Vec3 {
