@@ -116,8 +116,10 @@ fn negative_or_non_finite_lens_names_the_flag() {
 #[test]
 fn out_of_range_engine_numbers_name_the_flag() {
     let dir = temp_dir("engine-numbers");
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 7] = [
         (&["-size", "0", "10"], "-size"),
+        (&["--link-error", "0"], "--link-error"),
+        (&["--min-element-area", "-1"], "--min-element-area"),
         (&["--photon-max-radius", "-1"], "--photon-max-radius"),
         (&["--radiosity-tolerance", "nan"], "--radiosity-tolerance"),
         (

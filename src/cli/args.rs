@@ -321,10 +321,10 @@ pub struct RadiosityArgs {
     pub radiosity_solver: SolverKind,
     /// Hierarchical: refine a link carrying more than this fraction of the largest emitted
     /// power.
-    #[arg(long, default_value_t = radiosity_defaults().link_error)]
+    #[arg(long, default_value_t = radiosity_defaults().link_error, allow_negative_numbers = true)]
     pub link_error: f32,
     /// Hierarchical: do not split elements smaller than this fraction of the scene's area.
-    #[arg(long, default_value_t = radiosity_defaults().min_element_area)]
+    #[arg(long, default_value_t = radiosity_defaults().min_element_area, allow_negative_numbers = true)]
     pub min_element_area: f32,
     /// Memory for cached rows of form factors, MiB.
     #[arg(long, default_value_t = radiosity_defaults().ff_cache_mb)]
