@@ -34,9 +34,13 @@ fn solve(scene: &Scene, settings: &RenderSettings) -> Solution {
 /// 2.3% (printed here, not asserted).
 #[test]
 fn furnace_through_the_hierarchy() {
-    for rho in [0.5f32, 0.9] {
+    for rho in [0.5f32, 0.9, 0.99] {
         let scene = furnace(rho);
-        let solution = solve(&scene, &hierarchical(1));
+        let mut settings = hierarchical(1);
+        // Coarser than the default: refining by B·F·A splits ever more as B grows towards
+        // 1/(1 − ρ), which the furnace does not need and the test's time would not bear.
+        settings.radiosity.link_error = 1e-3;
+        let solution = solve(&scene, &settings);
         let truth = 1.0 / (1.0 - rho);
         let worst = solution
             .state

@@ -99,14 +99,27 @@ impl Element {
     }
 }
 
-/// A link: `receiver` gathers `form_factor` × the radiosity of `source`; `spread` is how
-/// much the form factor varies over the receiver (what the oracle weighs). 16 bytes.
+/// A link: `receiver` gathers `form_factor` × the radiosity of `source`. 16 bytes.
 #[derive(Clone, Copy, Debug)]
 struct Link {
     receiver: u32,
     source: u32,
+    /// Visibility included.
     form_factor: f32,
-    spread: f32,
+    /// How much the form factor varies over the receiver (what the oracle weighs), as the
+    /// top half of an f32's bits: the oracle needs no more than its first digits.
+    spread: u16,
+    /// Point pairs found unblocked, of `PAIRS`.
+    open: u16,
+}
+
+impl Link {
+    fn spread(&self) -> f32 {
+        f32::from_bits((self.spread as u32) << 16)
+    }
+    fn visible(&self) -> f32 {
+        self.open as f32 / PAIRS as f32
+    }
 }
 
 /// The quadtrees and their light.
@@ -158,6 +171,82 @@ impl<'a> Hierarchy<'a> {
     }
 }
 
+/// The top half of an f32's bits (bfloat16): 8 bits of mantissa.
+fn half_bits(x: f32) -> u16 {
+    (x.to_bits() >> 16) as u16
+}
+
+/// For each leaf, how the form factors of the links that reach it — its own and its
+/// ancestors' — change when they are all taken at the leaf's own points: Σ F(leaf points,
+/// S)·V over Σ F̄(receiver points, S)·V. Taken at one point, the form factors to the sources of
+/// those links (a partition of what the point can see) sum to exactly that point's coverage;
+/// taken at the points of coarser receivers they drift near edges (leaves of the closed cube
+/// otherwise sum to between 0.91 and 1.5). Scaling a leaf's gathered light by the ratio gives
+/// every leaf its own points' coverage, so a closed scene neither loses nor creates light,
+/// while the share of each source stays the coarse link's. Elements that are not leaves get 1.
+fn leaf_scales(h: &Hierarchy, links: &[Link], seed: u64) -> Vec<f32> {
+    let n = h.elements.len();
+    // The links of each receiver, as ranges of `order`.
+    let mut start = vec![0u32; n + 1];
+    for l in links {
+        start[l.receiver as usize + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut order = vec![0u32; links.len()];
+    for (k, l) in links.iter().enumerate() {
+        let slot = &mut fill[l.receiver as usize];
+        order[*slot as usize] = k as u32;
+        *slot += 1;
+    }
+    let by_receiver = |e: u32| &order[start[e as usize] as usize..start[e as usize + 1] as usize];
+    let per_root: Vec<Vec<(u32, f32)>> = (0..h.patches.len() as u32)
+        .into_par_iter()
+        .map(|root| {
+            let mut out = Vec::new();
+            let mut chain = Vec::new();
+            let mut stack = vec![(root, 0usize)];
+            // Depth first; `chain` holds the links of the element's ancestors and its own.
+            while let Some((e, depth)) = stack.pop() {
+                chain.truncate(depth);
+                chain.extend_from_slice(by_receiver(e));
+                let el = &h.elements[e as usize];
+                if el.children != NONE {
+                    let depth = chain.len();
+                    stack.extend((el.children..el.children + 4).map(|c| (c, depth)));
+                    continue;
+                }
+                let points: [Vec3; PAIRS] = std::array::from_fn(|k| h.sample(e, k, seed));
+                let (mut coarse, mut own) = (0.0f64, 0.0f64);
+                for &k in &chain {
+                    let l = &links[k as usize];
+                    coarse += l.form_factor as f64;
+                    if l.receiver == e {
+                        own += l.form_factor as f64;
+                        continue;
+                    }
+                    let source = &h.elements[l.source as usize].corners;
+                    let f: f32 = points
+                        .iter()
+                        .map(|&x| point_to_polygon(x, el.normal, source))
+                        .sum();
+                    own += (f / PAIRS as f32 * l.visible()) as f64;
+                }
+                let scale = if coarse > 1e-9 { (own / coarse) as f32 } else { 1.0 };
+                out.push((e, scale));
+            }
+            out
+        })
+        .collect();
+    let mut scales = vec![1.0f32; n];
+    for (e, scale) in per_root.into_iter().flatten() {
+        scales[e as usize] = scale;
+    }
+    scales
+}
+
 /// Whether some corner of each element lies strictly in front of the other's plane.
 fn may_see(r: &Element, s: &Element) -> bool {
     let in_front = |a: &Element, b: &Element| {
@@ -168,18 +257,22 @@ fn may_see(r: &Element, s: &Element) -> bool {
 }
 
 impl Hierarchical {
-    /// The form factor of each (receiver, source) pair, visibility included, and how much it
-    /// varies over the receiver: the spread of the point form factors, or the whole form
-    /// factor where some point pairs are blocked and others not.
-    fn form_factors(
-        &self,
-        h: &Hierarchy,
-        sampler: &FormFactorSampler,
-        pairs: &[(u32, u32)],
-    ) -> Vec<(f32, f32)> {
+    /// The link of each (receiver, source) pair: its form factor, visibility included, and
+    /// how much it varies over the receiver (the spread of the point form factors, or the
+    /// whole form factor where some point pairs are blocked and others not).
+    fn links(&self, h: &Hierarchy, sampler: &FormFactorSampler, pairs: &[(u32, u32)]) -> Vec<Link> {
         let scene = sampler.scene();
         let seed = sampler.seed();
-        let mut out = vec![(0.0f32, 0.0f32); pairs.len()];
+        let mut out: Vec<Link> = pairs
+            .iter()
+            .map(|&(receiver, source)| Link {
+                receiver,
+                source,
+                form_factor: 0.0,
+                spread: 0,
+                open: PAIRS as u16,
+            })
+            .collect();
         out.par_chunks_mut(LINK_CHUNK)
             .zip(pairs.par_chunks(LINK_CHUNK))
             .for_each(|(out, pairs)| {
@@ -192,8 +285,9 @@ impl Hierarchical {
                         let f = point_to_polygon(h.sample(r, k, seed), re.normal, &se.corners);
                         (sum, lo, hi) = (sum + f, lo.min(f), hi.max(f));
                     }
-                    out[o] = (sum / PAIRS as f32, hi - lo);
-                    if out[o].0 <= 0.0 || !sampler.visibility() {
+                    out[o].form_factor = sum / PAIRS as f32;
+                    out[o].spread = half_bits(hi - lo);
+                    if out[o].form_factor <= 0.0 || !sampler.visibility() {
                         continue;
                     }
                     let (rp, sp) = (&h.patches[re.patch as usize], &h.patches[se.patch as usize]);
@@ -214,17 +308,18 @@ impl Hierarchical {
                 let mut blocked = vec![false; rays.len()];
                 sampler.accel().occluded_batch(&rays, &mut blocked);
                 sampler.rays.fetch_add(rays.len() as u64, Relaxed);
-                let mut open = vec![0u32; out.len()];
+                for &o in owners.iter().step_by(PAIRS) {
+                    out[o].open = 0;
+                }
                 for (&o, b) in owners.iter().zip(&blocked) {
-                    open[o] += u32::from(!b);
+                    out[o].open += u16::from(!b);
                 }
                 for &o in owners.iter().step_by(PAIRS) {
-                    let (f, spread) = out[o];
-                    let partly = open[o] > 0 && open[o] < PAIRS as u32;
-                    out[o] = (
-                        f * open[o] as f32 / PAIRS as f32,
-                        if partly { f.max(spread) } else { spread },
-                    );
+                    let l = &mut out[o];
+                    if l.open > 0 && l.open < PAIRS as u16 {
+                        l.spread = half_bits(l.form_factor.max(l.spread()));
+                    }
+                    l.form_factor *= l.visible();
                 }
             });
         out
@@ -242,15 +337,16 @@ impl Hierarchical {
         links: &mut Vec<Link>,
     ) {
         while !candidates.is_empty() {
-            let factors = self.form_factors(h, sampler, &candidates);
+            let evaluated = self.links(h, sampler, &candidates);
             let mut next = Vec::new();
-            for (&(r, s), &(f, spread)) in candidates.iter().zip(&factors) {
-                if f <= 0.0 {
+            for link in evaluated {
+                if link.form_factor <= 0.0 {
                     continue;
                 }
+                let (r, s) = (link.receiver, link.source);
                 let (re, se) = (h.elements[r as usize], h.elements[s as usize]);
                 // What the link gets wrong by carrying one value over the receiver.
-                let error = re.area * spread * h.radiance[s as usize].max_element();
+                let error = re.area * link.spread() * h.radiance[s as usize].max_element();
                 let split_receiver = re.area >= se.area;
                 let larger = if split_receiver { re } else { se };
                 if error > threshold && larger.area > min_area {
@@ -263,12 +359,7 @@ impl Hierarchical {
                         }
                     }
                 } else {
-                    links.push(Link {
-                        receiver: r,
-                        source: s,
-                        form_factor: f,
-                        spread,
-                    });
+                    links.push(link);
                 }
             }
             candidates = next;
@@ -276,10 +367,16 @@ impl Hierarchical {
     }
 }
 
-/// Gathers over the links, pushes the gathered radiance down each quadtree and pulls the
-/// radiosity back up. Returns each element's incident radiance (its own and its ancestors'
-/// gathering) and the new radiance of every element.
-fn sweep(h: &Hierarchy, links: &[Link], sources: &[Color]) -> (Vec<Color>, Vec<Color>) {
+/// Gathers over the links, pushes the gathered radiance down each quadtree (scaled at the
+/// leaves by `scales`, see `leaf_scales`) and pulls the radiosity back up. Returns each
+/// element's incident radiance (its own and its ancestors' gathering) and the new radiance
+/// of every element.
+fn sweep(
+    h: &Hierarchy,
+    links: &[Link],
+    scales: &[f32],
+    sources: &[Color],
+) -> (Vec<Color>, Vec<Color>) {
     let mut gathered = vec![Vec3::ZERO; h.elements.len()];
     for l in links {
         gathered[l.receiver as usize] += sources[l.source as usize] * l.form_factor;
@@ -287,7 +384,7 @@ fn sweep(h: &Hierarchy, links: &[Link], sources: &[Color]) -> (Vec<Color>, Vec<C
     let mut incident = vec![Vec3::ZERO; h.elements.len()];
     let mut radiance = vec![Vec3::ZERO; h.elements.len()];
     for root in 0..h.patches.len() as u32 {
-        push_pull(h, root, Vec3::ZERO, &gathered, &mut incident, &mut radiance);
+        push_pull(h, root, Vec3::ZERO, &gathered, scales, &mut incident, &mut radiance);
     }
     (incident, radiance)
 }
@@ -297,21 +394,24 @@ fn push_pull(
     e: u32,
     from_above: Color,
     gathered: &[Color],
+    scales: &[f32],
     incident: &mut [Color],
     radiance: &mut [Color],
 ) -> Color {
     let el = &h.elements[e as usize];
     let total = from_above + gathered[e as usize];
-    incident[e as usize] = total;
     let b = if el.children == NONE {
         let p = &h.patches[el.patch as usize];
+        let total = total * scales[e as usize];
+        incident[e as usize] = total;
         p.emitted + p.albedo * total
     } else {
+        incident[e as usize] = total;
         let mut sum = Vec3::ZERO;
         let mut area = 0.0;
         for c in el.children..el.children + 4 {
             let a = h.elements[c as usize].area;
-            sum += push_pull(h, c, total, gathered, incident, radiance) * a;
+            sum += push_pull(h, c, total, gathered, scales, incident, radiance) * a;
             area += a;
         }
         if area > 0.0 {
@@ -365,6 +465,7 @@ impl RadiositySolver for Hierarchical {
             .collect();
         let mut links = Vec::new();
         self.refine(&mut h, sampler, initial, threshold, min_area, &mut links);
+        let mut scales = leaf_scales(&h, &links, sampler.seed());
 
         let mut light = PatchLight::default();
         let mut incident = vec![Vec3::ZERO; h.elements.len()];
@@ -374,7 +475,7 @@ impl RadiositySolver for Hierarchical {
         loop {
             // Sweeps over the fixed links until the change of power is under the tolerance.
             loop {
-                let (inc, radiance) = sweep(&h, &links, &h.radiance);
+                let (inc, radiance) = sweep(&h, &links, &scales, &h.radiance);
                 let before = power(&h.radiance[..patches.len()]);
                 let change = (power(&radiance[..patches.len()]) - before).abs();
                 h.radiance = radiance;
@@ -410,7 +511,7 @@ impl RadiositySolver for Hierarchical {
             // Refine the links that now carry too much (their sources have brightened).
             let (keep, again): (Vec<Link>, Vec<Link>) = links.iter().partition(|l| {
                 let re = &h.elements[l.receiver as usize];
-                re.area * l.spread * h.radiance[l.source as usize].max_element() <= threshold
+                re.area * l.spread() * h.radiance[l.source as usize].max_element() <= threshold
             });
             if again.is_empty() {
                 break;
@@ -418,6 +519,7 @@ impl RadiositySolver for Hierarchical {
             links = keep;
             let candidates = again.iter().map(|l| (l.receiver, l.source)).collect();
             self.refine(&mut h, sampler, candidates, threshold, min_area, &mut links);
+            scales = leaf_scales(&h, &links, sampler.seed());
             incident.resize(h.elements.len(), Vec3::ZERO);
         }
 
@@ -427,7 +529,7 @@ impl RadiositySolver for Hierarchical {
             .iter()
             .map(|e| patches[e.patch as usize].emitted)
             .collect();
-        let (direct, _) = sweep(&h, &links, &emission);
+        let (direct, _) = sweep(&h, &links, &scales, &emission);
         light.radiance = h.radiance[..patches.len()].to_vec();
         light.incident = area_means(&h, &incident);
         light.incident_direct = area_means(&h, &direct);
