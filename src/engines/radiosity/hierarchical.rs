@@ -3,17 +3,19 @@
 //! Each input patch is the root of a quadtree of elements. Light is carried by links between
 //! elements: a link from source S to receiver R holds the form factor F_RS, so that R gathers
 //! F_RS · B_S. Links start between every pair of input patches that can see each other and
-//! are refined by an error oracle on the power they carry, A_R · F_RS · B_S ("BF
-//! refinement"): above `link_error` times the largest emitted power, the larger of the two
-//! elements (if it is still larger than `min_element_area`) is split into four and the link
-//! replaced by links to its children. Between refinements, Jacobi sweeps over the fixed links
-//! gather at every element, push the gathered light down the quadtrees and pull the
-//! radiosity back up, until the change of power falls under the tolerance; then the links
-//! are refined again with the new radiosities, until none needs refining.
+//! are refined while the light a link gets wrong by carrying one value over its receiver,
+//! A_R · (spread of F over R) · B_S, exceeds `link_error` times the largest emitted power:
+//! the larger of the two elements (if it is still larger than `min_element_area`) is split
+//! into four and the link replaced by links to its children. Between refinements, Jacobi
+//! sweeps over the fixed links gather at every element, push the gathered light down the
+//! quadtrees and pull the radiosity back up, until the change of power falls under the
+//! tolerance; then the links are refined again with the new radiosities, until none needs it.
 //!
 //! A link's form factor is the exact point-to-polygon form factor averaged over four points of
 //! the receiver, times the fraction of four point pairs an occlusion ray finds unblocked; the
-//! rays of a refinement pass go to the Accel in batches.
+//! rays of a refinement pass go to the Accel in batches. Each leaf's gathered light is scaled
+//! so that its links' form factors are those of its own points (`leaf_scales`): a closed box
+//! then neither loses nor creates light.
 //!
 //! Parameters (defaults in `RadiositySettings`): `--link-error` (1e-4), `--min-element-area`
 //! (1e-5 of the scene's area), `--radiosity-tolerance`.
