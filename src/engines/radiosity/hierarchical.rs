@@ -236,7 +236,11 @@ fn leaf_scales(h: &Hierarchy, links: &[Link], seed: u64) -> Vec<f32> {
                         .sum();
                     own += (f / PAIRS as f32 * l.visible()) as f64;
                 }
-                let scale = if coarse > 1e-9 { (own / coarse) as f32 } else { 1.0 };
+                let scale = if coarse > 1e-9 {
+                    (own / coarse) as f32
+                } else {
+                    1.0
+                };
                 out.push((e, scale));
             }
             out
@@ -386,7 +390,15 @@ fn sweep(
     let mut incident = vec![Vec3::ZERO; h.elements.len()];
     let mut radiance = vec![Vec3::ZERO; h.elements.len()];
     for root in 0..h.patches.len() as u32 {
-        push_pull(h, root, Vec3::ZERO, &gathered, scales, &mut incident, &mut radiance);
+        push_pull(
+            h,
+            root,
+            Vec3::ZERO,
+            &gathered,
+            scales,
+            &mut incident,
+            &mut radiance,
+        );
     }
     (incident, radiance)
 }
