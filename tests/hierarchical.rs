@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{backends, furnace};
+use common::{backends, furnace, own_scene, worst_relative_error};
 use trilux::accel::{self, AccelOptions};
 use trilux::engines::radiosity::{RadiositySettings, Solution, SolverKind};
 use trilux::engines::RenderSettings;
@@ -40,12 +40,7 @@ fn furnace_through_the_hierarchy() {
         settings.radiosity.link_error = 1e-3;
         let solution = solve(&scene, &settings);
         let truth = 1.0 / (1.0 - rho);
-        let worst = solution
-            .state
-            .radiance
-            .iter()
-            .map(|l| (l.x / truth - 1.0).abs())
-            .fold(0.0f32, f32::max);
+        let worst = worst_relative_error(&solution.state.radiance, truth);
         println!(
             "ρ = {rho}: {}, {} sweeps, stop {:?}, worst error {:.4}%",
             solution.solver_report,
@@ -61,10 +56,7 @@ fn furnace_through_the_hierarchy() {
 /// patch, the hierarchical solution against the progressive solver's converged one.
 #[test]
 fn cornell_box_agrees_with_the_progressive_solver() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join("cornell_box_diffuse_sphere.obj");
-    let scene = Scene::load(&path).expect("loads");
+    let scene = own_scene("cornell_box_diffuse_sphere.obj");
     let mut progressive = hierarchical(2);
     progressive.radiosity.solver = SolverKind::Progressive;
     progressive.num_shadow_samples = 1;
@@ -104,10 +96,7 @@ fn cornell_box_agrees_with_the_progressive_solver() {
 /// Embree and the BVH answer every visibility ray alike, so the solutions are identical.
 #[test]
 fn both_accels_give_the_same_hierarchical_solution() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join("cornell_box_diffuse_sphere.obj");
-    let scene = Scene::load(&path).expect("loads");
+    let scene = own_scene("cornell_box_diffuse_sphere.obj");
     let mut settings = hierarchical(1);
     settings.num_shadow_samples = 1;
     let solutions: Vec<Vec<_>> = backends()

@@ -7,7 +7,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{backends, course_dir, furnace};
+use common::{backends, course_dir, furnace, worst_relative_error};
 use trilux::accel::{self, Accel, AccelOptions};
 use trilux::engines::radiosity::mesh::QuadMesh;
 use trilux::engines::radiosity::patch::patches;
@@ -174,16 +174,8 @@ fn furnace_patches_reach_le_over_one_minus_rho() {
         let solution = solve(&scene, accel.as_ref(), &settings);
         let truth = 1.0 / (1.0 - rho);
         let shown = solution.display_radiance();
-        let worst_solved = solution
-            .state
-            .radiance
-            .iter()
-            .map(|l| (l.x / truth - 1.0).abs())
-            .fold(0.0f32, f32::max);
-        let worst_shown = shown
-            .iter()
-            .map(|l| (l.x / truth - 1.0).abs())
-            .fold(0.0f32, f32::max);
+        let worst_solved = worst_relative_error(&solution.state.radiance, truth);
+        let worst_shown = worst_relative_error(&shown, truth);
         println!(
             "ρ = {rho}: {} patches, {} shots, stop {:?}, residual {:.2e}, worst error solved {:.3}%, shown (with ambient) {:.3}%",
             solution.patches.len(),

@@ -7,7 +7,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{backends, course_scenes, furnace, square_light};
+use common::{backends, course_scenes, furnace, square_light, worst_relative_error};
 use trilux::accel::{self, AccelOptions};
 use trilux::engines::radiosity::solver::{Relaxation, Stop};
 use trilux::engines::radiosity::{RadiositySettings, Solution};
@@ -53,12 +53,7 @@ fn stiff_radiosity_furnace_converges_with_automatic_over_relaxation() {
                 ..RenderSettings::default()
             };
             let solution = Solution::solve(&scene, accel.as_ref(), &settings, |_| {});
-            let worst = solution
-                .state
-                .radiance
-                .iter()
-                .map(|l| (l.x / truth - 1.0).abs())
-                .fold(0.0f32, f32::max);
+            let worst = worst_relative_error(&solution.state.radiance, truth);
             println!(
                 "{kind}: ρ = {rho}, {relaxation:?}: {} shots, {:?}, worst patch {:.3}%",
                 solution.state.iterations,

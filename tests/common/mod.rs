@@ -8,6 +8,15 @@ use trilux::accel::{Accel, AccelKind, PrimHit};
 use trilux::geometry::{faces_ray, intersect_quad, intersect_triangle, Ray, Shape};
 use trilux::scene::{PrimKind, PrimRef, Scene};
 
+/// The largest relative error of the red channel of `values` against `truth` (the furnaces
+/// are grey, so one channel tells).
+pub fn worst_relative_error(values: &[trilux::scene::Color], truth: f32) -> f32 {
+    values
+        .iter()
+        .map(|l| (l.x / truth - 1.0).abs())
+        .fold(0.0f32, f32::max)
+}
+
 /// The course's scene folder, beside the checkout (present in CI).
 pub fn course_dir() -> Option<PathBuf> {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/course-scenes");
@@ -27,7 +36,18 @@ pub fn course_scenes() -> Vec<PathBuf> {
 
 /// The project's own scenes in `scenes/`.
 pub fn own_scenes() -> Vec<PathBuf> {
-    obj_files(&PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes"))
+    obj_files(&own_scene_dir())
+}
+
+/// The project's own scene folder, `scenes/`.
+pub fn own_scene_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+/// One of `scenes/`, loaded.
+pub fn own_scene(name: &str) -> Scene {
+    let path = own_scene_dir().join(name);
+    Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 fn obj_files(dir: &std::path::Path) -> Vec<PathBuf> {

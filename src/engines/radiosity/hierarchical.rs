@@ -60,6 +60,8 @@ struct Element {
     corners: [Vec3; 4],
     area: f32,
     normal: Vec3,
+    /// The bilinear point at (0.5, 0.5).
+    centre: Vec3,
     /// The first of four consecutive children, or `NONE` for a leaf.
     children: u32,
 }
@@ -71,18 +73,14 @@ impl Element {
             corners,
             area: 0.5 * quad_normal(&corners).length(),
             normal,
+            centre: bilinear(&corners, 0.5, 0.5),
             children: NONE,
         }
     }
 
     /// The bilinear point at (s, t) ∈ [0,1]².
     fn point(&self, s: f32, t: f32) -> Vec3 {
-        let [a, b, c, d] = self.corners;
-        (a * (1.0 - s) + b * s) * (1.0 - t) + (d * (1.0 - s) + c * s) * t
-    }
-
-    fn centre(&self) -> Vec3 {
-        self.point(0.5, 0.5)
+        bilinear(&self.corners, s, t)
     }
 
     /// Four children along the midpoints of the edges (a triangle, stored as [a, b, c, c],
@@ -91,7 +89,7 @@ impl Element {
         let [a, b, c, d] = self.corners;
         let mid = |p: Vec3, q: Vec3| (p + q) * 0.5;
         let (ab, bc, cd, da) = (mid(a, b), mid(b, c), mid(c, d), mid(d, a));
-        let m = self.centre();
+        let m = self.centre;
         [
             [a, ab, m, da],
             [ab, b, bc, m],
@@ -101,7 +99,13 @@ impl Element {
     }
 }
 
-/// A link: `receiver` gathers `form_factor` × the radiosity of `source`. 16 bytes.
+fn bilinear(corners: &[Vec3; 4], s: f32, t: f32) -> Vec3 {
+    let [a, b, c, d] = *corners;
+    (a * (1.0 - s) + b * s) * (1.0 - t) + (d * (1.0 - s) + c * s) * t
+}
+
+/// A link: `receiver` gathers `form_factor` × the radiosity of `source`. 16 bytes (checked
+/// below).
 #[derive(Clone, Copy, Debug)]
 struct Link {
     receiver: u32,
@@ -114,6 +118,8 @@ struct Link {
     /// Point pairs found unblocked, of `PAIRS`.
     open: u16,
 }
+
+const _: () = assert!(std::mem::size_of::<Link>() == 16);
 
 impl Link {
     fn spread(&self) -> f32 {
@@ -256,7 +262,7 @@ fn leaf_scales(h: &Hierarchy, links: &[Link], seed: u64) -> Vec<f32> {
 /// Whether some corner of each element lies strictly in front of the other's plane.
 fn may_see(r: &Element, s: &Element) -> bool {
     let in_front = |a: &Element, b: &Element| {
-        let c = a.centre();
+        let c = a.centre;
         b.corners.iter().any(|&p| (p - c).dot(a.normal) > 0.0)
     };
     in_front(r, s) && in_front(s, r)
@@ -286,9 +292,10 @@ impl Hierarchical {
                 let mut owners: Vec<usize> = Vec::new();
                 for (o, &(r, s)) in pairs.iter().enumerate() {
                     let (re, se) = (&h.elements[r as usize], &h.elements[s as usize]);
+                    let xs: [Vec3; PAIRS] = std::array::from_fn(|k| h.sample(r, k, seed));
                     let (mut sum, mut lo, mut hi) = (0.0f32, f32::INFINITY, 0.0f32);
-                    for k in 0..PAIRS {
-                        let f = point_to_polygon(h.sample(r, k, seed), re.normal, &se.corners);
+                    for &x in &xs {
+                        let f = point_to_polygon(x, re.normal, &se.corners);
                         (sum, lo, hi) = (sum + f, lo.min(f), hi.max(f));
                     }
                     out[o].form_factor = sum / PAIRS as f32;
@@ -300,8 +307,7 @@ impl Hierarchical {
                     // Pair receiver point k with a source point whose index is shifted per
                     // link, so that no stratum pairs only with its mirror image.
                     let shift = 1 + (r ^ s) as usize;
-                    for k in 0..PAIRS {
-                        let x = h.sample(r, k, seed);
+                    for (k, &x) in xs.iter().enumerate() {
                         let y = h.sample(s, (k + shift) % PAIRS, seed);
                         let from = on_primitive(scene, rp, x, y - x);
                         rays.push(shadow_ray(from, on_primitive(scene, sp, y, x - y)));
@@ -375,8 +381,8 @@ impl Hierarchical {
 
 /// Gathers over the links, pushes the gathered radiance down each quadtree (scaled at the
 /// leaves by `scales`, see `leaf_scales`) and pulls the radiosity back up. Returns each
-/// element's incident radiance (its own and its ancestors' gathering) and the new radiance
-/// of every element.
+/// element's incident radiance (at a leaf its own and its ancestors' gathering; above, the
+/// area mean of its leaves') and the new radiance of every element.
 fn sweep(
     h: &Hierarchy,
     links: &[Link],
@@ -387,55 +393,57 @@ fn sweep(
     for l in links {
         gathered[l.receiver as usize] += sources[l.source as usize] * l.form_factor;
     }
-    let mut incident = vec![Vec3::ZERO; h.elements.len()];
-    let mut radiance = vec![Vec3::ZERO; h.elements.len()];
+    let mut light = Light {
+        incident: vec![Vec3::ZERO; h.elements.len()],
+        radiance: vec![Vec3::ZERO; h.elements.len()],
+    };
     for root in 0..h.patches.len() as u32 {
-        push_pull(
-            h,
-            root,
-            Vec3::ZERO,
-            &gathered,
-            scales,
-            &mut incident,
-            &mut radiance,
-        );
+        push_pull(h, root, Vec3::ZERO, &gathered, scales, &mut light);
     }
-    (incident, radiance)
+    (light.incident, light.radiance)
 }
 
+/// Per element: incident and outgoing radiance.
+struct Light {
+    incident: Vec<Color>,
+    radiance: Vec<Color>,
+}
+
+/// Pushes `from_above` plus `e`'s own gathering down to the leaves below `e`, and returns
+/// the area means of their (incident, outgoing) radiance.
 fn push_pull(
     h: &Hierarchy,
     e: u32,
     from_above: Color,
     gathered: &[Color],
     scales: &[f32],
-    incident: &mut [Color],
-    radiance: &mut [Color],
-) -> Color {
+    light: &mut Light,
+) -> (Color, Color) {
     let el = &h.elements[e as usize];
     let total = from_above + gathered[e as usize];
-    let b = if el.children == NONE {
+    let (incident, radiance) = if el.children == NONE {
         let p = &h.patches[el.patch as usize];
         let total = total * scales[e as usize];
-        incident[e as usize] = total;
-        p.emitted + p.albedo * total
+        (total, p.emitted + p.albedo * total)
     } else {
-        incident[e as usize] = total;
-        let mut sum = Vec3::ZERO;
+        let (mut incident, mut radiance) = (Vec3::ZERO, Vec3::ZERO);
         let mut area = 0.0;
         for c in el.children..el.children + 4 {
             let a = h.elements[c as usize].area;
-            sum += push_pull(h, c, total, gathered, scales, incident, radiance) * a;
+            let (i, b) = push_pull(h, c, total, gathered, scales, light);
+            incident += i * a;
+            radiance += b * a;
             area += a;
         }
         if area > 0.0 {
-            sum * area.recip()
+            (incident * area.recip(), radiance * area.recip())
         } else {
-            Vec3::ZERO
+            (total, Vec3::ZERO)
         }
     };
-    radiance[e as usize] = b;
-    b
+    light.incident[e as usize] = incident;
+    light.radiance[e as usize] = radiance;
+    (incident, radiance)
 }
 
 impl RadiositySolver for Hierarchical {
@@ -482,7 +490,8 @@ impl RadiositySolver for Hierarchical {
         let mut scales = leaf_scales(&h, &links, sampler.seed());
 
         let mut light = PatchLight::default();
-        let mut incident = vec![Vec3::ZERO; h.elements.len()];
+        // Set by every sweep; the loop below makes at least one.
+        let mut incident;
         let mut stop = Stop::Converged;
         let mut sweeps = 0u64;
         let mut rounds = 0;
@@ -534,7 +543,6 @@ impl RadiositySolver for Hierarchical {
             let candidates = again.iter().map(|l| (l.receiver, l.source)).collect();
             self.refine(&mut h, sampler, candidates, threshold, min_area, &mut links);
             scales = leaf_scales(&h, &links, sampler.seed());
-            incident.resize(h.elements.len(), Vec3::ZERO);
         }
 
         // What came straight from the emitters: one gather of the emission alone.
@@ -545,8 +553,8 @@ impl RadiositySolver for Hierarchical {
             .collect();
         let (direct, _) = sweep(&h, &links, &scales, &emission);
         light.radiance = h.radiance[..patches.len()].to_vec();
-        light.incident = area_means(&h, &incident);
-        light.incident_direct = area_means(&h, &direct);
+        light.incident = incident[..patches.len()].to_vec();
+        light.incident_direct = direct[..patches.len()].to_vec();
         light.undistributed = vec![Vec3::ZERO; patches.len()];
         light.iterations = sweeps;
         let leaves = h.elements.iter().filter(|e| e.children == NONE).count();
@@ -565,30 +573,4 @@ impl RadiositySolver for Hierarchical {
             ),
         }
     }
-}
-
-/// The area mean over each input patch's leaves of a per-element value that inner elements
-/// pass down (incident radiance).
-fn area_means(h: &Hierarchy, values: &[Color]) -> Vec<Color> {
-    fn mean(h: &Hierarchy, e: u32, values: &[Color]) -> Color {
-        let el = &h.elements[e as usize];
-        if el.children == NONE {
-            return values[e as usize];
-        }
-        let mut sum = Vec3::ZERO;
-        let mut area = 0.0;
-        for c in el.children..el.children + 4 {
-            let a = h.elements[c as usize].area;
-            sum += mean(h, c, values) * a;
-            area += a;
-        }
-        if area > 0.0 {
-            sum * area.recip()
-        } else {
-            values[e as usize]
-        }
-    }
-    (0..h.patches.len() as u32)
-        .map(|p| mean(h, p, values))
-        .collect()
 }
