@@ -220,7 +220,7 @@ fn plan_reports_what_the_scene_needs() {
     ));
     assert!(
         l.contains(
-            "radiosity mesh: yes (224 patches; visibility: one occlusion ray per point pair)"
+            "radiosity mesh: yes (224 patches, progressive solver; visibility: one occlusion ray per point pair)"
         ),
         "{l}"
     );

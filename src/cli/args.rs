@@ -315,8 +315,9 @@ pub struct RadiosityArgs {
     /// fixed ω in [1, 2), 1 being plain progressive refinement.
     #[arg(long, default_value_t = radiosity_defaults().relaxation)]
     pub radiosity_relaxation: Relaxation,
-    /// The solver: progressive refinement (shooting), or hierarchical radiosity (links
-    /// between element quadtrees, refined by the power they carry).
+    /// The solver: progressive refinement (shooting), hierarchical radiosity with
+    /// clustering (links between clusters and element quadtrees, refined by the power they
+    /// carry), or auto: hierarchical above 5,000 input patches, progressive up to it.
     #[arg(long, default_value_t = radiosity_defaults().solver)]
     pub radiosity_solver: SolverKind,
     /// Hierarchical: refine a link carrying more than this fraction of the largest emitted
@@ -326,6 +327,10 @@ pub struct RadiosityArgs {
     /// Hierarchical: do not split elements smaller than this fraction of the scene's area.
     #[arg(long, default_value_t = radiosity_defaults().min_element_area, allow_negative_numbers = true)]
     pub min_element_area: f32,
+    /// Hierarchical: with more input patches than this, start linking from the root
+    /// cluster; up to it, from every pair of patches.
+    #[arg(long, value_name = "PATCHES", default_value_t = radiosity_defaults().cluster_above)]
+    pub cluster_above: usize,
     /// Memory for cached rows of form factors, MiB.
     #[arg(long, default_value_t = radiosity_defaults().ff_cache_mb)]
     pub ff_cache_mb: usize,
@@ -405,6 +410,7 @@ impl RadiosityArgs {
             solver: self.radiosity_solver,
             link_error: self.link_error,
             min_element_area: self.min_element_area,
+            cluster_above: self.cluster_above,
             iterations: self.radiosity_iterations,
             max_shots_per_patch: self.radiosity_max_shots_per_patch,
             relaxation: self.radiosity_relaxation,

@@ -19,7 +19,7 @@ use std::sync::atomic::Ordering::Relaxed;
 
 pub use display::render_solution;
 use patch::Patch;
-use solver::{FormFactorSampler, PatchLight, RadiositySolver, SolveLimits, Stop};
+use solver::{FormFactorSampler, PatchLight, RadiositySolver, SolveLimits, Step, Stop};
 
 use super::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSettings, Rendered};
 use crate::accel::Accel;
@@ -51,6 +51,10 @@ pub struct Solution {
     pub solver_report: String,
     /// Rounds of adaptive subdivision done.
     pub adaptive_rounds: u32,
+    /// The solver that ran (`--radiosity-solver auto` resolved).
+    pub solver: SolverKind,
+    /// Patches that coincide with an earlier one (`patch::twins`), solved as one.
+    pub twins: usize,
 }
 
 /// Values over the patches of a solution, looked up at hits by `Solution::sample`.
@@ -82,16 +86,17 @@ pub fn convex_enclosure(scene: &Scene) -> bool {
     })
 }
 
-/// The solver the settings ask for (progressive refinement: the one there is so far).
-fn solver(r: &RadiositySettings) -> Box<dyn RadiositySolver> {
-    match r.solver {
-        SolverKind::Progressive => Box::new(progressive::Progressive {
-            cache_bytes: r.ff_cache_mb << 20,
-            relaxation: r.relaxation,
-        }),
+/// The solver of `kind` (resolved from `--radiosity-solver`) with the settings' parameters.
+fn solver(r: &RadiositySettings, kind: SolverKind) -> Box<dyn RadiositySolver> {
+    match kind {
         SolverKind::Hierarchical => Box::new(hierarchical::Hierarchical {
             link_error: r.link_error,
             min_element_area: r.min_element_area,
+            cluster_above: r.cluster_above,
+        }),
+        _ => Box::new(progressive::Progressive {
+            cache_bytes: r.ff_cache_mb << 20,
+            relaxation: r.relaxation,
         }),
     }
 }
@@ -106,6 +111,8 @@ impl Solution {
     ) -> Solution {
         let r = &settings.radiosity;
         let mut mesh = QuadMesh::from_scene(scene, r.tessellation());
+        // `auto` chooses by the scene's own faces, before --subdivide.
+        let kind = r.solver.resolve(mesh.leaves.len());
         mesh.subdivide(r.subdivide);
         let (visibility, visibility_reason) = if settings.num_shadow_samples == 0 {
             (false, "off (-num_shadow_samples 0)")
@@ -118,10 +125,19 @@ impl Solution {
         let mut round = 0;
         loop {
             let patches = patch::patches(scene, &mesh);
+            // Coincident twins take no part: the solvers see them with no area.
+            let twin_of = patch::twins(&patches);
+            let twins = twin_of.iter().filter(|&&t| t != NONE).count();
+            let mut solved_patches = patches.clone();
+            for (p, &t) in solved_patches.iter_mut().zip(&twin_of) {
+                if t != NONE {
+                    p.area = 0.0;
+                }
+            }
             let sampler = FormFactorSampler::new(
                 scene,
                 accel,
-                &patches,
+                &solved_patches,
                 r.num_form_factor_samples.max(1),
                 visibility,
                 settings.seed,
@@ -132,14 +148,15 @@ impl Solution {
                 cap: r.max_shots_per_patch.saturating_mul(patches.len() as u64),
                 log: r.log_convergence,
             };
-            let solved = solver(r).solve(&sampler, &limits, &on_progress);
-            let (state, stop) = (solved.light, solved.stop);
+            let solved = solver(r, kind).solve(&sampler, &limits, &on_progress);
+            let (mut state, stop) = (solved.light, solved.stop);
+            state.copy_twins(&twin_of);
             rays += sampler.rays.load(Relaxed);
             let mut patch_of_face = vec![NONE; mesh.faces.len()];
             for (k, p) in patches.iter().enumerate() {
                 patch_of_face[p.face as usize] = k as u32;
             }
-            let ambient = solver::ambient(&patches, &state.undistributed);
+            let ambient = solver::ambient(&solved_patches, &state.undistributed);
             let solution = Solution {
                 mesh,
                 patches,
@@ -152,6 +169,8 @@ impl Solution {
                 rays,
                 solver_report: solved.report,
                 adaptive_rounds: round,
+                solver: kind,
+                twins,
             };
             let Some(threshold) = r.adaptive_threshold else {
                 return solution;
@@ -466,7 +485,8 @@ impl Engine for RadiosityEngine {
 /// What a radiosity solve builds, for `--plan`: the mesh (its patches before adaptive
 /// subdivision, and whether form factors cast visibility rays) and the form-factor cache.
 pub fn mesh_plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
-    let patches = planned_patches(scene, &settings.radiosity);
+    let input_patches = planned_input_patches(scene, &settings.radiosity);
+    let patches = input_patches.saturating_mul(4u64.saturating_pow(settings.radiosity.subdivide));
     let visibility = if settings.num_shadow_samples == 0 {
         "off (-num_shadow_samples 0)"
     } else if convex_enclosure(scene) {
@@ -474,14 +494,19 @@ pub fn mesh_plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
     } else {
         "one occlusion ray per point pair"
     };
-    let cache = patches
-        .saturating_mul(patches)
-        .saturating_mul(4)
-        .min((settings.radiosity.ff_cache_mb as u64).saturating_mul(1 << 20));
+    let solver = settings.radiosity.solver.resolve(input_patches as usize);
+    // Only the progressive solver caches rows of form factors.
+    let cache = match solver {
+        SolverKind::Progressive => patches
+            .saturating_mul(patches)
+            .saturating_mul(4)
+            .min((settings.radiosity.ff_cache_mb as u64).saturating_mul(1 << 20)),
+        _ => 0,
+    };
     EnginePlan {
         structures: vec![(
             "radiosity mesh",
-            format!("yes ({patches} patches; visibility: {visibility})"),
+            format!("yes ({patches} patches, {solver} solver; visibility: {visibility})"),
         )],
         memory: vec![
             ("radiosity mesh", patches.saturating_mul(PATCH_BYTES)),
@@ -490,10 +515,11 @@ pub fn mesh_plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
     }
 }
 
-/// Patches of the radiosity mesh: every primitive's top-level faces, times 4 per subdivision.
-fn planned_patches(scene: &Scene, r: &RadiositySettings) -> u64 {
+/// Input patches of the radiosity mesh: every primitive's top-level faces (each
+/// `--subdivide` makes four of one).
+fn planned_input_patches(scene: &Scene, r: &RadiositySettings) -> u64 {
     let tessellation = r.tessellation();
-    let top = scene.quads.len() as u64
+    scene.quads.len() as u64
         + scene.triangles.len() as u64
         + scene
             .shapes
@@ -502,8 +528,7 @@ fn planned_patches(scene: &Scene, r: &RadiositySettings) -> u64 {
                 let (cols, rows) = s.shape.grid(&tessellation);
                 s.shape.part_count() as u64 * cols as u64 * rows as u64
             })
-            .sum::<u64>();
-    top.saturating_mul(4u64.saturating_pow(r.subdivide))
+            .sum::<u64>()
 }
 
 impl Solution {
@@ -536,21 +561,29 @@ impl Solution {
     pub fn summary(&self, settings: &RenderSettings) -> String {
         let r = &settings.radiosity;
         let state = &self.state;
+        let steps = match self.solver {
+            SolverKind::Hierarchical => "sweeps",
+            _ => "shots",
+        };
         let stop = match self.stop {
             Stop::Converged => format!("converged to tolerance {:.1e}", r.tolerance),
-            Stop::Iterations => format!("stopped after {} shots as asked", state.iterations),
+            Stop::Iterations => format!("stopped after {} {steps} as asked", state.iterations),
             Stop::NoLight => "nothing emits".to_string(),
-            Stop::Interrupted => format!("interrupted after {} shots", state.iterations),
+            Stop::Interrupted => format!("interrupted after {} {steps}", state.iterations),
             Stop::Cap => String::new(),
         };
-        let adaptive = if self.adaptive_rounds > 0 {
+        let mut mesh_notes = if self.adaptive_rounds > 0 {
             format!(", {} adaptive rounds", self.adaptive_rounds)
         } else {
             String::new()
         };
+        if self.twins > 0 {
+            mesh_notes += &format!(" ({} coincident twins solved as one)", self.twins);
+        }
         format!(
-            "radiosity: {} patches{adaptive}, {} shots, residual {:.3e}{}{stop}; visibility {}; {} visibility rays; {}",
+            "radiosity: {} patches{mesh_notes}, {} solver, {} {steps}, residual {:.3e}{}{stop}; visibility {}; {} visibility rays; {}",
             self.patches.len(),
+            self.solver,
             state.iterations,
             state.residual,
             if stop.is_empty() { "" } else { ", " },
@@ -570,16 +603,23 @@ impl Solution {
         ))
     }
 
-    /// `--log-convergence`: one CSV line per shot.
+    /// `--log-convergence`: one CSV line per shot (progressive) or sweep (hierarchical).
     pub fn convergence_csv(&self) -> String {
         use std::fmt::Write;
-        let mut csv = String::from("shot,patch,residual,seconds,rays\n");
+        let mut csv = String::from(match self.solver {
+            SolverKind::Hierarchical => "sweep,round,links,elements,residual,seconds,rays\n",
+            _ => "shot,patch,residual,seconds,rays\n",
+        });
         for r in &self.state.log {
-            let _ = writeln!(
-                csv,
-                "{},{},{:.6e},{:.6},{}",
-                r.shot, r.patch, r.residual, r.seconds, r.rays
-            );
+            let _ = match r.step {
+                Step::Shot { patch } => write!(csv, "{},{patch}", r.shot),
+                Step::Sweep {
+                    round,
+                    links,
+                    elements,
+                } => write!(csv, "{},{round},{links},{elements}", r.shot),
+            };
+            let _ = writeln!(csv, ",{:.6e},{:.6},{}", r.residual, r.seconds, r.rays);
         }
         csv
     }

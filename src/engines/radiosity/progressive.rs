@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use super::settings::Relaxation;
 use super::solver::{
-    FormFactorSampler, PatchLight, RadiositySolver, ShotRecord, SolveLimits, Solved, Stop,
+    FormFactorSampler, PatchLight, RadiositySolver, ShotRecord, SolveLimits, Solved, Step, Stop,
 };
 use crate::geometry::Vec3;
 use crate::scene::Color;
@@ -143,7 +143,7 @@ impl Progressive {
             if limits.log {
                 s.log.push(ShotRecord {
                     shot: s.iterations,
-                    patch: best as u32,
+                    step: Step::Shot { patch: best as u32 },
                     residual: s.residual,
                     seconds: start.elapsed().as_secs_f64(),
                     rays: sampler.rays.load(Relaxed),

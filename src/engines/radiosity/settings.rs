@@ -46,7 +46,8 @@ pub struct RadiositySettings {
     pub display: Display,
     /// Write the solved patches to this PLY file (`--export-radiosity`, default: none).
     pub export: Option<std::path::PathBuf>,
-    /// Which solver (`--radiosity-solver`, default progressive).
+    /// Which solver (`--radiosity-solver`, default auto: hierarchical above
+    /// `HIERARCHICAL_ABOVE` input patches, progressive up to it).
     pub solver: SolverKind,
     /// Hierarchical: refine a link that carries more than this fraction of the largest
     /// emitted power (`--link-error`, default 1e-4).
@@ -54,23 +55,47 @@ pub struct RadiositySettings {
     /// Hierarchical: elements smaller than this fraction of the scene's area are not split
     /// (`--min-element-area`, default 1e-5).
     pub min_element_area: f32,
+    /// Hierarchical: with more input patches than this, linking starts from the root
+    /// cluster linked to itself; up to it, from every pair of patches, which needs no
+    /// cluster estimate (`--cluster-above`, default 2000).
+    pub cluster_above: usize,
 }
+
+/// `--radiosity-solver auto` chooses the hierarchical solver for scenes of more input
+/// patches (their own faces, before `--subdivide`) than this: the course's scenes (a few
+/// hundred) keep the progressive solver and their images, buildings get the one whose cost
+/// grows about linearly.
+pub const HIERARCHICAL_ABOVE: usize = 5000;
 
 /// The radiosity solvers (`--radiosity-solver`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum SolverKind {
+    /// Hierarchical above `HIERARCHICAL_ABOVE` input patches, progressive up to it.
+    #[default]
+    Auto,
     /// Progressive refinement: shoot the patch with the most undistributed power, N² form
     /// factors at most; the course's solver.
-    #[default]
     Progressive,
-    /// Hierarchical radiosity: links between element quadtrees refined by the power they
-    /// carry, Jacobi sweeps over them (no clustering yet: k² initial links).
+    /// Hierarchical radiosity with clustering: links between clusters and element
+    /// quadtrees refined by the power they carry, Jacobi sweeps over them.
     Hierarchical,
+}
+
+impl SolverKind {
+    /// The solver that runs on a mesh of `patches` input patches.
+    pub fn resolve(self, patches: usize) -> SolverKind {
+        match self {
+            SolverKind::Auto if patches > HIERARCHICAL_ABOVE => SolverKind::Hierarchical,
+            SolverKind::Auto => SolverKind::Progressive,
+            chosen => chosen,
+        }
+    }
 }
 
 impl std::fmt::Display for SolverKind {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
+            SolverKind::Auto => "auto",
             SolverKind::Progressive => "progressive",
             SolverKind::Hierarchical => "hierarchical",
         })
@@ -107,9 +132,10 @@ impl Default for RadiositySettings {
             log_convergence: false,
             display: Display::Radiance,
             export: None,
-            solver: SolverKind::Progressive,
+            solver: SolverKind::Auto,
             link_error: 1e-4,
             min_element_area: 1e-5,
+            cluster_above: 2000,
         }
     }
 }

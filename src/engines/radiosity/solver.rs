@@ -12,6 +12,7 @@ use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use rayon::prelude::*;
 
 use super::form_factor::point_to_polygon;
+use super::mesh::NONE;
 use super::patch::{on_primitive, Patch};
 pub use super::settings::Relaxation;
 use crate::accel::Accel;
@@ -223,14 +224,29 @@ pub enum Stop {
     Interrupted,
 }
 
-/// One line of `--log-convergence`.
+/// One line of `--log-convergence`: a step of the solver (a shot, a sweep), with the
+/// residual after it, the time and the visibility rays cast so far.
 #[derive(Clone, Copy, Debug)]
 pub struct ShotRecord {
     pub shot: u64,
-    pub patch: u32,
+    pub step: Step,
     pub residual: f32,
     pub seconds: f64,
     pub rays: u64,
+}
+
+/// What a step of the log was.
+#[derive(Clone, Copy, Debug)]
+pub enum Step {
+    /// Progressive refinement: the patch that shot.
+    Shot { patch: u32 },
+    /// Hierarchical: a Jacobi sweep in refinement round `round`, over `links` links between
+    /// `elements` elements.
+    Sweep {
+        round: u32,
+        links: u64,
+        elements: u64,
+    },
 }
 
 /// What a solver found, in terms every solver gives: per-patch light, what the display
@@ -252,6 +268,25 @@ pub struct PatchLight {
     pub residual: f32,
     /// One record per step, when asked (`--log-convergence`).
     pub log: Vec<ShotRecord>,
+}
+
+impl PatchLight {
+    /// Gives each twin patch (see `patch::twins`) its first copy's light.
+    pub fn copy_twins(&mut self, twin_of: &[u32]) {
+        for (i, &t) in twin_of.iter().enumerate() {
+            if t != NONE {
+                let t = t as usize;
+                for field in [
+                    &mut self.radiance,
+                    &mut self.undistributed,
+                    &mut self.incident,
+                    &mut self.incident_direct,
+                ] {
+                    field[i] = field[t];
+                }
+            }
+        }
+    }
 }
 
 /// When a solver stops, whatever the solver.
