@@ -8,8 +8,10 @@ use std::collections::HashMap;
 
 use common::{backends, furnace, own_scene, worst_relative_error};
 use trilux::accel::{self, AccelOptions};
+use trilux::engines::radiosity::mesh::NONE;
 use trilux::engines::radiosity::{RadiositySettings, Solution, SolverKind};
 use trilux::engines::RenderSettings;
+use trilux::geometry::Vec3;
 use trilux::scene::Scene;
 
 fn hierarchical(subdivide: u32) -> RenderSettings {
@@ -261,4 +263,70 @@ fn both_accels_give_the_same_hierarchical_solution() {
     for s in &solutions[1..] {
         assert_eq!(s, &solutions[0]);
     }
+}
+
+/// The leaf elements a hierarchical solution shows and exports: the leaf `leaf_at` finds
+/// for a patch's point (s, t) holds that very point at the parameters it returns; each
+/// patch's radiance is the area mean of its leaves'; the PLY export writes one face per
+/// leaf.
+#[test]
+fn leaf_elements_tile_their_patches() {
+    let scene = own_scene("cornell_box.mgf");
+    let mut settings = hierarchical(0);
+    settings.num_shadow_samples = 1;
+    let solution = solve(&scene, &settings);
+    let elements = &solution.state.elements;
+    assert!(
+        elements.len() > 10 * solution.patches.len(),
+        "the patches were split"
+    );
+    let bilinear = |c: &[Vec3; 4], s: f32, t: f32| {
+        (c[0] * (1.0 - s) + c[1] * s) * (1.0 - t) + (c[3] * (1.0 - s) + c[2] * s) * t
+    };
+    let mut leaves = 0;
+    for (k, p) in solution.patches.iter().enumerate() {
+        for i in 0..50 {
+            let (s, t) = ((i % 7) as f32 / 6.5 + 0.01, (i / 7) as f32 / 7.5 + 0.02);
+            let (e, u, v) = solution.state.leaf_at(k, s, t);
+            assert_eq!(elements[e].children, NONE, "a leaf");
+            let (want, got) = (
+                bilinear(&p.corners, s, t),
+                bilinear(&elements[e].corners, u, v),
+            );
+            assert!(
+                (want - got).length() < 1e-5,
+                "patch {k} at ({s}, {t}): {want} vs {got}"
+            );
+        }
+        // Area mean of the leaves below patch k.
+        let (mut sum, mut area) = (Vec3::ZERO, 0.0f32);
+        let mut stack = vec![k];
+        while let Some(e) = stack.pop() {
+            let el = &elements[e];
+            if el.children == NONE {
+                let c = el.corners;
+                let a = 0.5 * (c[2] - c[0]).cross(c[3] - c[1]).length();
+                sum += el.radiance * a;
+                area += a;
+                leaves += 1;
+            } else {
+                stack.extend((0..4).map(|q| el.children as usize + q));
+            }
+        }
+        let mean = sum / area;
+        let b = solution.state.radiance[k];
+        assert!(
+            (mean - b).abs().max_element() <= 1e-4 * b.max_element().max(1e-3),
+            "patch {k}: leaves' mean {mean} vs {b}"
+        );
+    }
+    let path = std::env::temp_dir().join(format!("trilux-leaves-{}.ply", std::process::id()));
+    solution.write_ply(&path).expect("writes");
+    let bytes = std::fs::read(&path).unwrap();
+    std::fs::remove_file(&path).ok();
+    let header = String::from_utf8_lossy(&bytes[..400.min(bytes.len())]).to_string();
+    assert!(
+        header.contains(&format!("element face {leaves}\n")),
+        "{header}"
+    );
 }

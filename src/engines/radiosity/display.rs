@@ -44,7 +44,24 @@ pub fn render_solution(
             .collect(),
         Display::FormFactors => form_factor_greys(scene, accel, settings, solution, source),
     };
-    let field = solution.field(values, r.interpolate);
+    let elements = &solution.state.elements;
+    // A hierarchical solution shows its leaf elements (flat; -interpolate smooths the
+    // patches' means instead).
+    let field = match settings.radiosity.display {
+        Display::Radiance if !elements.is_empty() && !r.interpolate => solution.element_field(
+            elements
+                .iter()
+                .map(|e| e.radiance + patches[e.patch as usize].albedo * solution.ambient)
+                .collect(),
+        ),
+        Display::Absorbed if !elements.is_empty() && !r.interpolate => solution.element_field(
+            elements
+                .iter()
+                .map(|e| (Vec3::ONE - patches[e.patch as usize].albedo) * e.incident)
+                .collect(),
+        ),
+        _ => solution.field(values, r.interpolate),
+    };
     let (mut film, stats) = render_pixels(
         scene,
         accel,
@@ -71,12 +88,12 @@ pub fn render_solution(
                     (x > 0).then(|| id(x - 1, y)),
                     (y > 0).then(|| id(x, y - 1)),
                 ];
-                let border = neighbours.iter().flatten().any(|&n| n != here);
-                if outline_source && here == source as u32 && border {
+                let border = neighbours.iter().flatten().any(|n| n.0 != here.0);
+                if outline_source && here.0 == source as u32 && border {
                     film.pixels[y * w + x] = SOURCE_OUTLINE;
                 } else if r.wireframe
-                    && here != NONE
-                    && neighbours[..2].iter().flatten().any(|&n| n != here)
+                    && here.1 != NONE
+                    && neighbours[..2].iter().flatten().any(|n| n.1 != here.1)
                 {
                     film.pixels[y * w + x] = WIRE;
                 }
@@ -143,16 +160,17 @@ fn form_factor_greys(
         .collect()
 }
 
-/// The patch seen at each pixel centre (`NONE` for the background), rows from the top.
+/// The patch and the cell (`Solution::cell_at`) seen at each pixel centre (`NONE` for the
+/// background), rows from the top.
 fn patch_ids(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
     solution: &Solution,
-) -> Vec<u32> {
+) -> Vec<(u32, u32)> {
     let (w, h) = (settings.width, settings.height);
     let view = scene.camera().view();
-    let mut ids = vec![NONE; w as usize * h as usize];
+    let mut ids = vec![(NONE, NONE); w as usize * h as usize];
     ids.par_chunks_mut(w as usize)
         .enumerate()
         .for_each(|(row, out)| {
@@ -161,8 +179,8 @@ fn patch_ids(
                 let (x, y) = Camera::screen_point(i as u32, j, 0.5, 0.5, w, h);
                 let ray = view.ray(x, y);
                 if let Some(s) = crate::accel::closest_surface(accel, scene, &ray) {
-                    if let Some((k, _, _)) = solution.locate(scene, &s) {
-                        *id = k as u32;
+                    if let Some(cell) = solution.cell_at(scene, &s) {
+                        *id = cell;
                     }
                 }
             }

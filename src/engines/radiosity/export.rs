@@ -1,24 +1,42 @@
-//! `--export-radiosity FILE.ply`: the solution's patches (the leaf elements) as a binary
-//! little-endian PLY mesh whose vertex colours are each patch's radiosity — its outgoing
-//! radiance, linear float, not tone-mapped — so that a solution can be looked at in any mesh
-//! viewer and compared number by number. Every patch has its own four corners (a triangle
-//! patch, whose last two corners coincide, is written as a triangle), so a colour is the
-//! patch's own value, never an average.
+//! `--export-radiosity FILE.ply`: the solution's leaf elements — the patches, or the leaves
+//! of the hierarchical solver's quadtrees over them — as a binary little-endian PLY mesh
+//! whose vertex colours are each leaf's radiosity — its outgoing radiance, linear float, not
+//! tone-mapped — so that a solution can be looked at in any mesh viewer and compared number
+//! by number. Every leaf has its own four corners (a triangle, whose last two corners
+//! coincide, is written as a triangle), so a colour is the leaf's own value, never an
+//! average.
 
 use std::io::Write;
 use std::path::Path;
 
+use super::mesh::NONE;
 use super::Solution;
+use crate::geometry::Vec3;
 use crate::output::{write_atomically, OutputError};
+use crate::scene::Color;
 
 impl Solution {
     /// Writes the PLY file (atomically).
     pub fn write_ply(&self, path: &Path) -> Result<(), OutputError> {
-        let faces: Vec<(usize, usize)> = self
-            .patches
+        // (corners, radiance) of every leaf.
+        let leaves: Vec<(&[Vec3; 4], Color)> = if self.state.elements.is_empty() {
+            self.patches
+                .iter()
+                .zip(&self.state.radiance)
+                .map(|(p, &l)| (&p.corners, l))
+                .collect()
+        } else {
+            self.state
+                .elements
+                .iter()
+                .filter(|e| e.children == NONE)
+                .map(|e| (&e.corners, e.radiance))
+                .collect()
+        };
+        let faces: Vec<(usize, usize)> = leaves
             .iter()
             .enumerate()
-            .map(|(k, p)| (k, if p.corners[2] == p.corners[3] { 3 } else { 4 }))
+            .map(|(k, (c, _))| (k, if c[2] == c[3] { 3 } else { 4 }))
             .collect();
         let vertices: usize = faces.iter().map(|f| f.1).sum();
         write_atomically(path, |w| {
@@ -33,9 +51,8 @@ impl Solution {
             )
             .map_err(&io)?;
             for &(k, n) in &faces {
-                let p = &self.patches[k];
-                let l = self.state.radiance[k];
-                for c in &p.corners[..n] {
+                let (corners, l) = leaves[k];
+                for c in &corners[..n] {
                     for v in c.to_array().into_iter().chain(l.to_array()) {
                         w.write_all(&v.to_le_bytes()).map_err(&io)?;
                     }

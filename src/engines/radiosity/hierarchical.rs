@@ -42,7 +42,8 @@ use rayon::prelude::*;
 use super::form_factor::point_to_polygon;
 use super::patch::{on_primitive, Patch};
 use super::solver::{
-    FormFactorSampler, PatchLight, RadiositySolver, ShotRecord, SolveLimits, Solved, Step, Stop,
+    Element, FormFactorSampler, PatchLight, RadiositySolver, ShotRecord, SolveLimits, Solved, Step,
+    Stop,
 };
 use crate::geometry::{quad_normal, shadow_ray, Bounds3, Ray, Vec3};
 use crate::sampling::Rng;
@@ -360,6 +361,26 @@ impl<'a> Hierarchy<'a> {
             }
         }
         e
+    }
+
+    /// The elements, for display and export: the patches' roots first, then every element
+    /// below them (clusters, which were made between the two, left out).
+    fn elements(&self, incident: &[Color]) -> Vec<Element> {
+        let (patches, clusters) = (self.patches.len(), self.clusters.len() as u32);
+        // Clusters fill the nodes from the patches to the first element below a patch.
+        let index = |n: u32| if n == NONE { NONE } else { n - clusters };
+        self.nodes
+            .iter()
+            .enumerate()
+            .filter(|(k, node)| *k < patches || !node.is_cluster())
+            .map(|(k, node)| Element {
+                patch: node.patch,
+                corners: node.corners,
+                children: index(node.children),
+                radiance: self.radiance[k],
+                incident: incident[k],
+            })
+            .collect()
     }
 
     fn node(&self, n: u32) -> &Node {
@@ -876,6 +897,9 @@ impl RadiositySolver for Hierarchical {
         let mut sweeps = 0u64;
         let mut rounds = 0;
         loop {
+            // The change of power the round's first sweep made: after a refinement, what the
+            // refinement moved.
+            let mut first_change = None;
             // Sweeps over the fixed links until the change of power is under the tolerance.
             loop {
                 let (inc, radiance) = sweep(&h, &links, &scales, &h.radiance);
@@ -889,6 +913,7 @@ impl RadiositySolver for Hierarchical {
                 } else {
                     0.0
                 };
+                first_change.get_or_insert(light.residual);
                 on_step(light.residual);
                 if limits.log {
                     light.log.push(ShotRecord {
@@ -917,7 +942,10 @@ impl RadiositySolver for Hierarchical {
                 break;
             }
             rounds += 1;
-            if stop != Stop::Converged || rounds >= MAX_ROUNDS {
+            // A refinement that moved the power by less than the tolerance ends the solve:
+            // the links are as fine as the tolerance can tell.
+            let settled = rounds > 1 && first_change.is_some_and(|c| c <= limits.tolerance);
+            if stop != Stop::Converged || rounds >= MAX_ROUNDS || settled {
                 break;
             }
             // Refine the links that now carry too much (their sources have brightened).
@@ -949,6 +977,7 @@ impl RadiositySolver for Hierarchical {
         light.incident_direct = direct[..patches.len()].to_vec();
         light.undistributed = vec![Vec3::ZERO; patches.len()];
         light.iterations = sweeps;
+        light.elements = h.elements(&incident);
         let elements = h.nodes.len() - h.clusters.len();
         let leaves = h
             .nodes

@@ -57,11 +57,14 @@ pub struct Solution {
     pub twins: usize,
 }
 
-/// Values over the patches of a solution, looked up at hits by `Solution::sample`.
+/// Values over the patches of a solution, or over the leaf elements of a hierarchical one,
+/// looked up at hits by `Solution::sample`.
 #[derive(Clone, Debug)]
 pub struct PatchField {
     values: Vec<Color>,
     corners: Option<Vec<[Color; 4]>>,
+    /// `values` are per element of `PatchLight::elements` (shown at the leaves).
+    per_element: bool,
 }
 
 /// Whether every quad of the scene lies in front of (or on) every other quad's plane and there
@@ -259,13 +262,36 @@ impl Solution {
     /// interpolation.
     pub fn field(&self, values: Vec<Color>, interpolate: bool) -> PatchField {
         let corners = interpolate.then(|| self.corner_values(&values));
-        PatchField { values, corners }
+        PatchField {
+            values,
+            corners,
+            per_element: false,
+        }
+    }
+
+    /// Per-element values (one for each of `state.elements`), shown flat at the leaves.
+    pub fn element_field(&self, values: Vec<Color>) -> PatchField {
+        PatchField {
+            values,
+            corners: None,
+            per_element: true,
+        }
+    }
+
+    /// The patch under a hit, and what `--wireframe` outlines there: its leaf element where
+    /// the solver made elements, else the patch again.
+    pub fn cell_at(&self, scene: &Scene, hit: &SurfaceHit) -> Option<(u32, u32)> {
+        let (k, u, v) = self.locate(scene, hit)?;
+        Some((k as u32, self.state.leaf_at(k, u, v).0 as u32))
     }
 
     /// The value of `field` at a surface hit (None where no patch lies, e.g. a triangle of a
     /// scene whose mesh left it out).
     pub fn sample(&self, scene: &Scene, hit: &SurfaceHit, field: &PatchField) -> Option<Color> {
         let (k, u, v) = self.locate(scene, hit)?;
+        if field.per_element {
+            return Some(field.values[self.state.leaf_at(k, u, v).0]);
+        }
         Some(match &field.corners {
             Some(c) => {
                 let c = &c[k];

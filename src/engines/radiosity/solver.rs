@@ -268,6 +268,48 @@ pub struct PatchLight {
     pub residual: f32,
     /// One record per step, when asked (`--log-convergence`).
     pub log: Vec<ShotRecord>,
+    /// A solver that splits patches (hierarchical): the quadtree of elements over each
+    /// patch, patch k's root being element k. Empty when the patches are the elements.
+    pub elements: Vec<Element>,
+}
+
+/// An element of a patch's quadtree, with its light.
+#[derive(Clone, Copy, Debug)]
+pub struct Element {
+    /// The input patch it lies on.
+    pub patch: u32,
+    /// Corners in the patch's order (a triangle's as [a, b, c, c]); its four children cover
+    /// the quarters (s, t) ∈ [0,½]², [½,1]×[0,½], [½,1]², [0,½]×[½,1] of its bilinear
+    /// parameters, in that order.
+    pub corners: [Vec3; 4],
+    /// The first of four consecutive children, or `NONE` for a leaf.
+    pub children: u32,
+    pub radiance: Color,
+    pub incident: Color,
+}
+
+impl PatchLight {
+    /// The leaf element of patch `k` holding its point (s, t), and (s, t) within that leaf;
+    /// the patch itself when it has no elements.
+    pub fn leaf_at(&self, k: usize, mut s: f32, mut t: f32) -> (usize, f32, f32) {
+        if self.elements.is_empty() {
+            return (k, s, t);
+        }
+        let mut e = k;
+        while self.elements[e].children != NONE {
+            let (right, top) = (s >= 0.5, t >= 0.5);
+            let quarter = match (right, top) {
+                (false, false) => 0,
+                (true, false) => 1,
+                (true, true) => 2,
+                (false, true) => 3,
+            };
+            e = self.elements[e].children as usize + quarter;
+            s = if right { 2.0 * s - 1.0 } else { 2.0 * s };
+            t = if top { 2.0 * t - 1.0 } else { 2.0 * t };
+        }
+        (e, s, t)
+    }
 }
 
 impl PatchLight {
@@ -283,6 +325,10 @@ impl PatchLight {
                     &mut self.incident_direct,
                 ] {
                     field[i] = field[t];
+                }
+                // The twin shows its copy's leaves (their corners are the copy's).
+                if !self.elements.is_empty() {
+                    self.elements[i] = self.elements[t];
                 }
             }
         }
