@@ -856,3 +856,47 @@ fn bench_accel_measures_only_the_cells_asked_for() {
         assert!(rate > 0.0, "{table}");
     }
 }
+
+/// `--stats` names the radiosity solvers' counters: the mesh's, and each solver's own.
+#[test]
+fn stats_name_the_radiosity_counters() {
+    let dir = temp_dir("stats");
+    let scene = common::own_scene_dir().join("cornell_box.mgf");
+    for (solver, wanted) in [
+        ("progressive", "form-factor rows computed"),
+        ("hierarchical", "cluster links"),
+    ] {
+        let run = render(
+            &dir,
+            &[
+                "-input",
+                scene.to_str().unwrap(),
+                "--engine",
+                "radiosity",
+                "--radiosity-solver",
+                solver,
+                "-num_shadow_samples",
+                "1",
+                "-size",
+                "16",
+                "16",
+                "--stats",
+                "-o",
+                dir.join("stats.png").to_str().unwrap(),
+            ],
+        );
+        ok(&run);
+        // --stats writes to standard error.
+        let out = String::from_utf8_lossy(&run.stderr);
+        let line = out
+            .lines()
+            .find(|l| l.starts_with("stats: radiosity: "))
+            .unwrap_or_else(|| panic!("{solver}: no radiosity counters in {out}"));
+        assert!(
+            line.contains("input patches 16, coincident twins 0"),
+            "{line}"
+        );
+        assert!(line.contains(wanted), "{solver}: {line}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -82,7 +82,12 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     if let (Some(path), Some(csv)) = (&args.radiosity.log_convergence, &rendered.convergence_log) {
         crate::output::write_text_atomically(path, csv).map_err(|e| e.to_string())?;
     }
-    let Rendered { film, stats, .. } = rendered;
+    let Rendered {
+        film,
+        stats,
+        counters,
+        ..
+    } = rendered;
     let output = args
         .common
         .output
@@ -112,6 +117,10 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             stats.photon_rays.load(Relaxed)
         );
         eprintln!("stats: non-finite samples {non_finite}");
+        if let Some((label, counters)) = &counters {
+            let named: Vec<String> = counters.iter().map(|(n, c)| format!("{n} {c}")).collect();
+            eprintln!("stats: {label}: {}", named.join(", "));
+        }
         if let Some(kib) = peak_memory_kib() {
             eprintln!("stats: peak memory {:.1} MiB", kib as f64 / 1024.0);
         }

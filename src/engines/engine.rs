@@ -134,6 +134,8 @@ pub struct Rendered {
     pub warnings: Vec<String>,
     /// The solver's convergence log as CSV, for `--log-convergence`.
     pub convergence_log: Option<String>,
+    /// Named counters of what the engine built (`--stats`): a label and (name, count) pairs.
+    pub counters: Option<(&'static str, Vec<(&'static str, u64)>)>,
 }
 
 impl Rendered {
@@ -145,6 +147,7 @@ impl Rendered {
             summary: Vec::new(),
             warnings: Vec::new(),
             convergence_log: None,
+            counters: None,
         }
     }
 }

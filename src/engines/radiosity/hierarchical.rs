@@ -984,9 +984,24 @@ impl RadiositySolver for Hierarchical {
             .iter()
             .filter(|e| !e.is_cluster() && e.children == NONE)
             .count();
+        let clustered = links
+            .iter()
+            .filter(|l| h.node(l.receiver).is_cluster() || h.node(l.source).is_cluster())
+            .count();
+        let link_bytes = links.len() * std::mem::size_of::<Link>();
         Solved {
             light,
             stop,
+            counters: vec![
+                ("clusters", h.clusters.len() as u64),
+                ("elements", elements as u64),
+                ("leaves", leaves as u64),
+                ("links", links.len() as u64),
+                ("cluster links", clustered as u64),
+                ("link bytes", link_bytes as u64),
+                ("sweeps", sweeps),
+                ("refinement rounds", rounds as u64),
+            ],
             report: format!(
                 "hierarchical: {} input patches, {} clusters, {} elements ({} leaves), {} links ({} with a cluster at an end; {:.1} MiB), {} sweeps in {} refinement rounds",
                 patches.len(),
@@ -994,11 +1009,8 @@ impl RadiositySolver for Hierarchical {
                 elements,
                 leaves,
                 links.len(),
-                links
-                    .iter()
-                    .filter(|l| h.node(l.receiver).is_cluster() || h.node(l.source).is_cluster())
-                    .count(),
-                (links.len() * std::mem::size_of::<Link>()) as f64 / (1 << 20) as f64,
+                clustered,
+                link_bytes as f64 / (1 << 20) as f64,
                 sweeps,
                 rounds
             ),

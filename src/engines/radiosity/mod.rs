@@ -49,6 +49,8 @@ pub struct Solution {
     pub rays: u64,
     /// The solver's own counters, for the summary line.
     pub solver_report: String,
+    /// The same as named counters, for `--stats`.
+    pub solver_counters: Vec<(&'static str, u64)>,
     /// Rounds of adaptive subdivision done.
     pub adaptive_rounds: u32,
     /// The solver that ran (`--radiosity-solver auto` resolved).
@@ -171,6 +173,7 @@ impl Solution {
                 visibility_reason,
                 rays,
                 solver_report: solved.report,
+                solver_counters: solved.counters,
                 adaptive_rounds: round,
                 solver: kind,
                 twins,
@@ -579,8 +582,20 @@ impl Solution {
             summary,
             warnings: self.cap_warning(settings).into_iter().collect(),
             convergence_log: Some(self.convergence_csv()),
+            counters: Some(("radiosity", self.counters())),
             ..Rendered::plain(film, stats)
         })
+    }
+
+    /// Named counters for `--stats`: the mesh's, then the solver's.
+    pub fn counters(&self) -> Vec<(&'static str, u64)> {
+        let mut counters = vec![
+            ("input patches", self.patches.len() as u64),
+            ("coincident twins", self.twins as u64),
+            ("visibility rays", self.rays),
+        ];
+        counters.extend_from_slice(&self.solver_counters);
+        counters
     }
 
     /// One paragraph on how the solve went.

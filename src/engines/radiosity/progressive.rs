@@ -40,14 +40,20 @@ impl RadiositySolver for Progressive {
     ) -> Solved {
         let (light, stop, cache) = self.shoot(sampler, limits, on_step);
         Solved {
-            light,
-            stop,
+            counters: vec![
+                ("shots", light.iterations),
+                ("form-factor rows computed", cache.misses),
+                ("rows reused", cache.hits),
+                ("row cache peak bytes", cache.peak_bytes as u64),
+            ],
             report: format!(
                 "form-factor rows {} computed, {} reused (cache peak {:.1} MiB)",
                 cache.misses,
                 cache.hits,
                 cache.peak_bytes as f64 / (1 << 20) as f64
             ),
+            light,
+            stop,
         }
     }
 }

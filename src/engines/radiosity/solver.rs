@@ -354,6 +354,8 @@ pub struct Solved {
     pub stop: Stop,
     /// E.g. "form-factor rows 12 computed, 3 reused (cache peak 0.1 MiB)".
     pub report: String,
+    /// Named counters for `--stats` (rows computed, links, elements, …).
+    pub counters: Vec<(&'static str, u64)>,
 }
 
 /// A radiosity solver: from the patches and their form factors (through the sampler, which
