@@ -330,3 +330,35 @@ fn leaf_elements_tile_their_patches() {
         "{header}"
     );
 }
+
+/// A memory budget stops the refinement (with a warning) instead of growing past it, and the
+/// solution still conserves light: the closed cube's furnace stays within 1%.
+#[test]
+fn a_memory_budget_stops_the_refinement() {
+    let scene = furnace(0.5);
+    let mut settings = hierarchical(1);
+    settings.radiosity.link_error = 1e-3;
+    let free = solve(&scene, &settings);
+    let budget = 200_000;
+    settings.radiosity.memory_budget = budget;
+    let capped = solve(&scene, &settings);
+    let count = |s: &Solution, name: &str| {
+        s.solver_counters
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|c| c.1)
+            .expect("counted")
+    };
+    println!(
+        "links {} free, {} within {budget} bytes; {:?}",
+        count(&free, "links"),
+        count(&capped, "links"),
+        capped.solver_warning
+    );
+    assert!(free.solver_warning.is_none());
+    assert!(capped.solver_warning.is_some());
+    assert!(count(&capped, "link bytes") <= budget);
+    assert!(count(&capped, "links") < count(&free, "links"));
+    let worst = worst_relative_error(&capped.state.radiance, 2.0);
+    assert!(worst < 0.01, "worst error {worst}");
+}

@@ -411,6 +411,8 @@ impl RadiosityArgs {
             link_error: self.link_error,
             min_element_area: self.min_element_area,
             cluster_above: self.cluster_above,
+            // Set by the render from --max-memory and the plan.
+            memory_budget: radiosity_defaults().memory_budget,
             iterations: self.radiosity_iterations,
             max_shots_per_patch: self.radiosity_max_shots_per_patch,
             relaxation: self.radiosity_relaxation,

@@ -16,7 +16,7 @@ use crate::scene::Scene;
 pub fn run(args: &RenderArgs) -> Result<(), String> {
     let input = args.common.input.as_ref().ok_or("missing -input")?;
     args.validate()?;
-    let settings = args.settings();
+    let mut settings = args.settings();
     let pool = crate::parallel::thread_pool(args.common.threads).map_err(|e| e.to_string())?;
     crate::parallel::worker_start();
 
@@ -62,6 +62,8 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             if args.common.max_memory.is_none() { " (80% of this machine's memory)" } else { "" }
         ));
     }
+    // What the plan leaves of --max-memory bounds what the hierarchical solver refines.
+    settings.radiosity.memory_budget = max_memory - plan.memory;
     crate::interrupt::install();
     for flag in unused {
         eprintln!(

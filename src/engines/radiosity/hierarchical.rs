@@ -77,7 +77,16 @@ pub struct Hierarchical {
     /// Above this many input patches linking starts from the root cluster, up to it from
     /// every pair of patches.
     pub cluster_above: usize,
+    /// Refinement stops splitting once the links and nodes would take more bytes than this.
+    pub memory_budget: u64,
 }
+
+/// Bytes a link costs the solve at its peak: itself, its copy when the links are sorted
+/// into those to keep and to refine, and its index in the leaf scales' receiver order.
+const LINK_BYTES: usize = 2 * std::mem::size_of::<Link>() + 4;
+/// Bytes a node costs the solve: itself, its radiance, the sweeps' incident, gathered and
+/// new radiance, and its leaf scale.
+const NODE_BYTES: usize = std::mem::size_of::<Node>() + 4 * std::mem::size_of::<Color>() + 4;
 
 /// A node: an element of a patch's quadtree, or a cluster of patches.
 #[derive(Clone, Copy, Debug)]
@@ -690,9 +699,13 @@ impl Hierarchical {
         threshold: f32,
         min_area: f32,
         links: &mut Vec<Link>,
-    ) {
-        // The node of a pair to split, if either can be.
-        let pick = |h: &Hierarchy, r: u32, s: u32| -> Option<u32> {
+    ) -> bool {
+        let mut capped = false;
+        // The node of a pair to split, if either can be (none once over the memory budget).
+        let pick = |h: &Hierarchy, r: u32, s: u32, capped: bool| -> Option<u32> {
+            if capped {
+                return None;
+            }
             let splittable = |n: u32| {
                 let node = h.node(n);
                 node.is_cluster() || node.area > min_area
@@ -703,12 +716,17 @@ impl Hierarchical {
             [first, second].into_iter().find(|&n| splittable(n))
         };
         while !candidates.is_empty() {
+            // Stop splitting once what is held — links, nodes, and the candidates, each of
+            // which may become a link — passes the budget. Checked once per level of the
+            // breadth-first refinement, so a level may overshoot it by what it adds.
+            let bytes = (links.len() + candidates.len()) * LINK_BYTES + h.nodes.len() * NODE_BYTES;
+            capped |= bytes as u64 > self.memory_budget;
             let mut next = Vec::new();
             let mut evaluate = Vec::new();
             for (r, s) in candidates {
                 let clustered = h.node(r).is_cluster() || h.node(s).is_cluster();
                 if r == s || (clustered && !h.separated(r, s)) {
-                    match pick(h, r, s) {
+                    match pick(h, r, s, capped) {
                         Some(n) => split_pair(h, r, s, n, &mut next),
                         None => evaluate.push((r, s)),
                     }
@@ -721,13 +739,14 @@ impl Hierarchical {
                     continue;
                 }
                 let (r, s) = (link.receiver, link.source);
-                match pick(h, r, s).filter(|_| link_error(h, &link) > threshold) {
+                match pick(h, r, s, capped).filter(|_| link_error(h, &link) > threshold) {
                     Some(n) => split_pair(h, r, s, n, &mut next),
                     None => links.push(link),
                 }
             }
             candidates = next;
         }
+        capped
     }
 }
 
@@ -886,7 +905,7 @@ impl RadiositySolver for Hierarchical {
             Vec::new()
         };
         let mut links = Vec::new();
-        self.refine(&mut h, sampler, initial, threshold, min_area, &mut links);
+        let mut capped = self.refine(&mut h, sampler, initial, threshold, min_area, &mut links);
         let mut scales = Vec::new();
         update_leaf_scales(&h, &links, &vec![true; h.nodes.len()], &mut scales);
 
@@ -945,7 +964,7 @@ impl RadiositySolver for Hierarchical {
             // A refinement that moved the power by less than the tolerance ends the solve:
             // the links are as fine as the tolerance can tell.
             let settled = rounds > 1 && first_change.is_some_and(|c| c <= limits.tolerance);
-            if stop != Stop::Converged || rounds >= MAX_ROUNDS || settled {
+            if stop != Stop::Converged || rounds >= MAX_ROUNDS || settled || capped {
                 break;
             }
             // Refine the links that now carry too much (their sources have brightened).
@@ -960,7 +979,7 @@ impl RadiositySolver for Hierarchical {
             links = keep;
             let (kept, old_nodes) = (links.len(), h.nodes.len());
             let candidates = again.iter().map(|l| (l.receiver, l.source)).collect();
-            self.refine(&mut h, sampler, candidates, threshold, min_area, &mut links);
+            capped |= self.refine(&mut h, sampler, candidates, threshold, min_area, &mut links);
             let mut dirty = vec![false; h.nodes.len()];
             dirty[old_nodes..].fill(true);
             for l in again.iter().chain(&links[kept..]) {
@@ -989,9 +1008,15 @@ impl RadiositySolver for Hierarchical {
             .filter(|l| h.node(l.receiver).is_cluster() || h.node(l.source).is_cluster())
             .count();
         let link_bytes = links.len() * std::mem::size_of::<Link>();
+        let warning = capped.then(|| format!(
+            "hierarchical refinement stopped at the memory budget ({} of --max-memory left after the rest of the render) with {} links: the solution is coarser than --link-error asks",
+            crate::plan::human_bytes(self.memory_budget),
+            links.len()
+        ));
         Solved {
             light,
             stop,
+            warning,
             counters: vec![
                 ("clusters", h.clusters.len() as u64),
                 ("elements", elements as u64),

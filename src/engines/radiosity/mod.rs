@@ -51,6 +51,8 @@ pub struct Solution {
     pub solver_report: String,
     /// The same as named counters, for `--stats`.
     pub solver_counters: Vec<(&'static str, u64)>,
+    /// The solver's warning, if it had one.
+    pub solver_warning: Option<String>,
     /// Rounds of adaptive subdivision done.
     pub adaptive_rounds: u32,
     /// The solver that ran (`--radiosity-solver auto` resolved).
@@ -98,6 +100,7 @@ fn solver(r: &RadiositySettings, kind: SolverKind) -> Box<dyn RadiositySolver> {
             link_error: r.link_error,
             min_element_area: r.min_element_area,
             cluster_above: r.cluster_above,
+            memory_budget: r.memory_budget,
         }),
         _ => Box::new(progressive::Progressive {
             cache_bytes: r.ff_cache_mb << 20,
@@ -174,6 +177,7 @@ impl Solution {
                 rays,
                 solver_report: solved.report,
                 solver_counters: solved.counters,
+                solver_warning: solved.warning,
                 adaptive_rounds: round,
                 solver: kind,
                 twins,
@@ -580,7 +584,11 @@ impl Solution {
         }
         Ok(Rendered {
             summary,
-            warnings: self.cap_warning(settings).into_iter().collect(),
+            warnings: self
+                .cap_warning(settings)
+                .into_iter()
+                .chain(self.solver_warning.clone())
+                .collect(),
             convergence_log: Some(self.convergence_csv()),
             counters: Some(("radiosity", self.counters())),
             ..Rendered::plain(film, stats)

@@ -54,6 +54,7 @@ impl RadiositySolver for Progressive {
             ),
             light,
             stop,
+            warning: None,
         }
     }
 }

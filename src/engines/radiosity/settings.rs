@@ -59,6 +59,10 @@ pub struct RadiositySettings {
     /// cluster linked to itself; up to it, from every pair of patches, which needs no
     /// cluster estimate (`--cluster-above`, default 2000).
     pub cluster_above: usize,
+    /// Hierarchical: bytes the links and elements may take; refinement stops splitting
+    /// there, with a warning (the command line gives what `--max-memory` leaves after the
+    /// plan's estimate of the rest; default: no limit).
+    pub memory_budget: u64,
 }
 
 /// `--radiosity-solver auto` chooses the hierarchical solver for scenes of more input
@@ -136,6 +140,7 @@ impl Default for RadiositySettings {
             link_error: 1e-4,
             min_element_area: 1e-5,
             cluster_above: 2000,
+            memory_budget: u64::MAX,
         }
     }
 }

@@ -356,6 +356,8 @@ pub struct Solved {
     pub report: String,
     /// Named counters for `--stats` (rows computed, links, elements, …).
     pub counters: Vec<(&'static str, u64)>,
+    /// What the user should know about the solve (e.g. refinement stopped by memory).
+    pub warning: Option<String>,
 }
 
 /// A radiosity solver: from the patches and their form factors (through the sampler, which
