@@ -787,7 +787,7 @@ fn split_pair(h: &mut Hierarchy, r: u32, s: u32, n: u32, out: &mut Vec<(u32, u32
 }
 
 /// Gathers over the links, pushes the gathered radiance down (scaled at the leaves by
-/// `scales`, see `leaf_scales`) and pulls the radiosity back up. Returns each node's
+/// `scales`, see `update_leaf_scales`) and pulls the radiosity back up. Returns each node's
 /// incident radiance (at a leaf its own and its ancestors' gathering; above, the area mean
 /// of its leaves') and the new radiance of every node.
 fn sweep(
