@@ -5,7 +5,7 @@
 use rayon::prelude::*;
 
 use super::settings::Display;
-use super::solver::FormFactorSampler;
+use super::solver::{Element, FormFactorSampler};
 use super::Solution;
 use crate::accel::Accel;
 use crate::engines::engine::RenderSettings;
@@ -44,20 +44,19 @@ pub fn render_solution(
             .collect(),
         Display::FormFactors => form_factor_greys(scene, accel, settings, solution, source),
     };
-    let elements = &solution.state.elements;
     // A hierarchical solution shows its leaf elements (flat; -interpolate smooths the
-    // patches' means instead).
-    let field = match settings.radiosity.display {
-        Display::Radiance if !elements.is_empty() && !r.interpolate => solution.element_field(
+    // patches' means instead) in the views it has per element.
+    let per_element: Option<fn(&Element, Color, Color) -> Color> = match r.display {
+        Display::Radiance => Some(|e, albedo, ambient| e.radiance + albedo * ambient),
+        Display::Absorbed => Some(|e, albedo, _| (Vec3::ONE - albedo) * e.incident),
+        _ => None,
+    };
+    let elements = &solution.state.elements;
+    let field = match per_element {
+        Some(value) if !elements.is_empty() && !r.interpolate => solution.element_field(
             elements
                 .iter()
-                .map(|e| e.radiance + patches[e.patch as usize].albedo * solution.ambient)
-                .collect(),
-        ),
-        Display::Absorbed if !elements.is_empty() && !r.interpolate => solution.element_field(
-            elements
-                .iter()
-                .map(|e| (Vec3::ONE - patches[e.patch as usize].albedo) * e.incident)
+                .map(|e| value(e, patches[e.patch as usize].albedo, solution.ambient))
                 .collect(),
         ),
         _ => solution.field(values, r.interpolate),

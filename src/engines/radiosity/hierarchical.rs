@@ -110,7 +110,7 @@ struct Node {
 }
 
 impl Node {
-    fn element(patch: u32, corners: [Vec3; 4], normal: Vec3, parent: u32) -> Node {
+    fn element(patch: u32, corners: [Vec3; 4], normal: Vec3) -> Node {
         let centre = bilinear(&corners, 0.5, 0.5);
         let radius = corners
             .iter()
@@ -124,7 +124,7 @@ impl Node {
             centre,
             radius,
             children: NONE,
-            parent,
+            parent: NONE,
         }
     }
 
@@ -242,7 +242,7 @@ impl<'a> Hierarchy<'a> {
             .iter()
             .enumerate()
             .map(|(i, p)| {
-                let mut node = Node::element(i as u32, p.corners, p.normal, NONE);
+                let mut node = Node::element(i as u32, p.corners, p.normal);
                 // A patch of no area (a twin, see `patch::twins`) takes no part.
                 if p.area <= 0.0 {
                     node.area = 0.0;
@@ -250,7 +250,6 @@ impl<'a> Hierarchy<'a> {
                 node
             })
             .collect();
-        let radiance = patches.iter().map(|p| p.emitted).collect();
         let mut h = Hierarchy {
             patches,
             nodes,
@@ -258,7 +257,7 @@ impl<'a> Hierarchy<'a> {
             top: NONE,
             members: (0..patches.len() as u32).collect(),
             member_areas: Vec::new(),
-            radiance,
+            radiance: Vec::new(),
         };
         if !patches.is_empty() {
             let mut order = std::mem::take(&mut h.members);
@@ -271,6 +270,7 @@ impl<'a> Hierarchy<'a> {
             sum += patches[m as usize].area;
             h.member_areas.push(sum);
         }
+        h.radiance = h.emission();
         h
     }
 
@@ -303,10 +303,6 @@ impl<'a> Hierarchy<'a> {
         let id = self.nodes.len() as u32;
         let area = kids.iter().map(|&k| self.nodes[k as usize].area).sum();
         let centre = bounds.centre();
-        let emitted = kids
-            .iter()
-            .map(|&k| self.radiance[k as usize] * self.nodes[k as usize].area)
-            .fold(Vec3::ZERO, |a, b| a + b);
         for &k in &kids {
             self.nodes[k as usize].parent = id;
         }
@@ -319,11 +315,6 @@ impl<'a> Hierarchy<'a> {
             radius: 0.5 * bounds.extent().length(),
             children: self.clusters.len() as u32,
             parent: NONE,
-        });
-        self.radiance.push(if area > 0.0 {
-            emitted * (1.0 / area)
-        } else {
-            Vec3::ZERO
         });
         let mut normals = [Vec3::ZERO; 26];
         for &p in order.iter() {
@@ -407,7 +398,7 @@ impl<'a> Hierarchy<'a> {
             let first = self.nodes.len() as u32;
             for corners in node.split() {
                 self.nodes
-                    .push(Node::element(node.patch, corners, node.normal, NONE));
+                    .push(Node::element(node.patch, corners, node.normal));
                 self.radiance.push(self.radiance[n as usize]);
             }
             self.nodes[n as usize].children = first;
