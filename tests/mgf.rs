@@ -279,4 +279,33 @@ fn shipped_mgf_scenes_load_with_renderparks_patch_counts() {
     );
     let graz = patches("office1/graz.mgf") as f64;
     assert!((graz / 13_948.0 - 1.0).abs() < 0.01, "graz: {graz}");
+    // What `--plan` prints as the radiosity mesh's patches; `--two-sided` gives each face a
+    // back (RenderPark: 27,896 for graz two-sided).
+    let planned = |file: &str, flags: &[&str]| -> f64 {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+            .arg("--input")
+            .arg(dir.join(file))
+            .args(["--engine", "radiosity", "--plan"])
+            .args(flags)
+            .output()
+            .expect("render runs");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let line = stdout
+            .lines()
+            .find_map(|l| l.strip_prefix("radiosity mesh: yes ("))
+            .unwrap_or_else(|| panic!("{file} {flags:?}: no mesh line in\n{stdout}"));
+        line.split(' ').next().unwrap().parse().unwrap()
+    };
+    assert_eq!(planned("cube.mgf", &[]), 66.0);
+    let hospital = planned("hospital/hosp.mgf", &[]);
+    assert!(
+        (hospital / 24_982.0 - 1.0).abs() < 0.01,
+        "plan, hospital: {hospital}"
+    );
+    assert_eq!(planned("office1/graz.mgf", &[]), graz);
+    let two_sided = planned("office1/graz.mgf", &["--two-sided"]);
+    assert!(
+        (two_sided / 27_896.0 - 1.0).abs() < 0.01,
+        "plan, graz two-sided: {two_sided}"
+    );
 }

@@ -33,7 +33,10 @@ const MAX_SURVIVAL: f32 = 0.999;
 /// probability 0.999^20000 < 1e-8 even in a closed white room).
 const MAX_VERTICES: u32 = 20_000;
 
-struct PathTracer<'a> {
+/// The path tracer's estimator, for callers that want the radiance along rays of their own:
+/// `render` follows camera rays with it; a per-patch reference for radiosity follows rays
+/// that end on the patches' points (tests/hierarchical.rs).
+pub struct PathTracer<'a> {
     scene: &'a Scene,
     accel: &'a dyn Accel,
     lights: Vec<Light>,
@@ -51,7 +54,7 @@ struct Previous {
 }
 
 impl PathTracer<'_> {
-    fn new<'a>(scene: &'a Scene, accel: &'a dyn Accel) -> PathTracer<'a> {
+    pub fn new<'a>(scene: &'a Scene, accel: &'a dyn Accel) -> PathTracer<'a> {
         let lights = Light::collect(scene);
         let mut cdf = Vec::with_capacity(lights.len());
         let mut total = 0.0;
@@ -131,6 +134,12 @@ impl PathTracer<'_> {
             return Vec3::ZERO;
         }
         light.emitted * (cos_surface / std::f32::consts::PI * weight / light_pdf)
+    }
+
+    /// The radiance arriving along `ray`, from one path.
+    pub fn along(&self, ray: &Ray, rng: &mut Rng) -> Color {
+        let first = closest_surface(self.accel, self.scene, ray);
+        self.radiance(ray, first, rng, &mut Counts::default())
     }
 
     fn radiance(

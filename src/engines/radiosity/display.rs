@@ -66,11 +66,13 @@ pub fn render_solution(
         accel,
         &settings.image(),
         "display",
-        |_ray, hit, _rng, _counts| {
+        |ray, hit, _rng, _counts| {
             let Some(s) = hit else {
                 return scene.background;
             };
-            solution.sample(scene, &s, &field).unwrap_or(Vec3::ZERO)
+            solution
+                .sample(scene, &s, -ray.direction, &field)
+                .unwrap_or(Vec3::ZERO)
         },
     );
     let outline_source = settings.radiosity.display == Display::FormFactors;
@@ -178,7 +180,7 @@ fn patch_ids(
                 let (x, y) = Camera::screen_point(i as u32, j, 0.5, 0.5, w, h);
                 let ray = view.ray(x, y);
                 if let Some(s) = crate::accel::closest_surface(accel, scene, &ray) {
-                    if let Some(cell) = solution.cell_at(scene, &s) {
+                    if let Some(cell) = solution.cell_at(scene, &s, -ray.direction) {
                         *id = cell;
                     }
                 }

@@ -509,6 +509,13 @@ impl<'a> Hierarchy<'a> {
         let node = self.node(s);
         let normal = normal.or_else(|| (!self.node(r).is_cluster()).then(|| self.node(r).normal));
         if let (Some(n), false) = (normal, node.is_cluster()) {
+            // An element sends light from its front only: a point behind its plane (under a
+            // block standing on the floor, or in front of a two-sided wall's other side)
+            // gets none of it, whatever the visibility rays, which start on the element's
+            // lit side, would say.
+            if (x - node.centre).dot(node.normal) <= 0.0 {
+                return 0.0;
+            }
             return point_to_polygon(x, n, &node.corners);
         }
         let d = node.centre - x;
@@ -533,6 +540,9 @@ impl<'a> Hierarchy<'a> {
         receiver * shown / (std::f32::consts::PI * d2)
     }
 }
+
+/// The most a leaf's form factors may sum to (see `update_leaf_scales`).
+const MAX_COVERAGE: f64 = 1.2;
 
 /// Brings each leaf element's scale up to date: how the form factors of the links that reach
 /// it — its own, its ancestors' and its clusters' — change when they are all taken at the
@@ -598,8 +608,15 @@ fn update_leaf_scales(h: &Hierarchy, links: &[Link], dirty: &[bool], scales: &mu
                     let f = h.point_form_factor(el.centre, e, Some(el.normal), l.source);
                     own += (f * l.visible()) as f64;
                 }
+                // A point sees at most its whole hemisphere, but the sum can pass 1: clusters'
+                // isotropic estimates take it to 1.18 on the Cornell box with the sphere
+                // (holding those at 1 moved its floor 0.15% further from the path tracer),
+                // and overlapping surfaces (graz's desks, modelled through each other) to
+                // about 2, where loops of links gained light and two-sided graz diverged.
+                // Held at MAX_COVERAGE, a loop can gain only between surfaces of albedo
+                // above 1/MAX_COVERAGE.
                 let scale = if coarse > 1e-9 {
-                    (own / coarse) as f32
+                    (own.min(MAX_COVERAGE) / coarse) as f32
                 } else {
                     1.0
                 };

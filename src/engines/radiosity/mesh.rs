@@ -13,6 +13,12 @@ use crate::scene::{PrimKind, PrimRef, Scene};
 /// No half-edge (a border edge has no twin).
 pub const NONE: u32 = u32::MAX;
 
+/// The part of a quad or triangle that is its back side: with `--two-sided` every polygon
+/// gets a back-facing face of its own (RenderPark's `sides 2`), so that each side gathers and
+/// shows its own light. Its vertices are welded apart from the front's, so the two sides are
+/// never neighbours across an edge or a corner.
+pub const BACK: u32 = 1;
+
 /// A directed edge of one face: from `vertex` to the next half-edge's vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HalfEdge {
@@ -31,8 +37,8 @@ pub struct Face {
     pub half_edge: u32,
     pub material: u32,
     pub prim: PrimRef,
-    /// For rings: which of the four surfaces the face lies on.
-    /// The part of an analytic shape the face lies on (see `Shape`); 0 on polygons.
+    /// The part of an analytic shape the face lies on (see `Shape`); on polygons 0 for the
+    /// front and `BACK` for the back side.
     pub part: u32,
     /// (u0, v0, u1, v1): the rectangle of the primitive's parameters the face covers; its
     /// corners in half-edge order are (u0,v0), (u1,v0), (u1,v1), (u0,v1).
@@ -50,11 +56,12 @@ pub struct QuadMesh {
     pub faces: Vec<Face>,
     /// The faces that are not split, in creation order: the patches.
     pub leaves: Vec<u32>,
-    /// For each primitive, its top-level faces: quads and triangles have one, spheres H×V
-    /// (row by row from the bottom), rings 4×N (outer, inner, bottom, top).
+    /// For each primitive, its top-level faces: quads and triangles have one (two with their
+    /// back), spheres H×V (row by row from the bottom), rings 4×N (outer, inner, bottom, top).
     roots: HashMap<PrimRef, Roots>,
-    /// Vertex positions seen so far (bit patterns), so equal positions share one vertex.
-    welded: HashMap<[u32; 3], u32>,
+    /// Vertex positions seen so far (bit patterns, and 1 on back sides), so equal positions
+    /// on the same side share one vertex.
+    welded: HashMap<[u32; 4], u32>,
     /// Midpoints already made, keyed by their edge's two vertices (smaller first).
     midpoints: HashMap<(u32, u32), u32>,
 }
@@ -70,25 +77,35 @@ struct Roots {
 }
 
 impl QuadMesh {
-    /// The mesh of every primitive of the scene.
+    /// The mesh of every primitive of the scene; with `--two-sided`, polygons have a back.
     pub fn from_scene(scene: &Scene, raster: Tessellation) -> QuadMesh {
         let mut mesh = QuadMesh::default();
-        let unit = [0.0, 0.0, 1.0, 1.0];
-        for (i, q) in scene.quads.iter().enumerate() {
-            let prim = PrimRef {
-                kind: PrimKind::Quad,
-                index: i as u32,
-            };
-            mesh.add_root(prim, q.material, 0, q.vertices, unit, (1, 1));
-        }
-        for i in 0..scene.triangles.len() {
-            let prim = PrimRef {
-                kind: PrimKind::Triangle,
-                index: i as u32,
-            };
+        let polygons = scene
+            .quads
+            .iter()
+            .enumerate()
+            .map(|(i, q)| (PrimKind::Quad, i, q.material, q.vertices));
+        let triangles = (0..scene.triangles.len()).map(|i| {
             let [a, b, c] = scene.triangles.vertices(i);
-            let material = scene.triangles.materials[i];
-            mesh.add_root(prim, material, 0, [a, b, c, c], unit, (1, 1));
+            (
+                PrimKind::Triangle,
+                i,
+                scene.triangles.materials[i],
+                [a, b, c, c],
+            )
+        });
+        for (kind, i, material, corners) in polygons.chain(triangles) {
+            let prim = PrimRef {
+                kind,
+                index: i as u32,
+            };
+            mesh.add_root(prim, material, 0, corners, [0.0, 0.0, 1.0, 1.0], (1, 1));
+            if scene.two_sided_quads {
+                // The same parameters seen from behind: u runs the other way.
+                let [c0, c1, c2, c3] = corners;
+                let back = [c1, c0, c3, c2];
+                mesh.add_root(prim, material, BACK, back, [1.0, 0.0, 0.0, 1.0], (1, 1));
+            }
         }
         for (i, s) in scene.shapes.iter().enumerate() {
             let prim = PrimRef {
@@ -134,7 +151,8 @@ impl QuadMesh {
                 rows,
             })
             .count += 1;
-        let ids = corners.map(|p| self.weld(p));
+        let back = is_back(prim, part);
+        let ids = corners.map(|p| self.weld(p, back));
         self.push_face_ids(prim, material, part, ids, param, NONE, 0);
     }
 
@@ -172,9 +190,10 @@ impl QuadMesh {
         face
     }
 
-    fn weld(&mut self, p: Vec3) -> u32 {
+    fn weld(&mut self, p: Vec3, back: bool) -> u32 {
         // +0.0 and −0.0 are the same position.
-        let key = [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f32::to_bits);
+        let [x, y, z] = [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f32::to_bits);
+        let key = [x, y, z, back as u32];
         let next = self.vertices.len() as u32;
         let id = *self.welded.entry(key).or_insert(next);
         if id == next {
@@ -205,13 +224,15 @@ impl QuadMesh {
             return;
         }
         let c = self.face_vertex_ids(face);
-        let m = [0, 1, 2, 3].map(|k| self.midpoint(c[k], c[(k + 1) % 4]));
+        let back = is_back(f.prim, f.part);
+        let m = [0, 1, 2, 3].map(|k| self.midpoint(c[k], c[(k + 1) % 4], back));
         let centre = self.weld(
             (self.vertices[c[0] as usize]
                 + self.vertices[c[1] as usize]
                 + self.vertices[c[2] as usize]
                 + self.vertices[c[3] as usize])
                 * 0.25,
+            back,
         );
         let [u0, v0, u1, v1] = f.param;
         let (um, vm) = (0.5 * (u0 + u1), 0.5 * (v0 + v1));
@@ -228,13 +249,13 @@ impl QuadMesh {
         self.faces[face as usize].children = first;
     }
 
-    fn midpoint(&mut self, a: u32, b: u32) -> u32 {
+    fn midpoint(&mut self, a: u32, b: u32, back: bool) -> u32 {
         let key = (a.min(b), a.max(b));
         if let Some(&m) = self.midpoints.get(&key) {
             return m;
         }
         let p = (self.vertices[a as usize] + self.vertices[b as usize]) * 0.5;
-        let m = self.weld(p);
+        let m = self.weld(p, back);
         self.midpoints.insert(key, m);
         m
     }
@@ -351,6 +372,11 @@ impl QuadMesh {
         };
         (0.5 * len, unit)
     }
+}
+
+/// Whether a face of this primitive's part is the back side of a polygon.
+fn is_back(prim: PrimRef, part: u32) -> bool {
+    prim.kind != PrimKind::Shape && part == BACK
 }
 
 /// The parameter rectangle of cell (col, row) of a cols × rows grid over [0,1]².

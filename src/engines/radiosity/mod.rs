@@ -245,18 +245,29 @@ impl Solution {
             .collect()
     }
 
-    /// The patch under a surface hit, and the hit's parameters within that patch.
-    pub fn locate(&self, scene: &Scene, hit: &SurfaceHit) -> Option<(usize, f32, f32)> {
+    /// The patch under a surface hit seen from the side `toward` points to (a polygon's back
+    /// with `--two-sided`), and the hit's parameters within that patch.
+    pub fn locate(
+        &self,
+        scene: &Scene,
+        hit: &SurfaceHit,
+        toward: Vec3,
+    ) -> Option<(usize, f32, f32)> {
+        let side = if scene.two_sided_quads && hit.geometric_normal.dot(toward) < 0.0 {
+            mesh::BACK
+        } else {
+            0
+        };
         let (u, v, part) = match hit.prim.kind {
             PrimKind::Quad => {
                 let q = &scene.quads[hit.prim.index as usize];
                 let (u, v) = inverse_bilinear(&q.vertices, q.normal, hit.point).unwrap_or(hit.uv);
-                (u, v, 0)
+                (u, v, side)
             }
             PrimKind::Triangle => {
                 let (b1, b2) = hit.uv;
                 let u = if b2 < 1.0 { b1 / (1.0 - b2) } else { 0.0 };
-                (u, b2, 0)
+                (u, b2, side)
             }
             PrimKind::Shape => (hit.uv.0, hit.uv.1, hit.part),
         };
@@ -285,17 +296,23 @@ impl Solution {
         }
     }
 
-    /// The patch under a hit, and what `--wireframe` outlines there: its leaf element where
-    /// the solver made elements, else the patch again.
-    pub fn cell_at(&self, scene: &Scene, hit: &SurfaceHit) -> Option<(u32, u32)> {
-        let (k, u, v) = self.locate(scene, hit)?;
+    /// The patch under a hit seen from `toward`, and what `--wireframe` outlines there: its
+    /// leaf element where the solver made elements, else the patch again.
+    pub fn cell_at(&self, scene: &Scene, hit: &SurfaceHit, toward: Vec3) -> Option<(u32, u32)> {
+        let (k, u, v) = self.locate(scene, hit, toward)?;
         Some((k as u32, self.state.leaf_at(k, u, v).0 as u32))
     }
 
-    /// The value of `field` at a surface hit (None where no patch lies, e.g. a triangle of a
-    /// scene whose mesh left it out).
-    pub fn sample(&self, scene: &Scene, hit: &SurfaceHit, field: &PatchField) -> Option<Color> {
-        let (k, u, v) = self.locate(scene, hit)?;
+    /// The value of `field` at a surface hit seen from `toward` (None where no patch lies,
+    /// e.g. a triangle of a scene whose mesh left it out).
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        hit: &SurfaceHit,
+        toward: Vec3,
+        field: &PatchField,
+    ) -> Option<Color> {
+        let (k, u, v) = self.locate(scene, hit, toward)?;
         if field.per_element {
             return Some(field.values[self.state.leaf_at(k, u, v).0]);
         }
@@ -426,12 +443,12 @@ impl IndirectLight for RadiosityIndirect<'_> {
         scene: &Scene,
         _: &dyn Accel,
         s: &SurfaceHit,
-        _: Vec3,
+        n: Vec3,
         _: u32,
         _: &mut Rng,
     ) -> Color {
         self.solution
-            .sample(scene, s, &self.field)
+            .sample(scene, s, n, &self.field)
             .unwrap_or(Vec3::ZERO)
     }
 }
@@ -548,12 +565,12 @@ pub fn mesh_plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
     }
 }
 
-/// Input patches of the radiosity mesh: every primitive's top-level faces (each
-/// `--subdivide` makes four of one).
+/// Input patches of the radiosity mesh: every primitive's top-level faces, a polygon's back
+/// too with `--two-sided` (each `--subdivide` makes four of one).
 fn planned_input_patches(scene: &Scene, r: &RadiositySettings) -> u64 {
     let tessellation = r.tessellation();
-    scene.quads.len() as u64
-        + scene.triangles.len() as u64
+    let sides = 1 + scene.two_sided_quads as u64;
+    (scene.quads.len() + scene.triangles.len()) as u64 * sides
         + scene
             .shapes
             .iter()
