@@ -254,8 +254,8 @@ fn cornell_box_mgf_agrees_with_path_traced_and_fine_progressive_references() {
                 100.0 * l1,
                 100.0 * power_error
             );
-            // Measured (pairs, root cluster): against the path tracer 2.50% / -2.42% and
-            // 2.33% / -2.21%, against the fine progressive 2.21% / -2.11% and 2.05% / -1.90%.
+            // Measured (pairs, root cluster): against the path tracer 2.41% / -2.33% and
+            // 2.24% / -2.12%, against the fine progressive 2.12% / -2.02% and 1.97% / -1.81%.
             // Issue #15 aims at 2% and 1%: not met. Until session 9 the solver sat at -1.2%
             // because points under the blocks gathered the light of the blocks' faces from
             // behind (a leak the progressive solver does not have: elements now send light
@@ -560,6 +560,81 @@ fn office3_against_a_path_traced_reference() {
             clock.elapsed().as_secs_f64(),
             100.0 * l1,
             100.0 * power_error
+        );
+    }
+}
+
+/// The Cornell MGF turned into a measure of form-factor sums: every face white, albedo
+/// 0.001, emitting radiance 1, so that (B − 1)/0.001 is what each patch's form factors (with
+/// visibility) sum to, its coverage. Against the fraction of cosine-distributed rays from
+/// the patch that hit anything (2^16 a patch through the Accel), which is what coverage is.
+/// Without the blocks every patch is within 1% (measured: worst 0.52%; the progressive
+/// solver on the mesh as given is 1.9% under on the floor). With them every patch is short,
+/// worst the short block's front face (−10.4%) and the floor (0.771 against 0.843, −8.5%),
+/// and the floor falls further with refinement (0.781 at --link-error 1e-3, 0.765 at 1e-6);
+/// floor leaves in the cavities under the blocks, which one-sided quads let see through the
+/// blocks, cover 0.36–0.54 against 0.65. Asserted at 12.5% (the measured worst and a fifth)
+/// until it is found: this is where the Cornell MGF's missing power is to be looked for.
+#[test]
+fn form_factor_sums_match_the_coverage_rays_measure() {
+    let text = std::fs::read_to_string(common::own_scene_dir().join("cornell_box.mgf")).unwrap();
+    let mut faces = 0;
+    let mut with_blocks = String::new();
+    let mut empty = String::new();
+    for line in text.lines() {
+        let line = match line.trim_start() {
+            l if l.starts_with("cxy ") => "  cxy 0.333333 0.333333".to_string(),
+            l if l.starts_with("rd ") => " rd 0.001\n ed 575.13".to_string(),
+            l if l.starts_with("ed ") => continue,
+            _ => line.to_string(),
+        };
+        if line.starts_with("f ") {
+            faces += 1;
+        }
+        with_blocks += &line;
+        with_blocks += "\n";
+        // Faces 7–16 are the blocks.
+        if !(line.starts_with("f ") && faces > 6) {
+            empty += &line;
+            empty += "\n";
+        }
+    }
+    let dir = std::env::temp_dir().join(format!("trilux-coverage-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, text, bound) in [("empty", empty, 0.01f64), ("blocks", with_blocks, 0.125)] {
+        let path = dir.join(format!("{name}.mgf"));
+        std::fs::write(&path, text).unwrap();
+        let scene = Scene::load(&path).expect("the variant loads");
+        let mut settings = hierarchical(0);
+        settings.num_shadow_samples = 1;
+        let solution = solve(&scene, &settings);
+        let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).unwrap();
+        let mut worst = 0.0f64;
+        for (k, p) in solution.patches.iter().enumerate() {
+            let rays = 1u32 << 16;
+            let strata = trilux::sampling::Strata::new(trilux::sampling::Pattern::Jittered, rays);
+            let mut hits = 0u64;
+            for i in 0..rays {
+                let mut rng = trilux::sampling::Rng::new(3, k as u64, i as u64);
+                let (s, t) = strata.sample(i, &mut rng);
+                let (dir, _) = trilux::engines::scattering::diffuse_sample(
+                    p.normal,
+                    rng.next_f32(),
+                    rng.next_f32(),
+                );
+                let ray = trilux::geometry::Ray::new(p.point(s, t) + p.normal * 1e-5, dir);
+                hits += accel::closest_surface(accel.as_ref(), &scene, &ray).is_some() as u64;
+            }
+            let truth = hits as f64 / rays as f64;
+            let coverage = (solution.state.radiance[k].x as f64 - 1.0) / 0.001;
+            println!("{name}: patch {k}: coverage {coverage:.4}, rays {truth:.4}");
+            worst = worst.max((coverage / truth - 1.0).abs());
+        }
+        std::fs::remove_file(&path).ok();
+        println!("{name}: worst {:.2}%", 100.0 * worst);
+        assert!(
+            worst < bound,
+            "{name}: form factors sum {worst} off the coverage"
         );
     }
 }
