@@ -254,18 +254,15 @@ fn cornell_box_mgf_agrees_with_path_traced_and_fine_progressive_references() {
                 100.0 * l1,
                 100.0 * power_error
             );
-            // Measured (pairs, root cluster): against the path tracer 2.41% / -2.33% and
-            // 2.24% / -2.12%, against the fine progressive 2.12% / -2.02% and 1.97% / -1.81%.
-            // Issue #15 aims at 2% and 1%: not met. Until session 9 the solver sat at -1.2%
-            // because points under the blocks gathered the light of the blocks' faces from
-            // behind (a leak the progressive solver does not have: elements now send light
-            // from their front only). What remains comes with the blocks and grows with
-            // refinement (--link-error 1e-5: -2.8%): the empty box is +1.0% from the path
-            // tracer, the short block alone -0.1%, the tall block alone -1.6% (its sides
-            // -5% to -10%, the ceiling -5%). Bounds a quarter above the measured figures.
-            assert!(l1 < 0.031, "{name}: relative L1 {l1}");
+            // Measured (pairs, root cluster): against the path tracer 1.54% / +0.18% and
+            // 1.66% / +0.01%, against the fine progressive 1.48% / +0.50% and 1.61% / +0.33%;
+            // the bounds are issue #15's. (Until session 9: 1.79% / -1.23%, then -2.0% once
+            // elements sent light from their front only, because a link none of whose four
+            // point pairs saw its source was dropped instead of refined — next to the blocks,
+            // where part of an element sees what its sample points do not.)
+            assert!(l1 < 0.02, "{name}: relative L1 {l1}");
             assert!(
-                power_error.abs() < 0.03,
+                power_error.abs() < 0.01,
                 "{name}: reflected power {power_error}"
             );
         }
@@ -569,12 +566,12 @@ fn office3_against_a_path_traced_reference() {
 /// visibility) sum to, its coverage. Against the fraction of cosine-distributed rays from
 /// the patch that hit anything (2^16 a patch through the Accel), which is what coverage is.
 /// Without the blocks every patch is within 1% (measured: worst 0.52%; the progressive
-/// solver on the mesh as given is 1.9% under on the floor). With them every patch is short,
-/// worst the short block's front face (−10.4%) and the floor (0.771 against 0.843, −8.5%),
-/// and the floor falls further with refinement (0.781 at --link-error 1e-3, 0.765 at 1e-6);
-/// floor leaves in the cavities under the blocks, which one-sided quads let see through the
-/// blocks, cover 0.36–0.54 against 0.65. Asserted at 12.5% (the measured worst and a fifth)
-/// until it is found: this is where the Cornell MGF's missing power is to be looked for.
+/// solver on the mesh as given is 1.9% under on the floor). With them the room's six faces
+/// are within 1% too (measured: worst the floor, −0.35%), and the blocks' faces are short
+/// by up to 10.1% (the short block's front face, which sees mostly the open front; its other
+/// sides −2.9% to −4.7%): asserted at 12.5%, the measured worst and a fifth, until that is
+/// found. (Before links whose four point pairs all missed their source were refined instead
+/// of dropped, the floor was −8.5% and fell with refinement: this test found it.)
 #[test]
 fn form_factor_sums_match_the_coverage_rays_measure() {
     let text = std::fs::read_to_string(common::own_scene_dir().join("cornell_box.mgf")).unwrap();
@@ -609,7 +606,7 @@ fn form_factor_sums_match_the_coverage_rays_measure() {
         settings.num_shadow_samples = 1;
         let solution = solve(&scene, &settings);
         let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).unwrap();
-        let mut worst = 0.0f64;
+        let (mut worst, mut worst_room) = (0.0f64, 0.0f64);
         for (k, p) in solution.patches.iter().enumerate() {
             let rays = 1u32 << 16;
             let strata = trilux::sampling::Strata::new(trilux::sampling::Pattern::Jittered, rays);
@@ -628,10 +625,23 @@ fn form_factor_sums_match_the_coverage_rays_measure() {
             let truth = hits as f64 / rays as f64;
             let coverage = (solution.state.radiance[k].x as f64 - 1.0) / 0.001;
             println!("{name}: patch {k}: coverage {coverage:.4}, rays {truth:.4}");
-            worst = worst.max((coverage / truth - 1.0).abs());
+            let error = (coverage / truth - 1.0).abs();
+            worst = worst.max(error);
+            // The first six faces are the room's walls and its light.
+            if k < 6 {
+                worst_room = worst_room.max(error);
+            }
         }
         std::fs::remove_file(&path).ok();
-        println!("{name}: worst {:.2}%", 100.0 * worst);
+        println!(
+            "{name}: worst {:.2}%, of the room's faces {:.2}%",
+            100.0 * worst,
+            100.0 * worst_room
+        );
+        assert!(
+            worst_room < 0.01,
+            "{name}: the room's faces {worst_room} off"
+        );
         assert!(
             worst < bound,
             "{name}: form factors sum {worst} off the coverage"

@@ -475,6 +475,22 @@ impl<'a> Hierarchy<'a> {
         }
     }
 
+    /// The largest form factor from a corner of element `r` (moved a hundredth of the way
+    /// towards its centre) to element `s`; 0 when either is a cluster.
+    fn corner_form_factor(&self, r: u32, s: u32) -> f32 {
+        let node = self.node(r);
+        if node.is_cluster() || self.node(s).is_cluster() {
+            return 0.0;
+        }
+        node.corners
+            .iter()
+            .map(|&c| {
+                let x = c + (node.centre - c) * 0.01;
+                self.point_form_factor(x, r, Some(node.normal), s)
+            })
+            .fold(0.0, f32::max)
+    }
+
     fn may_see(&self, r: u32, s: u32) -> bool {
         let (a, b) = (self.node(r), self.node(s));
         a.area > 0.0 && b.area > 0.0 && self.in_front(r, s) && self.in_front(s, r)
@@ -661,6 +677,13 @@ impl Hierarchical {
                 }
                 link.form_factor = sum / PAIRS as f32;
                 link.spread = half_bits(hi - lo);
+                if hi <= 0.0 {
+                    // Every point missed the source, but a receiver reaching in front of it
+                    // from behind (the floor under a block, for the block's side) may see it
+                    // from its other part: the largest form factor at its corners says how
+                    // much is at stake.
+                    link.spread = half_bits(h.corner_form_factor(r, s));
+                }
                 if link.form_factor <= 0.0 || !sampler.visibility() {
                     continue;
                 }
@@ -689,7 +712,7 @@ impl Hierarchical {
             }
             for &o in owners.iter().step_by(PAIRS) {
                 let l = &mut out[o];
-                if l.open > 0 && l.open < PAIRS as u16 {
+                if l.open < PAIRS as u16 {
                     l.spread = half_bits(l.form_factor.max(l.spread()));
                 }
                 l.form_factor *= l.visible();
@@ -743,13 +766,14 @@ impl Hierarchical {
                 }
             }
             for link in self.links(h, sampler, &evaluate) {
-                if link.form_factor <= 0.0 {
+                if link.form_factor <= 0.0 && link.spread() <= 0.0 {
                     continue;
                 }
                 let (r, s) = (link.receiver, link.source);
                 match pick(h, r, s, capped).filter(|_| link_error(h, &link) > threshold) {
                     Some(n) => split_pair(h, r, s, n, &mut next),
-                    None => links.push(link),
+                    None if link.form_factor > 0.0 => links.push(link),
+                    None => {}
                 }
             }
             candidates = next;
