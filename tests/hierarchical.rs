@@ -8,10 +8,14 @@ use std::collections::HashMap;
 
 use common::{backends, furnace, own_scene, worst_relative_error};
 use trilux::accel::{self, AccelOptions};
+use trilux::engines::path::PathTracer;
 use trilux::engines::radiosity::mesh::NONE;
+use trilux::engines::radiosity::patch::Patch;
 use trilux::engines::radiosity::{RadiositySettings, Solution, SolverKind};
+use trilux::engines::scattering::diffuse_sample;
 use trilux::engines::RenderSettings;
-use trilux::geometry::Vec3;
+use trilux::geometry::{Ray, Vec3};
+use trilux::sampling::{Pattern, Rng, Strata};
 use trilux::scene::Scene;
 
 fn hierarchical(subdivide: u32) -> RenderSettings {
@@ -441,8 +445,7 @@ fn two_sided_walls_have_a_patch_on_each_side() {
         assert_eq!(wall_backs, 4, "{solver}");
         let field = solution.field(solution.display_radiance(), false);
         for (from, dir, truth) in [(-0.5f32, 1.0f32, furnace), (2.5, -1.0, 1.0)] {
-            let ray =
-                trilux::geometry::Ray::new(Vec3::new(from, 0.1, 0.2), Vec3::new(dir, 0.0, 0.0));
+            let ray = Ray::new(Vec3::new(from, 0.1, 0.2), Vec3::new(dir, 0.0, 0.0));
             let hit = accel::closest_surface(accel.as_ref(), &scene, &ray).expect("the wall");
             let seen = solution
                 .sample(&scene, &hit, -ray.direction, &field)
@@ -455,34 +458,43 @@ fn two_sided_walls_have_a_patch_on_each_side() {
     }
 }
 
-/// Per patch of `solution`, the radiance leaving it estimated by the path tracer: `paths[k]`
-/// paths ending at stratified points of patch k, each along the ray that arrives at the
-/// point straight onto its front (the surfaces are diffuse, so any direction would do).
-fn path_traced_patches(scene: &Scene, solution: &Solution, paths: &[u32], seed: u64) -> Vec<Vec3> {
+/// Per patch k of `solution`, the mean of `estimate(patch, point, rng)` over `samples[k]`
+/// stratified points of it, each with random numbers from (seed, patch, sample).
+fn patch_means(
+    solution: &Solution,
+    samples: &[u32],
+    seed: u64,
+    estimate: impl Fn(&Patch, Vec3, &mut Rng) -> Vec3 + Sync,
+) -> Vec<Vec3> {
     use rayon::prelude::*;
-    use trilux::engines::path::PathTracer;
-    use trilux::sampling::{Pattern, Rng, Strata};
-    let accel = accel::build(scene, backends()[0], &AccelOptions::default()).expect("builds");
-    let tracer = PathTracer::new(scene, accel.as_ref());
-    let step = 1e-4 * scene.bounds().extent().length();
     solution
         .patches
         .par_iter()
         .enumerate()
         .map(|(k, p)| {
-            let paths = paths[k];
-            let strata = Strata::new(Pattern::Jittered, paths);
+            let n = samples[k];
+            let strata = Strata::new(Pattern::Jittered, n);
             let mut sum = Vec3::ZERO;
-            for i in 0..paths {
+            for i in 0..n {
                 let mut rng = Rng::new(seed, k as u64, i as u64);
                 let (s, t) = strata.sample(i, &mut rng);
-                let x = p.point(s, t);
-                let ray = trilux::geometry::Ray::new(x + p.normal * step, -p.normal);
-                sum += tracer.along(&ray, &mut rng);
+                sum += estimate(p, p.point(s, t), &mut rng);
             }
-            sum / paths as f32
+            sum / n as f32
         })
         .collect()
+}
+
+/// Per patch of `solution`, the radiance leaving it estimated by the path tracer: `paths[k]`
+/// paths ending at stratified points of patch k, each along the ray that arrives at the
+/// point straight onto its front (the surfaces are diffuse, so any direction would do).
+fn path_traced_patches(scene: &Scene, solution: &Solution, paths: &[u32], seed: u64) -> Vec<Vec3> {
+    let accel = accel::build(scene, backends()[0], &AccelOptions::default()).expect("builds");
+    let tracer = PathTracer::new(scene, accel.as_ref());
+    let step = 1e-4 * scene.bounds().extent().length();
+    patch_means(solution, paths, seed, |p, x, rng| {
+        tracer.along(&Ray::new(x + p.normal * step, -p.normal), rng)
+    })
 }
 
 /// Issue #4's analytic form factors between unit squares, through the hierarchy: a square
@@ -618,23 +630,22 @@ fn form_factor_sums_match_the_coverage_rays_measure() {
         settings.num_shadow_samples = 1;
         let solution = solve(&scene, &settings);
         let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).unwrap();
+        let rays = 1u32 << 16;
+        let hit_fractions = patch_means(
+            &solution,
+            &vec![rays; solution.patches.len()],
+            3,
+            |p, x, rng| {
+                let (dir, _) = diffuse_sample(p.normal, rng.next_f32(), rng.next_f32());
+                let ray = Ray::new(x + p.normal * 1e-5, dir);
+                Vec3::splat(
+                    accel::closest_surface(accel.as_ref(), &scene, &ray).is_some() as u32 as f32,
+                )
+            },
+        );
         let (mut worst, mut worst_room) = (0.0f64, 0.0f64);
-        for (k, p) in solution.patches.iter().enumerate() {
-            let rays = 1u32 << 16;
-            let strata = trilux::sampling::Strata::new(trilux::sampling::Pattern::Jittered, rays);
-            let mut hits = 0u64;
-            for i in 0..rays {
-                let mut rng = trilux::sampling::Rng::new(3, k as u64, i as u64);
-                let (s, t) = strata.sample(i, &mut rng);
-                let (dir, _) = trilux::engines::scattering::diffuse_sample(
-                    p.normal,
-                    rng.next_f32(),
-                    rng.next_f32(),
-                );
-                let ray = trilux::geometry::Ray::new(p.point(s, t) + p.normal * 1e-5, dir);
-                hits += accel::closest_surface(accel.as_ref(), &scene, &ray).is_some() as u64;
-            }
-            let truth = hits as f64 / rays as f64;
+        for (k, hit_fraction) in hit_fractions.iter().enumerate() {
+            let truth = hit_fraction.x as f64;
             let coverage = (solution.state.radiance[k].x as f64 - 1.0) / 0.001;
             println!("{name}: patch {k}: coverage {coverage:.4}, rays {truth:.4}");
             let error = (coverage / truth - 1.0).abs();
