@@ -237,7 +237,8 @@ fn cornell_box_mgf_agrees_with_path_traced_and_fine_progressive_references() {
         100.0 * l1,
         100.0 * power_error
     );
-    // Measured 0.51% / +0.32%; the bounds are twice that (the path tracer's own noise per
+    // Measured 0.30% / -0.05% (0.51% / +0.32% while the form factor's clip dropped
+    // crossings); the bounds are twice the earlier figures (the path tracer's own noise per
     // patch is about 0.1–1%).
     assert!(l1 < 0.01, "references disagree: relative L1 {l1}");
     assert!(
@@ -258,13 +259,15 @@ fn cornell_box_mgf_agrees_with_path_traced_and_fine_progressive_references() {
                 100.0 * l1,
                 100.0 * power_error
             );
-            // Measured (pairs, root cluster): against the path tracer 1.54% / +0.18% and
-            // 1.66% / +0.01%, against the fine progressive 1.48% / +0.50% and 1.61% / +0.33%;
-            // the bounds are issue #15's. (Until session 9: 1.79% / -1.23%, then -2.0% once
-            // elements sent light from their front only, because a link none of whose four
-            // point pairs saw its source was dropped instead of refined — next to the blocks,
-            // where part of an element sees what its sample points do not.)
-            assert!(l1 < 0.02, "{name}: relative L1 {l1}");
+            // Measured (pairs, root cluster): against the path tracer 0.89% / +0.13% and
+            // 0.92% / +0.03%, against the fine progressive 1.03% / +0.08% and 1.07% / -0.02%.
+            // The L1 bound is the worst of those and two fifths (the references are 0.30%
+            // apart), the power bound issue #15's. History: 1.79% / -1.23% until session 9,
+            // then -2.0% once elements sent light from their front only, because a link none
+            // of whose four point pairs saw its source was dropped instead of refined; then
+            // 1.54% / +0.18% until the form factor's clip kept every crossing and the leaf
+            // scales were weighted by the light each link carries.
+            assert!(l1 < 0.015, "{name}: relative L1 {l1}");
             assert!(
                 power_error.abs() < 0.01,
                 "{name}: reflected power {power_error}"
@@ -575,77 +578,103 @@ fn office3_against_path_traced_references() {
         100.0 * power_error
     );
     // Measured: the traces 2.16% / +0.12% apart (1.59% / +0.05% with 32 M paths), the
-    // solution L1 11.6%, power -0.17% (-0.06% against 32 M paths; -2.34% while links whose
-    // pairs all missed were dropped). BENCHMARKS.md says where the L1 comes from: a wall
-    // quad overlapped by coplanar ones, walls and ceiling 2-14% high, lamp bulbs low. The
-    // power bound is issue #15's; the L1 bound is the measured figure and a tenth, not the
-    // issue's aim of 2%, which office3 does not meet.
+    // solution L1 9.64%, power -0.08% (11.6% / -0.17% until the form factor's clip kept
+    // every crossing and the leaf scales were weighted by the light each link carries;
+    // -2.34% while links whose pairs all missed were dropped). BENCHMARKS.md says where the
+    // L1 comes from: a wall quad overlapped by coplanar ones, walls and ceiling high, lamp
+    // bulbs low. The power bound is issue #15's; the L1 bound is the measured figure and a
+    // tenth, not the issue's aim of 2%, which office3 does not meet.
     assert!(noise < 0.04, "the references disagree: L1 {noise}");
     assert!(power_error.abs() < 0.01, "reflected power {power_error}");
-    assert!(l1 < 0.13, "relative L1 {l1}");
+    assert!(l1 < 0.106, "relative L1 {l1}");
 }
 
-/// The Cornell MGF turned into a measure of form-factor sums: every face white, albedo
-/// 0.001, emitting radiance 1, so that (B − 1)/0.001 is what each patch's form factors (with
-/// visibility) sum to, its coverage. Against the fraction of cosine-distributed rays from
-/// the patch that hit anything (2^16 a patch through the Accel), which is what coverage is.
+/// The Cornell MGF made a measure of form factors: every face white of albedo 0.001, the
+/// faces `lit` picks emitting radiance 1 (`ed` 575.13, as mgf.md converts), the others none,
+/// and only the faces `kept` picks. A patch's radiance less its own emission, over 0.001, is
+/// then what its form factors (visibility included) to the lit faces sum to, up to 0.1%.
+fn cornell_mgf_lit(lit: impl Fn(usize) -> bool, kept: impl Fn(usize) -> bool) -> String {
+    let text = std::fs::read_to_string(common::own_scene_dir().join("cornell_box.mgf")).unwrap();
+    let mut out = String::new();
+    for (name, ed) in [("dark", ""), ("lit", "\n ed 575.13")] {
+        out += &format!("m {name} =\n c\n  cxy 0.333333 0.333333\n rd 0.001{ed}\n");
+    }
+    let mut face = 0;
+    let mut lines = text.lines().peekable();
+    while let Some(line) = lines.next() {
+        let t = line.trim_start();
+        if t.starts_with("m ") {
+            // The scene's own materials, defined (with their indented lines) or used.
+            while lines.peek().is_some_and(|l| l.starts_with(' ')) {
+                lines.next();
+            }
+            continue;
+        }
+        if t.starts_with("f ") {
+            face += 1;
+            if !kept(face - 1) {
+                continue;
+            }
+            out += if lit(face - 1) { "m lit\n" } else { "m dark\n" };
+        }
+        out += line;
+        out += "\n";
+    }
+    out
+}
+
+/// Solves an MGF text hierarchically (four point pairs, one shadow sample) and measures,
+/// per patch, the fraction of `rays` cosine-distributed rays from stratified points of it
+/// whose first hit `counts` (the hit's primitive index).
+fn solve_and_cast(
+    text: &str,
+    name: &str,
+    rays: u32,
+    counts: impl Fn(u32) -> bool + Sync,
+) -> (Solution, Vec<f64>) {
+    let dir = std::env::temp_dir().join(format!("trilux-form-factors-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.mgf"));
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::load(&path).expect("the variant loads");
+    std::fs::remove_file(&path).ok();
+    let mut settings = hierarchical(0);
+    settings.num_shadow_samples = 1;
+    let solution = solve(&scene, &settings);
+    let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).unwrap();
+    let fractions = patch_means(
+        &solution,
+        &vec![rays; solution.patches.len()],
+        3,
+        |p, x, rng| {
+            let (dir, _) = diffuse_sample(p.normal, rng.next_f32(), rng.next_f32());
+            let ray = Ray::new(x + p.normal * 1e-5, dir);
+            let hit = accel::closest_surface(accel.as_ref(), &scene, &ray);
+            Vec3::splat(hit.is_some_and(|h| counts(h.prim.index)) as u32 as f32)
+        },
+    );
+    (solution, fractions.iter().map(|f| f.x as f64).collect())
+}
+
+/// The Cornell MGF with every face lit: (B − 1)/0.001 is each patch's coverage, the sum of
+/// its form factors, against the fraction of cosine rays from the patch that hit anything
+/// (2^16 a patch), which is what coverage is.
 /// Without the blocks every patch is within 1% (measured: worst 0.52%; the progressive
 /// solver on the mesh as given is 1.9% under on the floor). With them the room's six faces
-/// are within 1% too (measured: worst the floor, −0.35%), and the blocks' faces are short
-/// by up to 10.1% (the short block's front face, which sees mostly the open front; its other
-/// sides −2.9% to −4.7%): asserted at 12.5%, the measured worst and a fifth, until that is
-/// found. (Before links whose four point pairs all missed their source were refined instead
-/// of dropped, the floor was −8.5% and fell with refinement: this test found it.)
+/// are within 1% too (measured: worst 0.29%), and the blocks' faces within 1.5%
+/// (measured: worst 1.20%, the short block's side facing the tall one). This test found two
+/// bugs: links whose four point pairs all missed their source were dropped instead of
+/// refined (the floor −8.5%, falling with refinement), and the form factor's clip dropped
+/// about half the crossings of polygons straddling the receiver's plane (the blocks' faces,
+/// which see the floor run on under the other block, up to 10.1% short).
 #[test]
 fn form_factor_sums_match_the_coverage_rays_measure() {
-    let text = std::fs::read_to_string(common::own_scene_dir().join("cornell_box.mgf")).unwrap();
-    let mut faces = 0;
-    let mut with_blocks = String::new();
-    let mut empty = String::new();
-    for line in text.lines() {
-        let line = match line.trim_start() {
-            l if l.starts_with("cxy ") => "  cxy 0.333333 0.333333".to_string(),
-            l if l.starts_with("rd ") => " rd 0.001\n ed 575.13".to_string(),
-            l if l.starts_with("ed ") => continue,
-            _ => line.to_string(),
-        };
-        if line.starts_with("f ") {
-            faces += 1;
-        }
-        with_blocks += &line;
-        with_blocks += "\n";
-        // Faces 7–16 are the blocks.
-        if !(line.starts_with("f ") && faces > 6) {
-            empty += &line;
-            empty += "\n";
-        }
-    }
-    let dir = std::env::temp_dir().join(format!("trilux-coverage-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    for (name, text, bound) in [("empty", empty, 0.01f64), ("blocks", with_blocks, 0.125)] {
-        let path = dir.join(format!("{name}.mgf"));
-        std::fs::write(&path, text).unwrap();
-        let scene = Scene::load(&path).expect("the variant loads");
-        let mut settings = hierarchical(0);
-        settings.num_shadow_samples = 1;
-        let solution = solve(&scene, &settings);
-        let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).unwrap();
-        let rays = 1u32 << 16;
-        let hit_fractions = patch_means(
-            &solution,
-            &vec![rays; solution.patches.len()],
-            3,
-            |p, x, rng| {
-                let (dir, _) = diffuse_sample(p.normal, rng.next_f32(), rng.next_f32());
-                let ray = Ray::new(x + p.normal * 1e-5, dir);
-                Vec3::splat(
-                    accel::closest_surface(accel.as_ref(), &scene, &ray).is_some() as u32 as f32,
-                )
-            },
-        );
+    // Faces 6–15 are the blocks.
+    for (name, faces, bound) in [("empty", 6, 0.01f64), ("blocks", 16, 0.015)] {
+        let text = cornell_mgf_lit(|_| true, |f| f < faces);
+        let (solution, hit_fractions) = solve_and_cast(&text, name, 1 << 16, |_| true);
         let (mut worst, mut worst_room) = (0.0f64, 0.0f64);
-        for (k, hit_fraction) in hit_fractions.iter().enumerate() {
-            let truth = hit_fraction.x as f64;
+        for (k, &truth) in hit_fractions.iter().enumerate() {
             let coverage = (solution.state.radiance[k].x as f64 - 1.0) / 0.001;
             println!("{name}: patch {k}: coverage {coverage:.4}, rays {truth:.4}");
             let error = (coverage / truth - 1.0).abs();
@@ -655,7 +684,6 @@ fn form_factor_sums_match_the_coverage_rays_measure() {
                 worst_room = worst_room.max(error);
             }
         }
-        std::fs::remove_file(&path).ok();
         println!(
             "{name}: worst {:.2}%, of the room's faces {:.2}%",
             100.0 * worst,
@@ -670,4 +698,48 @@ fn form_factor_sums_match_the_coverage_rays_measure() {
             "{name}: form factors sum {worst} off the coverage"
         );
     }
+}
+
+/// The Cornell MGF lit one face at a time (16 solves): (B_k − [k lit])/0.001 is patch k's
+/// form factor to the lit face, against the fraction of 2^16 cosine rays from patch k whose
+/// first hit is that face. Per receiver, the sum over the sources of |solved − rays| over
+/// its coverage by rays. Measured: worst 2.05% (the green wall; the rays' own noise is
+/// about 0.5–1% of a receiver's coverage). Asserted at 3%. With one ratio for every link
+/// in the leaf scales (unweighted by what each carries) the worst is 10.1%: a coarse link
+/// carrying nothing (the floor's, while only the back wall is lit) rescaled the fine links
+/// that carry the light by its own ratio (the short block's back face got 0.20 of the back
+/// wall where the rays say 0.29).
+#[test]
+fn form_factors_per_source_match_the_rays() {
+    let n = 16;
+    let mut solved = vec![vec![0.0f64; n]; n];
+    let mut traced = vec![vec![0.0f64; n]; n];
+    for j in 0..n {
+        let text = cornell_mgf_lit(|f| f == j, |_| true);
+        let (solution, fractions) = solve_and_cast(&text, &format!("lit-{j}"), 1 << 16, |prim| {
+            prim as usize == j
+        });
+        for k in 0..n {
+            let own = if k == j { 1.0 } else { 0.0 };
+            solved[k][j] = (solution.state.radiance[k].x as f64 - own) / 0.001;
+            traced[k][j] = fractions[k];
+        }
+    }
+    let mut worst = (0.0f64, 0);
+    for k in 0..n {
+        let off: f64 = (0..n)
+            .filter(|&j| j != k)
+            .map(|j| (solved[k][j] - traced[k][j]).abs())
+            .sum();
+        let coverage: f64 = traced[k].iter().sum();
+        println!(
+            "receiver {k}: off by {:.2}% of its coverage {coverage:.4}",
+            100.0 * off / coverage
+        );
+        if off / coverage > worst.0 {
+            worst = (off / coverage, k);
+        }
+    }
+    println!("worst: receiver {}, {:.2}%", worst.1, 100.0 * worst.0);
+    assert!(worst.0 < 0.03, "receiver {} off by {}", worst.1, worst.0);
 }
