@@ -156,6 +156,15 @@ fn furnace_through_the_clusters() {
 /// same mesh subdivided further: its patches are averaged over the patch of `solution` they
 /// descend from), and the relative difference of the reflected power.
 fn per_input_patch_difference(reference: &Solution, solution: &Solution) -> (f64, f64) {
+    per_input_patch_difference_over(reference, solution, &vec![true; solution.patches.len()])
+}
+
+/// `per_input_patch_difference` over the patches of `solution` that `counted` marks.
+fn per_input_patch_difference_over(
+    reference: &Solution,
+    solution: &Solution,
+    counted: &[bool],
+) -> (f64, f64) {
     let patch_of_face: HashMap<u32, usize> = solution
         .patches
         .iter()
@@ -174,11 +183,13 @@ fn per_input_patch_difference(reference: &Solution, solution: &Solution) -> (f64
         entry.1 += p.area as f64 * (*b - p.emitted).element_sum() as f64;
     }
     let (mut diff, mut sum, mut power_ref, mut power) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
-    for ((p, b), &(area, a)) in solution
+    for (((p, b), &(area, a)), _) in solution
         .patches
         .iter()
         .zip(&solution.state.radiance)
         .zip(&reflected)
+        .zip(counted)
+        .filter(|(_, &counted)| counted)
     {
         assert!(area > 0.0, "every patch is covered by the reference");
         let b = (*b - p.emitted).element_sum() as f64 * p.area as f64;
@@ -500,6 +511,20 @@ fn path_traced_patches(scene: &Scene, solution: &Solution, paths: &[u32], seed: 
     })
 }
 
+/// Per patch of `solution`, whether the rays `path_traced_patches` sends to it land on it at
+/// least half the time: a patch lying under a coplanar one (office3's walls overlap) is not
+/// what those rays measure, so the path-traced reference says nothing of it.
+fn seen_by_the_reference(scene: &Scene, solution: &Solution, paths: &[u32]) -> Vec<bool> {
+    let accel = accel::build(scene, backends()[0], &AccelOptions::default()).expect("builds");
+    let step = 1e-4 * scene.bounds().extent().length();
+    let landed = patch_means(solution, paths, 5, |p, x, _| {
+        let ray = Ray::new(x + p.normal * step, -p.normal);
+        let hit = accel::closest_surface(accel.as_ref(), scene, &ray);
+        Vec3::splat(hit.is_some_and(|h| h.prim == p.prim && h.part == p.part) as u32 as f32)
+    });
+    landed.iter().map(|l| l.x >= 0.5).collect()
+}
+
 /// Issue #4's analytic form factors between unit squares, through the hierarchy: a square
 /// emitting radiance 1 (albedo 0) and a receiving square of albedo ρ = 0.5, nothing else, so
 /// the receiver's radiance is exactly ρ·F. Linked as one pair of patches and refined by the
@@ -568,25 +593,43 @@ fn office3_against_path_traced_references() {
     again.state.radiance = path_traced_patches(&scene, &solution, &paths, 8);
     let (l1, power_error) = per_input_patch_difference(&traced, &solution);
     let (noise, noise_power) = per_input_patch_difference(&traced, &again);
+    let seen = seen_by_the_reference(&scene, &solution, &paths);
+    let unseen_area: f64 = (solution.patches.iter().zip(&seen))
+        .filter(|(_, &seen)| !seen)
+        .map(|(p, _)| p.area as f64)
+        .sum();
+    let (l1_seen, _) = per_input_patch_difference_over(&traced, &solution, &seen);
     println!(
         "office3: {}; the two traces apart by L1 {:.2}% and power {:+.2}%; the solution \
-         against the first: relative L1 {:.2}%, reflected power {:+.2}%",
+         against the first: relative L1 {:.2}%, reflected power {:+.2}%; over the patches the \
+         reference sees ({} of {} unseen, {:.2} m² of {:.1}), L1 {:.2}%",
         solution.solver_report,
         100.0 * noise,
         100.0 * noise_power,
         100.0 * l1,
-        100.0 * power_error
+        100.0 * power_error,
+        seen.iter().filter(|&&s| !s).count(),
+        seen.len(),
+        unseen_area,
+        total_area,
+        100.0 * l1_seen
     );
     // Measured: the traces 2.16% / +0.12% apart (1.59% / +0.05% with 32 M paths), the
     // solution L1 9.64%, power -0.08% (11.6% / -0.17% until the form factor's clip kept
     // every crossing and the leaf scales were weighted by the light each link carries;
     // -2.34% while links whose pairs all missed were dropped). BENCHMARKS.md says where the
     // L1 comes from: a wall quad overlapped by coplanar ones, walls and ceiling high, lamp
-    // bulbs low. The power bound is issue #15's; the L1 bound is the measured figure and a
-    // tenth, not the issue's aim of 2%, which office3 does not meet.
+    // bulbs low. 3,336 small patches (11.05 of 155.3 m²) lie under other geometry, where
+    // the reference's rays land on something else: over the rest the L1 is 8.08%. The
+    // power bound is issue #15's; the L1 bounds are the measured figures and a tenth, not
+    // the issue's aim of 2%, which office3 does not meet.
     assert!(noise < 0.04, "the references disagree: L1 {noise}");
     assert!(power_error.abs() < 0.01, "reflected power {power_error}");
     assert!(l1 < 0.106, "relative L1 {l1}");
+    assert!(
+        l1_seen < 0.089,
+        "relative L1 over the patches seen {l1_seen}"
+    );
 }
 
 /// The Cornell MGF made a measure of form factors: every face white of albedo 0.001, the
