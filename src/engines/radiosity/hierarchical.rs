@@ -688,14 +688,14 @@ fn update_leaf_scales(
                         h.point_form_factor(el.centre, e, Some(el.normal), l.source)
                     };
                     let (at_centre, as_is) = ((f * l.visible()) as f64, l.form_factor as f64);
-                    let e = emission[s].as_dvec3();
+                    let emitted = emission[s].as_dvec3();
                     let b = if weighted {
                         (h.radiance[s] - emission[s]).max(Vec3::ZERO).as_dvec3()
                     } else {
                         DVec3::ONE
                     };
-                    direct.0 += e * at_centre;
-                    direct.1 += e * as_is;
+                    direct.0 += emitted * at_centre;
+                    direct.1 += emitted * as_is;
                     reflected.0 += b * at_centre;
                     reflected.1 += b * as_is;
                     covered += as_is;
@@ -910,27 +910,21 @@ fn split_pair(h: &mut Hierarchy, r: u32, s: u32, n: u32, out: &mut Vec<(u32, u32
     }
 }
 
-/// Gathers over the links — the sources' emission and what they reflect apart, for the
-/// leaf scales — pushes the gathered radiance down (scaled at the leaves by `scales`, see
+/// Per node: what its own links gather of `sources` (F × the source's value, summed).
+fn gather(h: &Hierarchy, links: &[Link], sources: &[Color]) -> Vec<Color> {
+    let mut gathered = vec![Vec3::ZERO; h.nodes.len()];
+    for l in links {
+        gathered[l.receiver as usize] += sources[l.source as usize] * l.form_factor;
+    }
+    gathered
+}
+
+/// Pushes what the links gathered — of the sources' emission and of what they reflect,
+/// apart for the leaf scales — down (scaled at the leaves by `scales`, see
 /// `update_leaf_scales`) and pulls the radiosity back up. Returns each node's incident
 /// radiance (at a leaf its own and its ancestors' gathering; above, the area mean of its
 /// leaves') and the new radiance of every node.
-fn sweep(
-    h: &Hierarchy,
-    links: &[Link],
-    scales: &[LeafScale],
-    sources: &[Color],
-    emission: &[Color],
-) -> (Vec<Color>, Vec<Color>) {
-    let mut gathered = Gathered {
-        direct: vec![Vec3::ZERO; h.nodes.len()],
-        reflected: vec![Vec3::ZERO; h.nodes.len()],
-    };
-    for l in links {
-        let (r, s) = (l.receiver as usize, l.source as usize);
-        gathered.direct[r] += emission[s] * l.form_factor;
-        gathered.reflected[r] += (sources[s] - emission[s]) * l.form_factor;
-    }
+fn sweep(h: &Hierarchy, scales: &[LeafScale], gathered: &Gathered) -> (Vec<Color>, Vec<Color>) {
     let mut light = Light {
         incident: vec![Vec3::ZERO; h.nodes.len()],
         radiance: vec![Vec3::ZERO; h.nodes.len()],
@@ -940,7 +934,7 @@ fn sweep(
             h,
             h.top,
             (Vec3::ZERO, Vec3::ZERO),
-            &gathered,
+            gathered,
             scales,
             &mut light,
         );
@@ -950,9 +944,9 @@ fn sweep(
 
 /// Per node: the light gathered over its own links, from the sources' emission and from
 /// what they reflect.
-struct Gathered {
-    direct: Vec<Color>,
-    reflected: Vec<Color>,
+struct Gathered<'a> {
+    direct: &'a [Color],
+    reflected: &'a [Color],
 }
 
 /// Per node: incident and outgoing radiance.
@@ -1056,6 +1050,8 @@ impl RadiositySolver for Hierarchical {
         let mut links = Vec::new();
         let mut capped = self.refine(&mut h, sampler, initial, threshold, min_area, &mut links);
         let mut emission = h.emission();
+        // What the links gather of the emission changes only with the links.
+        let mut direct = gather(&h, &links, &emission);
         let mut scales = Vec::new();
         update_leaf_scales(&h, &links, &emission, false, &mut scales);
 
@@ -1071,7 +1067,17 @@ impl RadiositySolver for Hierarchical {
             let mut first_change = None;
             // Sweeps over the fixed links until the change of power is under the tolerance.
             loop {
-                let (inc, radiance) = sweep(&h, &links, &scales, &h.radiance, &emission);
+                let reflected: Vec<Color> = h
+                    .radiance
+                    .iter()
+                    .zip(&emission)
+                    .map(|(&b, &e)| b - e)
+                    .collect();
+                let gathered = Gathered {
+                    direct: &direct,
+                    reflected: &gather(&h, &links, &reflected),
+                };
+                let (inc, radiance) = sweep(&h, &scales, &gathered);
                 let before = power(&h.radiance[..patches.len()]);
                 let change = (power(&radiance[..patches.len()]) - before).abs();
                 h.radiance = radiance;
@@ -1128,6 +1134,7 @@ impl RadiositySolver for Hierarchical {
                 let candidates = again.iter().map(|l| (l.receiver, l.source)).collect();
                 capped |= self.refine(&mut h, sampler, candidates, threshold, min_area, &mut links);
                 emission = h.emission();
+                direct = gather(&h, &links, &emission);
             }
             // Whether or not links were refined, the leaf scales now weigh the links by the
             // radiosities just solved for; the next round's first sweep says how much that
@@ -1136,10 +1143,15 @@ impl RadiositySolver for Hierarchical {
         }
 
         // What came straight from the emitters: one gather of the emission alone.
-        let (direct, _) = sweep(&h, &links, &scales, &emission, &emission);
+        let none = vec![Vec3::ZERO; h.nodes.len()];
+        let gathered = Gathered {
+            direct: &direct,
+            reflected: &none,
+        };
+        let (incident_direct, _) = sweep(&h, &scales, &gathered);
         light.radiance = h.radiance[..patches.len()].to_vec();
         light.incident = incident[..patches.len()].to_vec();
-        light.incident_direct = direct[..patches.len()].to_vec();
+        light.incident_direct = incident_direct[..patches.len()].to_vec();
         light.undistributed = vec![Vec3::ZERO; patches.len()];
         light.iterations = sweeps;
         light.elements = h.elements(&incident);
