@@ -505,10 +505,22 @@ fn patch_means(
 fn path_traced_patches(scene: &Scene, solution: &Solution, paths: &[u32], seed: u64) -> Vec<Vec3> {
     let accel = accel::build(scene, backends()[0], &AccelOptions::default()).expect("builds");
     let tracer = PathTracer::new(scene, accel.as_ref());
-    let step = 1e-4 * scene.bounds().extent().length();
+    let step = arrival_step(scene);
     patch_means(solution, paths, seed, |p, x, rng| {
-        tracer.along(&Ray::new(x + p.normal * step, -p.normal), rng)
+        tracer.along(&arriving(p, x, step), rng)
     })
+}
+
+/// How far in front of a patch `path_traced_patches`' rays start: a ten-thousandth of the
+/// scene's diagonal.
+fn arrival_step(scene: &Scene) -> f32 {
+    1e-4 * scene.bounds().extent().length()
+}
+
+/// The ray `path_traced_patches` follows to point `x` of patch `p`: from `step` in front of
+/// it, straight onto its front.
+fn arriving(p: &Patch, x: Vec3, step: f32) -> Ray {
+    Ray::new(x + p.normal * step, -p.normal)
 }
 
 /// Per patch of `solution`, whether the rays `path_traced_patches` sends to it land on it at
@@ -516,10 +528,9 @@ fn path_traced_patches(scene: &Scene, solution: &Solution, paths: &[u32], seed: 
 /// what those rays measure, so the path-traced reference says nothing of it.
 fn seen_by_the_reference(scene: &Scene, solution: &Solution, paths: &[u32]) -> Vec<bool> {
     let accel = accel::build(scene, backends()[0], &AccelOptions::default()).expect("builds");
-    let step = 1e-4 * scene.bounds().extent().length();
+    let step = arrival_step(scene);
     let landed = patch_means(solution, paths, 5, |p, x, _| {
-        let ray = Ray::new(x + p.normal * step, -p.normal);
-        let hit = accel::closest_surface(accel.as_ref(), scene, &ray);
+        let hit = accel::closest_surface(accel.as_ref(), scene, &arriving(p, x, step));
         Vec3::splat(hit.is_some_and(|h| h.prim == p.prim && h.part == p.part) as u32 as f32)
     });
     landed.iter().map(|l| l.x >= 0.5).collect()
