@@ -6,7 +6,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use common::{backends, course_scenes};
+use common::{backends, own_scenes};
 
 fn render(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_render"))
@@ -25,19 +25,6 @@ fn ok(out: &Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
-/// A course command line's arguments, its scene file found in the course folder.
-fn course_args(course: &Path, line: &str) -> Vec<String> {
-    line.split(' ')
-        .map(|a| {
-            if a.ends_with(".obj") {
-                course.join(a).to_string_lossy().into_owned()
-            } else {
-                a.to_string()
-            }
-        })
-        .collect()
-}
-
 /// Runs `render` once per backend with `args` plus `--accel KIND` (a "{kind}" in `args` or
 /// `output` stands for the backend's name) and asserts that every run wrote the same bytes to
 /// `output`; `what` names the run in the failure message.
@@ -53,6 +40,7 @@ fn assert_backends_write_identical_images(dir: &Path, args: &[&str], output: &st
             std::fs::read(dir.join(output.replace("{kind}", &kind))).expect("image written")
         })
         .collect();
+    assert!(images.len() >= 2, "{what}: one backend, nothing to compare");
     assert!(
         images.windows(2).all(|w| w[0] == w[1]),
         "{what}: the backends' images differ"
@@ -65,10 +53,14 @@ fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
+#[cfg_attr(
+    not(feature = "embree"),
+    ignore = "compares Embree with the BVH: needs the embree feature"
+)]
 #[test]
-fn every_course_scene_renders_identically_with_both_backends() {
+fn every_scene_renders_identically_with_both_backends() {
     let dir = temp_dir("backends");
-    for scene in course_scenes() {
+    for scene in own_scenes() {
         let input = scene.to_str().unwrap();
         let stem = scene.file_stem().unwrap().to_string_lossy().into_owned();
         // The MATERIALS view, and the default ray tracer with soft shadows and mirrors.
@@ -94,11 +86,9 @@ fn every_course_scene_renders_identically_with_both_backends() {
 
 #[test]
 fn course_command_lines_run_verbatim() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
+    let scenes = common::own_scene_dir();
     let dir = temp_dir("verbatim");
-    let scene = |name: &str| course.join(name).to_string_lossy().into_owned();
+    let scene = |name: &str| scenes.join(name).to_string_lossy().into_owned();
     let lines: Vec<Vec<String>> = vec![
         vec![
             "-input".into(),
@@ -191,16 +181,14 @@ fn course_command_lines_run_verbatim() {
 
 #[test]
 fn plan_reports_what_the_scene_needs() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
+    let scenes = common::own_scene_dir();
     let dir = temp_dir("plan");
     let spheres = ok(&render(
         &dir,
         &[
             "--plan",
             "-input",
-            course.join("reflective_spheres.obj").to_str().unwrap(),
+            scenes.join("reflective_spheres.obj").to_str().unwrap(),
         ],
     ));
     assert!(spheres.contains("user geometry: 2 spheres"), "{spheres}");
@@ -211,7 +199,7 @@ fn plan_reports_what_the_scene_needs() {
         &[
             "--plan",
             "-input",
-            course.join("l.obj").to_str().unwrap(),
+            scenes.join("l.obj").to_str().unwrap(),
             "--subdivide",
             "2",
             "-num_shadow_samples",
@@ -229,7 +217,7 @@ fn plan_reports_what_the_scene_needs() {
         &[
             "--plan",
             "-input",
-            course.join("cornell_box.obj").to_str().unwrap(),
+            scenes.join("cornell_box.obj").to_str().unwrap(),
         ],
     ));
     assert!(cornell.contains("user geometry: none"), "{cornell}");
@@ -242,7 +230,7 @@ fn plan_reports_what_the_scene_needs() {
         &[
             "--plan",
             "-input",
-            course.join("reflective_ring.obj").to_str().unwrap(),
+            scenes.join("reflective_ring.obj").to_str().unwrap(),
         ],
     ));
     assert!(ring.contains("user geometry: 1 ring"), "{ring}");
@@ -256,11 +244,9 @@ fn plan_reports_what_the_scene_needs() {
 
 #[test]
 fn output_formats_are_linear_and_written_atomically() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
+    let scenes = common::own_scene_dir();
     let dir = temp_dir("formats");
-    let input = course.join("reflective_spheres.obj");
+    let input = scenes.join("reflective_spheres.obj");
     for name in ["a.png", "a.jpg", "a.exr", "a.pfm"] {
         ok(&render(
             &dir,
@@ -320,11 +306,9 @@ fn output_formats_are_linear_and_written_atomically() {
 
 #[test]
 fn thread_count_does_not_change_the_image() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
+    let scenes = common::own_scene_dir();
     let dir = temp_dir("threads");
-    let input = course.join("textured_plane_reflective_sphere.obj");
+    let input = scenes.join("textured_plane_reflective_sphere.obj");
     for t in ["1", "2"] {
         ok(&render(
             &dir,
@@ -372,11 +356,9 @@ fn bad_input_is_a_clear_error() {
 
 #[test]
 fn ray_tree_is_written_beside_the_image() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
+    let scenes = common::own_scene_dir();
     let dir = temp_dir("raytree");
-    let input = course.join("reflective_spheres.obj");
+    let input = scenes.join("reflective_spheres.obj");
     // Pixel (32, 24) of a 64×64 image is on the large mirror sphere.
     ok(&render(
         &dir,
@@ -428,11 +410,13 @@ fn ray_tree_is_written_beside_the_image() {
 
 /// The ray-tracing command lines of the course, verbatim, each with both backends: the
 /// images must be identical.
+#[cfg_attr(
+    not(feature = "embree"),
+    ignore = "compares Embree with the BVH: needs the embree feature"
+)]
 #[test]
 fn course_ray_tracing_commands_give_identical_images_with_both_backends() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
+    let scenes = common::own_scene_dir();
     let commands = [
         "-input reflective_spheres.obj",
         "-input reflective_spheres.obj -num_bounces 1",
@@ -448,7 +432,7 @@ fn course_ray_tracing_commands_give_identical_images_with_both_backends() {
     ];
     for (k, command) in commands.iter().enumerate() {
         let dir = temp_dir(&format!("course-{k}"));
-        let mut args = course_args(&course, command);
+        let mut args = common::scene_args(&scenes, command);
         args.push("--quiet".into());
         let argv: Vec<&str> = args.iter().map(String::as_str).collect();
         // Each run writes the default output, <stem>.png, read before the next run.
@@ -510,9 +494,7 @@ fn compare_reports_the_errors_of_an_image_against_a_reference() {
 /// with a radiosity-only flag run the radiosity engine.
 #[test]
 fn course_radiosity_command_lines_run_verbatim() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
+    let scenes = common::own_scene_dir();
     let dir = temp_dir("radiosity-verbatim");
     let lines = [
         "-input cornell_box.obj",
@@ -524,7 +506,7 @@ fn course_radiosity_command_lines_run_verbatim() {
         "-input cornell_box_diffuse_sphere.obj -sphere_rasterization 16 12 -num_shadow_samples 1",
     ];
     for line in lines {
-        let args = course_args(&course, line);
+        let args = common::scene_args(&scenes, line);
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let out = render(&dir, &args);
         ok(&out);
@@ -544,14 +526,16 @@ fn course_radiosity_command_lines_run_verbatim() {
 
 /// Every visualization mode, the wireframe, the convergence log, adaptive subdivision and the
 /// hybrid ray tracer write their files; radiosity images are identical with both backends.
+#[cfg_attr(
+    not(feature = "embree"),
+    ignore = "compares Embree with the BVH: needs the embree feature"
+)]
 #[test]
 fn radiosity_modes_write_their_outputs_identically_with_both_backends() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
+    let scenes = common::own_scene_dir();
     let dir = temp_dir("radiosity-modes");
-    let l = course.join("l.obj").to_string_lossy().into_owned();
-    let sphere = course
+    let l = scenes.join("l.obj").to_string_lossy().into_owned();
+    let sphere = scenes
         .join("cornell_box_diffuse_sphere.obj")
         .to_string_lossy()
         .into_owned();
@@ -648,9 +632,7 @@ fn radiosity_modes_write_their_outputs_identically_with_both_backends() {
 /// `<stem>.png` with the photon engine.
 #[test]
 fn course_photon_command_lines_run_verbatim() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
+    let scenes = common::own_scene_dir();
     let dir = temp_dir("photon-verbatim");
     let lines = [
         "-input reflective_ring.obj -num_photons_to_shoot 10000 -num_bounces 2 -num_shadow_samples 10",
@@ -659,7 +641,7 @@ fn course_photon_command_lines_run_verbatim() {
         "-input cornell_box_reflective_sphere.obj -num_photons_to_shoot 500000 -num_shadow_samples 500 -num_photons_to_collect 500 -num_bounces 1",
     ];
     for line in lines {
-        let mut args = course_args(&course, line);
+        let mut args = common::scene_args(&scenes, line);
         args.extend(["-size", "48", "48"].map(String::from));
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let out = render(&dir, &args);
@@ -681,15 +663,13 @@ fn course_photon_command_lines_run_verbatim() {
 /// without tracing; a file made for another scene, or not a photon file, is a clear error.
 #[test]
 fn photon_maps_are_saved_and_loaded_and_checked() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
+    let scenes = common::own_scene_dir();
     let dir = temp_dir("photon-file");
-    let cornell = course
+    let cornell = scenes
         .join("cornell_box_diffuse_sphere.obj")
         .to_string_lossy()
         .into_owned();
-    let ring = course
+    let ring = scenes
         .join("reflective_ring.obj")
         .to_string_lossy()
         .into_owned();
@@ -764,9 +744,7 @@ fn photon_maps_are_saved_and_loaded_and_checked() {
 /// slope close to −1 against time.
 #[test]
 fn report_writes_csv_plot_and_summary_with_the_path_tracers_slope() {
-    let Some(dir) = common::course_dir() else {
-        return;
-    };
+    let dir = common::own_scene_dir();
     let out = std::env::temp_dir().join(format!("trilux-report-{}", std::process::id()));
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
         .arg("report")

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{backends, course_dir};
+use common::backends;
 use trilux::accel::{self, closest_surface, Accel, AccelOptions};
 use trilux::engines::photon::PhotonSettings;
 use trilux::engines::radiosity::{RadiositySettings, SolverKind};
@@ -64,9 +64,7 @@ fn mean_relative_difference(a: &Film, b: &Film, pixels: &[usize]) -> f64 {
 
 #[test]
 fn radiosity_photon_and_path_images_agree_on_flat_regions() {
-    let Some(dir) = course_dir() else {
-        return;
-    };
+    let dir = common::own_scene_dir();
     let scene = Scene::load(&dir.join("cornell_box_diffuse_sphere.obj")).expect("loads");
     let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
     let base = RenderSettings {

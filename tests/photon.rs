@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{backends, course_dir, furnace};
+use common::{backends, furnace};
 use trilux::accel::{self, AccelOptions};
 use trilux::engines::compose::render_photons;
 use trilux::engines::photon::{PathKind, PhotonMaps, PhotonSettings};
@@ -65,9 +65,7 @@ fn furnace_radiance_is_le_over_one_minus_rho() {
 /// photons, inside the ring's footprint.
 #[test]
 fn mirror_ring_focuses_a_caustic_inside_itself() {
-    let Some(dir) = course_dir() else {
-        return;
-    };
+    let dir = common::own_scene_dir();
     let scene = Scene::load(&dir.join("reflective_ring.obj")).expect("loads");
     let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
     let maps = PhotonMaps::build(&scene, accel.as_ref(), &settings(200_000));
@@ -97,14 +95,13 @@ fn mirror_ring_focuses_a_caustic_inside_itself() {
     assert!(on_floor_inside * 2 > maps.caustic.len());
 }
 
+#[cfg_attr(
+    not(feature = "embree"),
+    ignore = "compares Embree with the BVH: needs the embree feature"
+)]
 #[test]
 fn both_accels_give_identical_photon_images() {
-    let Some(dir) = course_dir() else {
-        return;
-    };
-    if backends().len() < 2 {
-        return;
-    }
+    let dir = common::own_scene_dir();
     for (file, gather) in [
         ("cornell_box_diffuse_sphere.obj", true),
         ("reflective_ring.obj", false),
@@ -208,9 +205,7 @@ fn stored_power_is_emitted_power_over_one_minus_rho() {
 /// wall, and by more than in the ray tracer with its grey ambient light.
 #[test]
 fn floor_bleeds_the_colour_of_the_nearest_wall() {
-    let Some(dir) = course_dir() else {
-        return;
-    };
+    let dir = common::own_scene_dir();
     let scene = Scene::load(&dir.join("cornell_box_diffuse_sphere.obj")).expect("loads");
     let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
     let (w, h) = (48u32, 48u32);
@@ -245,14 +240,13 @@ fn floor_bleeds_the_colour_of_the_nearest_wall() {
 }
 
 /// Both Accels store the same photons, bit for bit, for the same seed.
+#[cfg_attr(
+    not(feature = "embree"),
+    ignore = "compares Embree with the BVH: needs the embree feature"
+)]
 #[test]
 fn both_accels_give_identical_photon_maps() {
-    let Some(dir) = course_dir() else {
-        return;
-    };
-    if backends().len() < 2 {
-        return;
-    }
+    let dir = common::own_scene_dir();
     for file in ["cornell_box_reflective_sphere.obj", "reflective_ring.obj"] {
         let scene = Scene::load(&dir.join(file)).expect("loads");
         let maps: Vec<PhotonMaps> = backends()
@@ -278,9 +272,7 @@ fn both_accels_give_identical_photon_maps() {
 /// blurs the cusp over about a unit of floor (see the note on issue #5).
 #[test]
 fn ring_caustic_stands_out_as_in_the_path_tracer() {
-    let Some(dir) = course_dir() else {
-        return;
-    };
+    let dir = common::own_scene_dir();
     let mut scene = Scene::load(&dir.join("reflective_ring.obj")).expect("loads");
     for m in scene.materials.iter_mut().filter(|m| m.texture.is_some()) {
         m.texture = None;

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{backends, course_scenes};
+use common::{backends, own_scenes};
 use trilux::accel::{self, closest_surface, AccelOptions};
 use trilux::bench::uniform_direction;
 use trilux::geometry::{vec3, Ray, RingPart, RingShape, Shape, SphereShape, Vec3};
@@ -146,7 +146,7 @@ fn ring_surfaces_and_hole() {
 /// random directions on the open side; none may hit its own surface again at a tiny t.
 #[test]
 fn secondary_rays_never_rehit_their_surface_at_any_scale() {
-    for path in course_scenes() {
+    for path in own_scenes() {
         let base = Scene::load(&path).expect("loads");
         for scale in [1e-3f32, 1e-1, 1.0, 1e2, 1e4] {
             let scene = base.transformed(scale, Vec3::ZERO);
@@ -198,10 +198,8 @@ fn secondary_rays_never_rehit_their_surface_at_any_scale() {
 /// BVH the ceiling, at the same t. Whichever is reported, the surface is the same.
 #[test]
 fn a_hit_on_a_shared_edge_settles_to_one_surface() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
-    let scene = Scene::load(&course.join("cornell_box.obj")).expect("loads");
+    let scenes = common::own_scene_dir();
+    let scene = Scene::load(&scenes.join("cornell_box.obj")).expect("loads");
     let ray = Ray::new(
         vec3(0.0, 0.0, 8.0),
         vec3(0.04883026, 0.110299796, -0.99269813),
@@ -229,10 +227,8 @@ fn a_hit_on_a_shared_edge_settles_to_one_surface() {
 /// walls (where the two triangles of a quad meet), must all hit a wall — with every backend.
 #[test]
 fn no_ray_leaks_out_of_a_closed_box() {
-    let Some(course) = common::course_dir() else {
-        return;
-    };
-    let scene = Scene::load(&course.join("cornell_box.obj")).expect("loads");
+    let scenes = common::own_scene_dir();
+    let scene = Scene::load(&scenes.join("cornell_box.obj")).expect("loads");
     let mut targets = Vec::new();
     for q in &scene.quads {
         let v = q.vertices;

@@ -7,7 +7,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{backends, course_dir, furnace, worst_relative_error};
+use common::{backends, furnace, worst_relative_error};
 use trilux::accel::{self, Accel, AccelOptions};
 use trilux::engines::radiosity::mesh::QuadMesh;
 use trilux::engines::radiosity::patch::patches;
@@ -201,10 +201,7 @@ fn furnace_patches_reach_le_over_one_minus_rho() {
 /// The patches of l.obj's far arm wall (z = −1), which cannot see the light at x = −1.
 #[test]
 fn far_arm_of_the_l_room_gets_no_direct_light_with_visibility() {
-    let Some(dir) = course_dir() else {
-        eprintln!("course scenes not found; skipped");
-        return;
-    };
+    let dir = common::own_scene_dir();
     let scene = Scene::load(&dir.join("l.obj")).expect("l.obj loads");
     let accel = accel_for(&scene);
     for shadow_samples in [0, 1] {
@@ -245,14 +242,13 @@ fn far_arm_of_the_l_room_gets_no_direct_light_with_visibility() {
     }
 }
 
+#[cfg_attr(
+    not(feature = "embree"),
+    ignore = "compares Embree with the BVH: needs the embree feature"
+)]
 #[test]
 fn both_accels_give_identical_solutions() {
-    let Some(dir) = course_dir() else {
-        return;
-    };
-    if backends().len() < 2 {
-        return;
-    }
+    let dir = common::own_scene_dir();
     for (file, raster_flags) in [
         ("l.obj", (8, 6)),
         ("cornell_box_diffuse_sphere.obj", (16, 12)),
@@ -290,14 +286,13 @@ fn both_accels_give_identical_solutions() {
 /// Every form factor of every shooter, with visibility, from both Accels: identical, on the
 /// L-shaped room (whose inner corner lines up with rays between patch centres) and the Cornell
 /// box with a rasterized sphere.
+#[cfg_attr(
+    not(feature = "embree"),
+    ignore = "compares Embree with the BVH: needs the embree feature"
+)]
 #[test]
 fn every_form_factor_is_identical_with_both_accels() {
-    let Some(dir) = course_dir() else {
-        return;
-    };
-    if backends().len() < 2 {
-        return;
-    }
+    let dir = common::own_scene_dir();
     for (file, subdivide, samples) in [
         ("l.obj", 3, 1),
         ("l.obj", 1, 9),

@@ -7,7 +7,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{backends, course_scenes, furnace, square_light, worst_relative_error};
+use common::{backends, furnace, own_scenes, square_light, worst_relative_error};
 use trilux::accel::{self, AccelOptions};
 use trilux::engines::radiosity::solver::{Relaxation, Stop};
 use trilux::engines::radiosity::{RadiositySettings, Solution};
@@ -116,7 +116,7 @@ fn stiff_path_and_photon_furnace() {
 /// untransformed scene (relMSE ≤ 1e-3: no acne, no leaks), with both Accels; moved by 1e4 it
 /// is measured and printed.
 #[test]
-fn course_scenes_do_not_depend_on_units_or_position() {
+fn scenes_do_not_depend_on_units_or_position() {
     let s = RenderSettings {
         width: 32,
         height: 32,
@@ -136,7 +136,7 @@ fn course_scenes_do_not_depend_on_units_or_position() {
     ];
     // The worst relMSE over the course scenes, per Accel and transform, and which scene.
     let mut worst: Vec<(String, f32, f32, f64, String)> = Vec::new();
-    for path in course_scenes() {
+    for path in own_scenes() {
         let base = Scene::load(&path).expect("loads");
         let name = path.file_name().unwrap_or_default().to_string_lossy();
         for kind in backends() {
@@ -170,9 +170,7 @@ fn course_scenes_do_not_depend_on_units_or_position() {
 /// divided by the factor against the image at 1, below 1e-6), and nothing overflows.
 #[test]
 fn emitted_radiance_from_1e_minus_30_to_1e30_scales_linearly() {
-    let Some(dir) = common::course_dir() else {
-        return;
-    };
+    let dir = common::own_scene_dir();
     let base = Scene::load(&dir.join("cornell_box_diffuse_sphere.obj")).expect("loads");
     let mut s = RenderSettings {
         width: 24,
@@ -314,16 +312,10 @@ fn tiny_and_huge_spheres_and_a_paper_thin_ring() {
     }
 }
 
-fn course_scene(name: &str) -> Option<std::path::PathBuf> {
-    common::course_dir().map(|d| d.join(name))
-}
-
 /// Huge requests are refused before anything is allocated, with the estimate in the message.
 #[test]
 fn huge_requests_are_refused_with_a_clear_message() {
-    let Some(scene) = course_scene("cornell_box_diffuse_sphere.obj") else {
-        return;
-    };
+    let scene = common::own_scene_dir().join("cornell_box_diffuse_sphere.obj");
     let scene = scene.to_string_lossy().into_owned();
     // The largest image -size accepts (65536², 48 GiB of film) against an explicit limit, so
     // that the case does not depend on the host's memory.
@@ -366,9 +358,7 @@ fn huge_requests_are_refused_with_a_clear_message() {
 /// non-zero.
 #[test]
 fn interrupted_render_writes_the_image_so_far() {
-    let Some(scene) = course_scene("cornell_box_diffuse_sphere.obj") else {
-        return;
-    };
+    let scene = common::own_scene_dir().join("cornell_box_diffuse_sphere.obj");
     let dir = std::env::temp_dir().join(format!("trilux-sigint-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let output = dir.join("partial.png");
@@ -412,9 +402,7 @@ fn interrupted_render_writes_the_image_so_far() {
 /// each is counted, left out, and the render's statistics report them.
 #[test]
 fn non_finite_samples_are_counted_and_left_out() {
-    let Some(dir) = common::course_dir() else {
-        return;
-    };
+    let dir = common::own_scene_dir();
     let mut scene = Scene::load(&dir.join("cornell_box_diffuse_sphere.obj")).expect("loads");
     for m in scene
         .materials

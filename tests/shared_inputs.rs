@@ -1,0 +1,275 @@
+//! The reference inputs beside the checkout, in `../shared/`: the course's scenes and
+//! RenderPark's MGF scenes. Every other test reads the project's own `scenes/` (or builds its
+//! scene in code); these check that the course's files are what `scenes/` copies, that the
+//! course's command lines run on them verbatim, and the measured figures of the MGF scenes
+//! the project does not ship.
+//!
+//! A trial whose input is missing is reported as ignored, by name, with the path it looked
+//! for: a user's clone has no `../shared/`. Where the inputs must be present (CI sets
+//! `TRILUX_REQUIRE_SHARED=1`), a missing input fails the trial instead.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::references::{
+    hierarchical, path_traced_patches, per_input_patch_difference, per_input_patch_difference_over,
+    seen_by_the_reference, solve,
+};
+use libtest_mimic::{Arguments, Failed, Trial};
+use trilux::scene::Scene;
+
+fn main() {
+    let args = Arguments::from_args();
+    let trials = vec![
+        shared_input_trial(
+            "course_scenes_match_ours_and_run_verbatim",
+            "course-scenes",
+            course_compatibility,
+        ),
+        shared_input_trial(
+            "shipped_mgf_scenes_load_with_renderparks_patch_counts",
+            "mgf-scenes",
+            shipped_mgf_scenes_load_with_renderparks_patch_counts,
+        ),
+        shared_input_trial(
+            "office3_against_path_traced_references",
+            "mgf-scenes/office3/office.mgf",
+            office3_against_path_traced_references,
+        ),
+    ];
+    libtest_mimic::run(&args, trials).exit();
+}
+
+/// A trial that runs `body` on `../shared/<input>`: ignored, saying why, when that is missing
+/// (failed instead when `TRILUX_REQUIRE_SHARED` is set).
+fn shared_input_trial(name: &'static str, input: &str, body: fn(&Path)) -> Trial {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared")
+        .join(input);
+    let present = path.exists();
+    let required = std::env::var_os("TRILUX_REQUIRE_SHARED").is_some();
+    if !present && !required {
+        eprintln!(
+            "{name}: skipped: {} not found (reference inputs beside the checkout)",
+            path.display()
+        );
+    }
+    Trial::test(name, move || {
+        if !present {
+            return Err(Failed::from(format!(
+                "{} not found (TRILUX_REQUIRE_SHARED is set, or the trial was run with --ignored)",
+                path.display()
+            )));
+        }
+        body(&path);
+        Ok(())
+    })
+    .with_ignored_flag(!present && !required)
+}
+
+/// The course's command lines, one or more per engine and every course scene (the photon
+/// lines at 48×48, as the course's own images would take minutes each).
+const COURSE_LINES: [&str; 8] = [
+    "-input reflective_spheres.obj -num_bounces 3 -num_shadow_samples 1",
+    "-input textured_plane_reflective_sphere.obj -num_bounces 1 -num_shadow_samples 4",
+    "-input cornell_box_diffuse_sphere.obj -ambient_light 0.2 0.2 0.2 -num_shadow_samples 10",
+    "-input cornell_box.obj",
+    "-size 300 150 -input l.obj -num_form_factor_samples 10 -num_shadow_samples 1",
+    "-input cornell_box_diffuse_sphere.obj -sphere_rasterization 16 12 -num_shadow_samples 1",
+    "-input reflective_ring.obj -num_photons_to_shoot 10000 -num_bounces 2 -num_shadow_samples 10 -size 48 48",
+    "-input cornell_box_reflective_sphere.obj -num_photons_to_shoot 500000 -num_shadow_samples 500 -num_photons_to_collect 500 -num_bounces 1 -size 48 48",
+];
+
+/// The course's scenes are the ones `scenes/` holds (`own_scenes_match_the_course_scenes`),
+/// and each course command line runs verbatim on the course's file and writes the very bytes
+/// it writes from ours — but for the two scenes with textures, whose images are our own.
+fn course_compatibility(course: &Path) {
+    own_scenes_match_the_course_scenes(course);
+    let out = std::env::temp_dir().join(format!("trilux-course-compat-{}", std::process::id()));
+    for line in COURSE_LINES {
+        let images: Vec<Vec<u8>> = [course.to_path_buf(), common::own_scene_dir()]
+            .iter()
+            .enumerate()
+            .map(|(k, dir)| {
+                let cwd = out.join(k.to_string());
+                std::fs::create_dir_all(&cwd).expect("temp dir");
+                let run = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+                    .args(common::scene_args(dir, line))
+                    .arg("--quiet")
+                    .current_dir(&cwd)
+                    .output()
+                    .expect("render runs");
+                assert!(
+                    run.status.success(),
+                    "`{line}` in {}: {}",
+                    dir.display(),
+                    String::from_utf8_lossy(&run.stderr)
+                );
+                let stem = line.split(' ').find(|a| a.ends_with(".obj")).unwrap();
+                std::fs::read(cwd.join(stem.replace(".obj", ".png"))).expect("<stem>.png written")
+            })
+            .collect();
+        if !line.contains("textured_plane") && !line.contains("reflective_ring") {
+            assert!(
+                images[0] == images[1],
+                "`{line}`: the course's file and ours give different images"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// trilux's own versions of the course scenes (in `scenes/`) have the course's geometry,
+/// materials, camera and background; only the texture images are our own.
+fn own_scenes_match_the_course_scenes(course: &Path) {
+    let theirs = common::obj_files(course);
+    assert!(theirs.len() >= 7, "the course has its seven scenes");
+    for theirs_path in theirs {
+        let path = common::own_scene_dir().join(theirs_path.file_name().unwrap());
+        assert!(
+            path.is_file(),
+            "{}: scenes/ has no version",
+            theirs_path.display()
+        );
+        let ours = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let theirs = Scene::load(&theirs_path).unwrap_or_else(|e| panic!("{e}"));
+        let what = path.display();
+        assert_eq!(ours.quads, theirs.quads, "{what}: quads");
+        assert_eq!(ours.shapes, theirs.shapes, "{what}: spheres and rings");
+        assert_eq!(ours.camera, theirs.camera, "{what}: camera");
+        assert_eq!(ours.background, theirs.background, "{what}: background");
+        assert_eq!(
+            ours.materials.len(),
+            theirs.materials.len(),
+            "{what}: materials"
+        );
+        for (a, b) in ours.materials.iter().zip(&theirs.materials) {
+            assert_eq!(
+                (a.diffuse, a.reflective, a.emitted),
+                (b.diffuse, b.reflective, b.emitted),
+                "{what}"
+            );
+            assert_eq!(a.texture_file, b.texture_file, "{what}: texture name");
+        }
+    }
+}
+
+/// The shipped MGF scenes: every entry file loads, and the patch counts mgf.md gives.
+fn shipped_mgf_scenes_load_with_renderparks_patch_counts(dir: &Path) {
+    let patches = |file: &str| -> usize {
+        let scene = Scene::load(&dir.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        scene.quads.len() + scene.triangles.len()
+    };
+    for file in [
+        "corridor.mgf",
+        "hospital/main.mgf",
+        "office2/office2.mgf",
+        "office3/office.mgf",
+        "salon/classroom.mgf",
+        "soda.mgf",
+        "floor_gloss.mgf",
+        "examp1.mgf",
+    ] {
+        assert!(patches(file) > 0, "{file}");
+    }
+    assert_eq!(patches("cube.mgf"), 66);
+    // RenderPark: 24,982 for the hospital, 13,948 for graz (one-sided).
+    let hospital = patches("hospital/hosp.mgf") as f64;
+    assert!(
+        (hospital / 24_982.0 - 1.0).abs() < 0.01,
+        "hospital: {hospital}"
+    );
+    let graz = patches("office1/graz.mgf") as f64;
+    assert!((graz / 13_948.0 - 1.0).abs() < 0.01, "graz: {graz}");
+    // What `--plan` prints as the radiosity mesh's patches; `--two-sided` gives each face a
+    // back (RenderPark: 27,896 for graz two-sided).
+    let planned = |file: &str, flags: &[&str]| -> f64 {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+            .arg("--input")
+            .arg(dir.join(file))
+            .args(["--engine", "radiosity", "--plan"])
+            .args(flags)
+            .output()
+            .expect("render runs");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let line = stdout
+            .lines()
+            .find_map(|l| l.strip_prefix("radiosity mesh: yes ("))
+            .unwrap_or_else(|| panic!("{file} {flags:?}: no mesh line in\n{stdout}"));
+        line.split(' ').next().unwrap().parse().unwrap()
+    };
+    assert_eq!(planned("cube.mgf", &[]), 66.0);
+    let hospital = planned("hospital/hosp.mgf", &[]);
+    assert!(
+        (hospital / 24_982.0 - 1.0).abs() < 0.01,
+        "plan, hospital: {hospital}"
+    );
+    assert_eq!(planned("office1/graz.mgf", &[]), graz);
+    let two_sided = planned("office1/graz.mgf", &["--two-sided"]);
+    assert!(
+        (two_sided / 27_896.0 - 1.0).abs() < 0.01,
+        "plan, graz two-sided: {two_sided}"
+    );
+}
+
+/// office3 (RenderPark's office: 12,628 input patches, one 21 m² floor), hierarchical,
+/// against the path tracer averaged per input patch: 16 M paths shared by area (at least 16
+/// a patch), traced twice with different seeds, so that the L1 between the two traces — the
+/// reference's own noise — is measured beside the solver's.
+fn office3_against_path_traced_references(path: &Path) {
+    let scene = Scene::load(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut settings = hierarchical(0);
+    settings.radiosity.tolerance = 1e-4;
+    settings.num_shadow_samples = 1;
+    let solution = solve(&scene, &settings);
+    let total_area: f64 = solution.patches.iter().map(|p| p.area as f64).sum();
+    let paths: Vec<u32> = solution
+        .patches
+        .iter()
+        .map(|p| ((16e6 * p.area as f64 / total_area) as u32).max(16))
+        .collect();
+    let mut traced = solution.clone();
+    traced.state.radiance = path_traced_patches(&scene, &solution, &paths, 7);
+    let mut again = solution.clone();
+    again.state.radiance = path_traced_patches(&scene, &solution, &paths, 8);
+    let (l1, power_error) = per_input_patch_difference(&traced, &solution);
+    let (noise, noise_power) = per_input_patch_difference(&traced, &again);
+    let seen = seen_by_the_reference(&scene, &solution, &paths);
+    let unseen_area: f64 = (solution.patches.iter().zip(&seen))
+        .filter(|(_, &seen)| !seen)
+        .map(|(p, _)| p.area as f64)
+        .sum();
+    let (l1_seen, _) = per_input_patch_difference_over(&traced, &solution, &seen);
+    println!(
+        "office3: {}; the two traces apart by L1 {:.2}% and power {:+.2}%; the solution \
+         against the first: relative L1 {:.2}%, reflected power {:+.2}%; over the patches the \
+         reference sees ({} of {} unseen, {:.2} m² of {:.1}), L1 {:.2}%",
+        solution.solver_report,
+        100.0 * noise,
+        100.0 * noise_power,
+        100.0 * l1,
+        100.0 * power_error,
+        seen.iter().filter(|&&s| !s).count(),
+        seen.len(),
+        unseen_area,
+        total_area,
+        100.0 * l1_seen
+    );
+    // Measured: the traces 2.16% / +0.12% apart (1.59% / +0.05% with 32 M paths), the
+    // solution L1 9.64%, power -0.08% (11.6% / -0.17% until the form factor's clip kept
+    // every crossing and the leaf scales were weighted by the light each link carries;
+    // -2.34% while links whose pairs all missed were dropped). BENCHMARKS.md says where the
+    // L1 comes from: a wall quad overlapped by coplanar ones, walls and ceiling high, lamp
+    // bulbs low. 3,336 small patches (11.05 of 155.3 m²) lie under other geometry, where
+    // the reference's rays land on something else: over the rest the L1 is 8.08%. The
+    // power bound is issue #15's; the L1 bounds are the measured figures and a tenth, not
+    // the issue's aim of 2%, which office3 does not meet.
+    assert!(noise < 0.04, "the references disagree: L1 {noise}");
+    assert!(power_error.abs() < 0.01, "reflected power {power_error}");
+    assert!(l1 < 0.106, "relative L1 {l1}");
+    assert!(
+        l1_seen < 0.089,
+        "relative L1 over the patches seen {l1_seen}"
+    );
+}
