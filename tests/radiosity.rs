@@ -401,3 +401,156 @@ fn exported_ply_holds_every_patch_with_its_radiance() {
     assert_eq!(at, body.len(), "nothing after the faces");
     assert_eq!(next as usize, vertices);
 }
+
+/// The nearest patch (front side: quads are one-sided) that the ray from `o` along `d` meets,
+/// intersected with the patch's own corners in f64 (apart from the Accel and from the mesh's
+/// lookup), and how far inside it the point lies (its distance to the nearest edge); None
+/// when it meets no patch, or when the nearest two lie within `eps` of each other along the
+/// ray.
+fn patch_through(
+    solution: &Solution,
+    o: [f64; 3],
+    d: [f64; 3],
+    eps: f64,
+) -> Option<Option<(usize, f64)>> {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let f64s = |v: trilux::geometry::Vec3| [v.x as f64, v.y as f64, v.z as f64];
+    let mut hits: Vec<(f64, usize, f64)> = Vec::new();
+    for (k, p) in solution.patches.iter().enumerate() {
+        let c = p.corners.map(f64s);
+        let n = cross(sub(c[1], c[0]), sub(c[2], c[0]));
+        let dn = dot(d, n);
+        if dn >= 0.0 {
+            continue;
+        }
+        let t = dot(sub(c[0], o), n) / dn;
+        if t <= 1e-9 {
+            continue;
+        }
+        let x = [o[0] + d[0] * t, o[1] + d[1] * t, o[2] + d[2] * t];
+        let n_len = dot(n, n).sqrt();
+        let margin = (0..4)
+            .map(|e| {
+                let edge = sub(c[(e + 1) % 4], c[e]);
+                dot(cross(edge, sub(x, c[e])), n) / (n_len * dot(edge, edge).sqrt())
+            })
+            .fold(f64::INFINITY, f64::min);
+        if margin >= -eps {
+            hits.push((t, k, margin));
+        }
+    }
+    hits.sort_by(|a, b| a.0.total_cmp(&b.0));
+    match hits.as_slice() {
+        [] => Some(None),
+        [(_, k, margin)] => Some(Some((*k, *margin))),
+        [(t0, k, margin), (t1, ..), ..] => ((t1 - t0) > eps).then_some(Some((*k, *margin))),
+    }
+}
+
+/// Each display mode of a radiosity image against the solution it shows: every pixel whose
+/// centre ray meets a patch at least 1e-4 inside its edges (by `patch_through`, the test's
+/// own intersection) must hold that patch's value, as the mode defines it from the
+/// solution's per-patch state, to f32 rounding; pixels meeting no patch the background. The
+/// L room of scenes/ subdivided twice, stopped after 40 shots so that light is still
+/// undistributed and the ambient term is not zero. (The radiosity-modes CLI test compares
+/// the two backends, which share everything after the hit, so an image wrong in the same way
+/// for both passes it; this one does not.)
+#[test]
+fn radiosity_images_show_each_patchs_value() {
+    use trilux::engines::radiosity::{render_solution, Display};
+    let scene = Scene::load(&common::own_scene_dir().join("l.obj")).expect("loads");
+    let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
+    let mut settings = RenderSettings {
+        width: 64,
+        height: 48,
+        num_antialias_samples: 1,
+        quiet: true,
+        radiosity: RadiositySettings {
+            subdivide: 2,
+            iterations: Some(40),
+            ..Default::default()
+        },
+        ..RenderSettings::default()
+    };
+    let solution = Solution::solve(&scene, accel.as_ref(), &settings, |_| {});
+    assert!(solution.ambient.max_element() > 0.0, "light left to shoot");
+    let view = scene.camera().view();
+    let (w, h) = (settings.width, settings.height);
+    type Value = fn(&Solution, usize) -> trilux::scene::Color;
+    // Each mode, its value per patch, and how many distinct values its image must show (the
+    // lights: emitting or not; the materials: the room's albedos and the background).
+    let modes: [(Display, Value, usize); 5] = [
+        (
+            Display::Radiance,
+            |s, k| s.state.radiance[k] + s.patches[k].albedo * s.ambient,
+            20,
+        ),
+        (Display::Materials, |s, k| s.patches[k].albedo, 2),
+        (Display::Lights, |s, k| s.patches[k].emitted, 2),
+        (Display::Undistributed, |s, k| s.state.undistributed[k], 20),
+        (
+            Display::Absorbed,
+            |s, k| (trilux::geometry::Vec3::ONE - s.patches[k].albedo) * s.state.incident[k],
+            20,
+        ),
+    ];
+    for (display, value, least_distinct) in modes {
+        settings.radiosity.display = display;
+        let (film, _) = render_solution(&scene, accel.as_ref(), &settings, &solution);
+        let (mut compared, mut distinct) = (0usize, Vec::<[u32; 3]>::new());
+        for row in 0..h {
+            let j = h - 1 - row;
+            for i in 0..w {
+                let screen = trilux::scene::Camera::screen_point(i, j, 0.5, 0.5, w, h);
+                let ray = view.ray(screen.0, screen.1);
+                let o = [
+                    ray.origin.x as f64,
+                    ray.origin.y as f64,
+                    ray.origin.z as f64,
+                ];
+                let d = [
+                    ray.direction.x as f64,
+                    ray.direction.y as f64,
+                    ray.direction.z as f64,
+                ];
+                let expected = match patch_through(&solution, o, d, 1e-4) {
+                    Some(Some((k, margin))) if margin > 1e-4 => value(&solution, k),
+                    Some(None) => scene.background,
+                    _ => continue,
+                };
+                let got = film.get(i, row);
+                assert!(
+                    (got - expected).abs().max_element() <= 1e-6 * expected.abs().max_element().max(1.0),
+                    "{display:?}, pixel ({i}, {row}): {got:?} where the solution gives {expected:?}"
+                );
+                compared += 1;
+                let key = [got.x.to_bits(), got.y.to_bits(), got.z.to_bits()];
+                if !distinct.contains(&key) {
+                    distinct.push(key);
+                }
+            }
+        }
+        println!(
+            "{display:?}: {compared} of {} pixels compared, {} distinct values",
+            w * h,
+            distinct.len()
+        );
+        assert!(
+            compared as f64 > 0.8 * (w * h) as f64,
+            "{display:?}: {compared} pixels compared"
+        );
+        assert!(
+            distinct.len() >= least_distinct,
+            "{display:?}: {} values",
+            distinct.len()
+        );
+    }
+}
