@@ -788,6 +788,69 @@ fn photon_maps_are_saved_and_loaded_and_checked() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `--load-photons` refuses, naming the file and the reason, a file made with other photon
+/// settings (seed, photon count, depth, final gathering), for an edited scene, of another
+/// version, or cut short; settings that only change the lookups (photons to collect) load.
+#[test]
+fn photon_files_made_otherwise_are_refused() {
+    let dir = temp_dir("photon-refusals");
+    let scene_text = std::fs::read_to_string(common::own_scene_dir().join("cornell_box.obj"))
+        .expect("scene reads");
+    std::fs::write(dir.join("box.obj"), &scene_text).unwrap();
+    // 5,000 photons unless `extra` says otherwise.
+    let with = |extra: &[&str]| -> Output {
+        let mut args = vec!["-input", "box.obj", "-size", "8", "8"];
+        if !extra.contains(&"-num_photons_to_shoot") {
+            args.extend(["-num_photons_to_shoot", "5000"]);
+        }
+        args.extend(extra);
+        render(&dir, &args)
+    };
+    ok(&with(&[
+        "--save-photons",
+        "maps.photons",
+        "-o",
+        "saved.png",
+    ]));
+    let refused = |extra: &[&str], file: &str, reason: &str| {
+        let mut args = vec!["--load-photons", file, "-o", "loaded.png"];
+        args.extend(extra);
+        let out = with(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(file) && err.contains(reason),
+            "{extra:?} {file}: expected a refusal saying {reason:?}, got {:?}: {err}",
+            out.status
+        );
+    };
+    let other = "made for another scene or other settings";
+    refused(&["--seed", "8"], "maps.photons", other);
+    refused(&["-num_photons_to_shoot", "6000"], "maps.photons", other);
+    refused(&["--max-photon-depth", "3"], "maps.photons", other);
+    refused(&["-gather_indirect"], "maps.photons", other);
+    ok(&with(&[
+        "--load-photons",
+        "maps.photons",
+        "-num_photons_to_collect",
+        "20",
+        "-o",
+        "loaded.png",
+    ]));
+    let bytes = std::fs::read(dir.join("maps.photons")).unwrap();
+    std::fs::write(dir.join("cut.photons"), &bytes[..bytes.len() - 7]).unwrap();
+    refused(&[], "cut.photons", "truncated or damaged");
+    let mut old = bytes.clone();
+    old[8..12].copy_from_slice(&2u32.to_le_bytes());
+    std::fs::write(dir.join("old.photons"), &old).unwrap();
+    refused(&[], "old.photons", "photon file version 2");
+    // The same file name, one albedo changed.
+    let edited = scene_text.replacen("diffuse", "diffuse 0.3 0.3 0.3\n#", 1);
+    assert_ne!(edited, scene_text);
+    std::fs::write(dir.join("box.obj"), &edited).unwrap();
+    refused(&[], "maps.photons", other);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `render report` on the course Cornell box with the path tracer alone, small and quick:
 /// it writes the CSV, the plot and the summary, and the path tracer's relMSE falls with
 /// slope close to −1 against time.
