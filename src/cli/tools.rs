@@ -168,11 +168,17 @@ pub fn report(args: &ReportArgs) -> Result<(), String> {
     crate::interrupt::install();
     let report = pool.install(|| crate::report::run(&args.scene, &settings))?;
     emit(&crate::report::summary(&report, &settings))?;
+    let wrote = format!(
+        "report.csv, report.png and report.md in {}",
+        settings.output.display()
+    );
+    if crate::interrupt::requested() {
+        return Err(format!(
+            "interrupted: wrote {wrote} with the runs finished so far"
+        ));
+    }
     if !args.quiet {
-        eprintln!(
-            "wrote report.csv, report.png and report.md in {}",
-            settings.output.display()
-        );
+        eprintln!("wrote {wrote}");
     }
     Ok(())
 }

@@ -148,6 +148,9 @@ pub fn render_pixels(
     let stats = RenderStats::default();
     let mut film = Film::new(w, h);
     let bar = crate::progress::bar(h as u64, label, settings.quiet);
+    // Ctrl-C during what came before (a radiosity solve, photon tracing) stopped that, and
+    // the pixels show what it made; Ctrl-C during the pixels stops them.
+    let interrupted_before = crate::interrupt::requested();
     film.pixels
         .par_chunks_mut(w as usize)
         .enumerate()
@@ -159,7 +162,7 @@ pub fn render_pixels(
             // chunks (the pixels not yet rendered stay black).
             let chunk = (CHUNK_SAMPLES / spp).max(1);
             for (c, pixels) in out.chunks_mut(chunk).enumerate() {
-                if crate::interrupt::requested() {
+                if !interrupted_before && crate::interrupt::requested() {
                     break;
                 }
                 let first = (c * chunk) as u32;

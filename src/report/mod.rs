@@ -179,9 +179,17 @@ pub fn run(scene_path: &Path, settings: &ReportSettings) -> Result<Report, Strin
                         Ok::<_, String>((rendered, t.elapsed().as_secs_f64()))
                     };
                     let (rendered, mut elapsed) = timed_render()?;
+                    if crate::interrupt::requested() {
+                        // The run in flight was cut short: its image is not what its
+                        // budget renders, so it is left out.
+                        break;
+                    }
                     let mut spent = elapsed;
                     while spent < MIN_TIMED_SECONDS && !crate::interrupt::requested() {
                         let (_, again) = timed_render()?;
+                        if crate::interrupt::requested() {
+                            break; // a repetition cut short is not the run's time
+                        }
                         elapsed = elapsed.min(again);
                         spent += again;
                     }
@@ -275,6 +283,11 @@ fn reference_image(
     let clock = Instant::now();
     let film = engines::render(EngineKind::Path, scene, accel.as_ref(), &s)?.film;
     let seconds = clock.elapsed().as_secs_f64();
+    // A reference cut short by Ctrl-C is not the reference: caching it would spoil every
+    // later report on the scene.
+    if crate::interrupt::requested() {
+        return Err("interrupted while rendering the reference: no report written".into());
+    }
     film.write(&cache).map_err(|e| e.to_string())?;
     Ok((
         film,
