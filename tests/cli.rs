@@ -990,3 +990,62 @@ fn stats_name_the_radiosity_counters() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The progress bar: drawn with its ETA on a terminal (a pseudo-terminal from `script`, of
+/// util-linux/bsdutils, with TERM=xterm), absent when stderr is piped and under `--quiet`.
+#[test]
+fn progress_bar_shows_on_a_terminal_only() {
+    let dir = temp_dir("progress");
+    let scene = common::own_scene_dir().join("cornell_box_diffuse_sphere.obj");
+    let command = |quiet: bool| {
+        format!(
+            "{} -input {} --engine path -size 64 64 -num_antialias_samples 256 -o bar.png{}",
+            env!("CARGO_BIN_EXE_render"),
+            scene.display(),
+            if quiet { " --quiet" } else { "" }
+        )
+    };
+    let on_terminal = |quiet: bool| -> String {
+        let out = std::process::Command::new("script")
+            .args(["-qec", &command(quiet), "/dev/null"])
+            .env("TERM", "xterm")
+            .current_dir(&dir)
+            .output()
+            .expect("script (bsdutils) runs");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let shown = on_terminal(false);
+    assert!(
+        shown.contains("ETA"),
+        "no progress bar on a terminal: {shown:?}"
+    );
+    let quiet = on_terminal(true);
+    assert!(!quiet.contains("ETA"), "--quiet on a terminal: {quiet:?}");
+    let piped = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+        .args(["-input", scene.to_str().unwrap(), "--engine", "path"])
+        .args([
+            "-size",
+            "64",
+            "64",
+            "-num_antialias_samples",
+            "256",
+            "-o",
+            "bar.png",
+        ])
+        .env("TERM", "xterm")
+        .current_dir(&dir)
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&piped.stderr);
+    assert!(piped.status.success(), "{stderr}");
+    assert!(
+        !stderr.contains("ETA") && !stderr.contains('\r'),
+        "a progress bar when piped: {stderr:?}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

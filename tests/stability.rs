@@ -354,6 +354,84 @@ fn huge_requests_are_refused_with_a_clear_message() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--max-memory 1.000 KiB"));
 }
 
+/// `--max-memory` as `--plan` reports it: K, M, G and T suffixes (either case, powers of
+/// 1024, fractions allowed) and plain bytes; without the flag, 80% of MemTotal in
+/// /proc/meminfo, read here (8 GiB where there is none); sizes that are not positive
+/// numbers refused, naming the flag.
+#[test]
+fn max_memory_takes_suffixes_and_defaults_to_80_percent_of_physical_memory() {
+    let scene = common::own_scene_dir().join("cornell_box.obj");
+    let plan_limit = |extra: &[&str]| -> f64 {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+            .arg("-input")
+            .arg(&scene)
+            .arg("--plan")
+            .args(extra)
+            .output()
+            .expect("runs");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let line = stdout
+            .lines()
+            .find_map(|l| l.strip_prefix("memory limit: --max-memory "))
+            .unwrap_or_else(|| panic!("{extra:?}: no memory limit in\n{stdout}"));
+        let mut words = line.split(' ');
+        let value: f64 = words.next().unwrap().parse().unwrap();
+        let unit = match words.next() {
+            Some("B") => 1.0,
+            Some("KiB") => 1024.0,
+            Some("MiB") => 1024.0 * 1024.0,
+            Some("GiB") => 1024.0f64.powi(3),
+            Some("TiB") => 1024.0f64.powi(4),
+            other => panic!("{extra:?}: unit {other:?} in {line}"),
+        };
+        value * unit
+    };
+    let kib = 1024.0f64;
+    for (flag, bytes) in [
+        ("123", 123.0),
+        ("512K", 512.0 * kib),
+        ("512k", 512.0 * kib),
+        ("3M", 3.0 * kib * kib),
+        ("1.5G", 1.5 * kib.powi(3)),
+        ("2g", 2.0 * kib.powi(3)),
+        ("1T", kib.powi(4)),
+    ] {
+        let limit = plan_limit(&["--max-memory", flag]);
+        // Printed with three decimals of its unit.
+        assert!(
+            (limit / bytes - 1.0).abs() < 1e-3,
+            "--max-memory {flag}: {limit} bytes where {bytes}"
+        );
+    }
+    let total_kib: Option<f64> = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
+        m.lines()
+            .find(|l| l.starts_with("MemTotal:"))?
+            .split_whitespace()
+            .nth(1)?
+            .parse()
+            .ok()
+    });
+    let expected = total_kib.map_or(8.0 * kib.powi(3), |k| 0.8 * k * kib);
+    let limit = plan_limit(&[]);
+    assert!(
+        (limit / expected - 1.0).abs() < 1e-3,
+        "default limit {limit} bytes where 80% of physical memory is {expected}"
+    );
+    for bad in ["0", "-1G", "8X", "G", "lots"] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+            .arg("-input")
+            .arg(&scene)
+            .args(["--plan", &format!("--max-memory={bad}")])
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && stderr.contains("--max-memory") && stderr.contains(bad),
+            "--max-memory {bad}: {stderr}"
+        );
+    }
+}
+
 /// Runs `render` with `args` in `dir`, sends SIGINT at each of `signals` (milliseconds after
 /// the start), and returns how it ended, its stderr, and the seconds it ran on after the
 /// last signal.

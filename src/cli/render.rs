@@ -43,23 +43,33 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     let engine = args.engine();
     let plan = Plan::new(&scene, engine, kind, &settings);
     let unused = args.unused_flags();
+    let max_memory = args
+        .common
+        .max_memory
+        .unwrap_or_else(crate::plan::default_max_memory);
+    let limit = format!(
+        "--max-memory {}{}",
+        crate::plan::human_bytes(max_memory),
+        if args.common.max_memory.is_none() {
+            " (80% of this machine's memory)"
+        } else {
+            ""
+        }
+    );
     if args.common.plan {
         let notes: String = unused
             .iter()
             .map(|f| format!("note: {f} is ignored: the {engine} engine does not read it\n"))
             .collect();
-        return emit(&format!("scene: {}\n{plan}{notes}", input.display()));
+        return emit(&format!(
+            "scene: {}\n{plan}memory limit: {limit}\n{notes}",
+            input.display()
+        ));
     }
-    let max_memory = args
-        .common
-        .max_memory
-        .unwrap_or_else(crate::plan::default_max_memory);
     if plan.memory > max_memory {
         return Err(format!(
-            "this render would need about {}, more than --max-memory {}{}; ask for less (-size, -num_photons_to_shoot, --subdivide) or raise --max-memory",
+            "this render would need about {}, more than {limit}; ask for less (-size, -num_photons_to_shoot, --subdivide) or raise --max-memory",
             plan.memory_summary(),
-            crate::plan::human_bytes(max_memory),
-            if args.common.max_memory.is_none() { " (80% of this machine's memory)" } else { "" }
         ));
     }
     // What the plan leaves of --max-memory bounds what the hierarchical solver refines.
