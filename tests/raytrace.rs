@@ -386,3 +386,95 @@ fn a_glass_prism_refracts_by_snells_law_and_reflects_totally_past_the_critical_a
         }
     }
 }
+
+/// Lights that are not quads, against closed forms, in the ray tracer and the path tracer.
+/// A sphere of radius R and radiance Le whose centre is at distance d, at angle θ from a
+/// surface's normal, and wholly above its horizon, gives irradiance π Le (R/d)² cos θ: a
+/// white floor of albedo ρ seen at (1.5, 0, 0) under a sphere at (0, 2, 0), R = 0.5, has
+/// radiance ρ Le (R/d)² cos θ = ρ Le · 0.04 · 0.8. A triangle of an OBJ file with an MTL
+/// `Ke` gives what Lambert's polygon formula gives (`polygon_irradiance`, above). Both
+/// within 1% (the square light's tolerance; measured: the ray tracer at 1,024 shadow samples
+/// +0.05% and +0.06%, the path tracer at 4,096 paths a pixel over 4×4 pixels +0.42% and
+/// +0.20%).
+#[test]
+fn sphere_and_triangle_lights_give_the_closed_form_irradiance() {
+    const RHO_FLOOR: f64 = 0.5;
+    const LE_LIGHT: f64 = 4.0;
+    let camera_at = |x: f32| trilux::scene::Camera {
+        position: trilux::geometry::vec3(x, 5.0, 0.0),
+        point_of_interest: trilux::geometry::vec3(x, 0.0, 0.0),
+        up: trilux::geometry::vec3(0.0, 0.0, -1.0),
+        projection: trilux::scene::Projection::Orthographic { size: 1e-4 },
+    };
+    let sphere = load(&format!(
+        "material\ndiffuse 0 0 0\nemitted {LE_LIGHT} {LE_LIGHT} {LE_LIGHT}\n\
+         material\ndiffuse {RHO_FLOOR} {RHO_FLOOR} {RHO_FLOOR}\n\
+         m 0\ns 0 2 0 0.5\n\
+         m 1\nv -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\nf 1 2 3 4\n\
+         background_color 0 0 0\n\
+         OrthographicCamera {{\ncamera_position 1.5 5 0\npoint_of_interest 1.5 0 0\nup 0 0 -1\nsize 0.0001\n}}\n"
+    ));
+    let sphere_truth = RHO_FLOOR * LE_LIGHT * (0.5f64 / 2.5).powi(2) * 0.8;
+    // The triangle faces down (its vertices counter-clockwise seen from below); the floor
+    // is seen at (1.5, 0, 0), beside it, where the camera's ray does not meet it first.
+    let triangle = [[-1.0, 1.0, -0.5], [1.0, 1.0, -0.5], [0.0, 1.0, 1.0]];
+    let dir = std::env::temp_dir().join(format!("trilux-triangle-light-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    std::fs::write(
+        dir.join("tri.mtl"),
+        format!("newmtl light\nKd 0 0 0\nKe {LE_LIGHT} {LE_LIGHT} {LE_LIGHT}\nnewmtl floor\nKd {RHO_FLOOR} {RHO_FLOOR} {RHO_FLOOR}\n"),
+    )
+    .unwrap();
+    let v = |p: [f64; 3]| format!("v {} {} {}\n", p[0], p[1], p[2]);
+    std::fs::write(
+        dir.join("tri.obj"),
+        format!(
+            "mtllib tri.mtl\n{}{}{}v -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\n\
+             usemtl light\nf 1 2 3\nusemtl floor\nf 4 5 6\nf 4 6 7\n",
+            v(triangle[0]),
+            v(triangle[1]),
+            v(triangle[2])
+        ),
+    )
+    .unwrap();
+    let mut tri = Scene::load(&dir.join("tri.obj")).expect("the OBJ loads");
+    tri.camera = Some(camera_at(1.5));
+    tri.background = Vec3::ZERO;
+    let tri_truth =
+        RHO_FLOOR * LE_LIGHT * polygon_irradiance([1.5, 0.0, 0.0], [0.0, 1.0, 0.0], &triangle) / PI;
+    std::fs::remove_dir_all(&dir).ok();
+    for (name, scene, truth) in [
+        ("sphere", &sphere, sphere_truth),
+        ("triangle", &tri, tri_truth),
+    ] {
+        for engine in [
+            trilux::engines::EngineKind::Raytrace,
+            trilux::engines::EngineKind::Path,
+        ] {
+            let settings = RenderSettings {
+                num_shadow_samples: 1024,
+                num_antialias_samples: if engine == trilux::engines::EngineKind::Path {
+                    4096
+                } else {
+                    1
+                },
+                ..quiet(4, 4)
+            };
+            for kind in backends() {
+                let accel = accel::build(scene, kind, &AccelOptions::default()).expect("builds");
+                let film = trilux::engines::render(engine, scene, accel.as_ref(), &settings)
+                    .expect("renders")
+                    .film;
+                let m = mean(&film);
+                println!(
+                    "{name} light, {engine}, {kind}: {m:.5} against {truth:.5} ({:+.2}%)",
+                    100.0 * (m / truth - 1.0)
+                );
+                assert!(
+                    (m / truth - 1.0).abs() < 0.01,
+                    "{name}, {engine}, {kind}: {m} against {truth}"
+                );
+            }
+        }
+    }
+}
