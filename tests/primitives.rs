@@ -227,37 +227,10 @@ fn a_hit_on_a_shared_edge_settles_to_one_surface() {
 /// walls (where the two triangles of a quad meet), must all hit a wall — with every backend.
 #[test]
 fn no_ray_leaks_out_of_a_closed_box() {
-    let scenes = common::own_scene_dir();
-    let scene = Scene::load(&scenes.join("cornell_box.obj")).expect("loads");
-    let mut targets = Vec::new();
-    for q in &scene.quads {
-        let v = q.vertices;
-        for k in 0..4 {
-            let (a, b) = (v[k], v[(k + 1) % 4]);
-            for s in 0..=16 {
-                targets.push(a + (b - a) * (s as f32 / 16.0));
-            }
-        }
-        for s in 0..=16 {
-            targets.push(v[1] + (v[3] - v[1]) * (s as f32 / 16.0));
-        }
-    }
+    let (scene, targets) = box_edge_targets(1024);
     for kind in backends() {
         let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
-        let mut leaks = 0;
-        for (k, &target) in targets.iter().enumerate() {
-            let mut rng = Rng::new(17, k as u64, 0);
-            // Inside the box [-1,1]³, away from the walls.
-            let origin = vec3(
-                rng.next_f32() * 1.6 - 0.8,
-                rng.next_f32() * 1.6 - 0.8,
-                rng.next_f32() * 1.6 - 0.8,
-            );
-            let ray = Ray::new(origin, target - origin);
-            if accel.intersect(&ray).is_none() || !accel.occluded(&ray) {
-                leaks += 1;
-            }
-        }
+        let leaks = leaks(accel.as_ref(), &targets);
         assert_eq!(
             leaks,
             0,
@@ -265,4 +238,66 @@ fn no_ray_leaks_out_of_a_closed_box() {
             targets.len()
         );
     }
+}
+
+/// The Cornell box of scenes/, and `steps` + 1 points along every edge and diagonal of its
+/// quads: where a ray from inside slips out if the intersection is not watertight.
+fn box_edge_targets(steps: u32) -> (Scene, Vec<Vec3>) {
+    let scene = Scene::load(&common::own_scene_dir().join("cornell_box.obj")).expect("loads");
+    let mut targets = Vec::new();
+    for q in &scene.quads {
+        let v = q.vertices;
+        for k in 0..4 {
+            let (a, b) = (v[k], v[(k + 1) % 4]);
+            for s in 0..=steps {
+                targets.push(a + (b - a) * (s as f32 / steps as f32));
+            }
+        }
+        for s in 0..=steps {
+            targets.push(v[1] + (v[3] - v[1]) * (s as f32 / steps as f32));
+        }
+    }
+    (scene, targets)
+}
+
+/// How many rays from random points inside the box [-1,1]³ (away from the walls) towards
+/// `targets` miss every wall or are not occluded.
+fn leaks(accel: &dyn trilux::accel::Accel, targets: &[Vec3]) -> usize {
+    let mut leaks = 0;
+    for (k, &target) in targets.iter().enumerate() {
+        let mut rng = Rng::new(17, k as u64, 0);
+        let origin = vec3(
+            rng.next_f32() * 1.6 - 0.8,
+            rng.next_f32() * 1.6 - 0.8,
+            rng.next_f32() * 1.6 - 0.8,
+        );
+        let ray = Ray::new(origin, target - origin);
+        if accel.intersect(&ray).is_none() || !accel.occluded(&ray) {
+            leaks += 1;
+        }
+    }
+    leaks
+}
+
+/// `--embree-robust false` reaches Embree, and what `AccelOptions::embree_robust` says of it
+/// holds: off, rays aimed at the box's edges and quad diagonals slip through (so the
+/// default, on, is what makes the test above pass for Embree).
+#[test]
+#[cfg_attr(
+    not(feature = "embree"),
+    ignore = "Embree's robust mode: needs the embree feature"
+)]
+fn embree_without_robust_mode_leaks_through_edges() {
+    let (scene, targets) = box_edge_targets(1024);
+    let options = AccelOptions {
+        embree_robust: false,
+        ..AccelOptions::default()
+    };
+    let accel = accel::build(&scene, trilux::accel::AccelKind::Embree, &options).expect("builds");
+    let leaks = leaks(accel.as_ref(), &targets);
+    println!(
+        "embree, robust mode off: {leaks} of {} rays left the box",
+        targets.len()
+    );
+    assert!(leaks > 0, "no ray left the box with robust mode off");
 }
