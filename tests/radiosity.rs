@@ -186,15 +186,13 @@ fn furnace_patches_reach_le_over_one_minus_rho() {
             100.0 * worst_shown
         );
         assert_eq!(solution.patches.len(), 384);
-        if rho < 0.995 {
-            assert_eq!(solution.stop, Stop::Converged);
-            assert!(worst_solved < 5e-3, "ρ = {rho}: {worst_solved}");
-        } else {
-            // Either way the solver says how it stopped; the shown image holds the ambient
-            // estimate of the light not yet shot.
-            assert!(matches!(solution.stop, Stop::Converged | Stop::Cap));
-            assert!(worst_shown < 5e-3, "ρ = {rho}: {worst_shown}");
-        }
+        // With the default automatic over-relaxation every ρ converges, even 0.999 (87,735
+        // shots; plain shooting stops at its cap there, tests/stability.rs). Measured: worst
+        // patch 0.059% solved, 0.011% shown; 0.5% is the tolerance's 1e-3 residual with room
+        // for the 16-sample form factors.
+        assert_eq!(solution.stop, Stop::Converged, "ρ = {rho}");
+        assert!(worst_solved < 5e-3, "ρ = {rho}: {worst_solved}");
+        assert!(worst_shown < 5e-3, "ρ = {rho}: {worst_shown}");
     }
 }
 

@@ -354,6 +354,65 @@ fn huge_requests_are_refused_with_a_clear_message() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--max-memory 1.000 KiB"));
 }
 
+/// Over-relaxation changes how fast the progressive solver gets there, not where: on the
+/// Cornell box of scenes/ (subdivided twice, with its sphere), solved to the same tolerance
+/// plainly (ω = 1) and with automatic over-relaxation, the second takes fewer shots and every
+/// patch agrees with the first within 0.2% of the brightest patch's radiance (measured:
+/// 6,898 shots against 10,696, and 0.040% apart).
+#[test]
+fn over_relaxation_takes_fewer_shots_to_the_same_solution() {
+    let scene = Scene::load(&common::own_scene_dir().join("cornell_box_diffuse_sphere.obj"))
+        .expect("loads");
+    let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
+    let solve = |relaxation| {
+        let settings = RenderSettings {
+            quiet: true,
+            radiosity: RadiositySettings {
+                subdivide: 2,
+                tolerance: 1e-4,
+                relaxation,
+                ..Default::default()
+            },
+            ..RenderSettings::default()
+        };
+        Solution::solve(&scene, accel.as_ref(), &settings, |_| {})
+    };
+    let plain = solve(Relaxation::Fixed(1.0));
+    let relaxed = solve(Relaxation::Auto);
+    assert_eq!(plain.stop, Stop::Converged);
+    assert_eq!(relaxed.stop, Stop::Converged);
+    let brightest = plain
+        .state
+        .radiance
+        .iter()
+        .map(|l| l.max_element())
+        .fold(0.0f32, f32::max);
+    let worst = plain
+        .state
+        .radiance
+        .iter()
+        .zip(&relaxed.state.radiance)
+        .map(|(a, b)| (*a - *b).abs().max_element())
+        .fold(0.0f32, f32::max)
+        / brightest;
+    println!(
+        "plain: {} shots, automatic over-relaxation: {} shots; largest difference {:.4}% of the brightest patch",
+        plain.state.iterations,
+        relaxed.state.iterations,
+        100.0 * worst
+    );
+    assert!(
+        relaxed.state.iterations < plain.state.iterations,
+        "{} shots relaxed, {} plain",
+        relaxed.state.iterations,
+        plain.state.iterations
+    );
+    assert!(
+        worst < 2e-3,
+        "the solutions differ by {worst} of the brightest patch"
+    );
+}
+
 /// `--max-memory` as `--plan` reports it: K, M, G and T suffixes (either case, powers of
 /// 1024, fractions allowed) and plain bytes; without the flag, 80% of MemTotal in
 /// /proc/meminfo, read here (8 GiB where there is none); sizes that are not positive
