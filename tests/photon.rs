@@ -229,14 +229,26 @@ fn floor_bleeds_the_colour_of_the_nearest_wall() {
         .film;
     let traced = trilux::engines::raytrace::render(&scene, accel.as_ref(), &s).0;
     let bleed_photons = r_over_b(&photons, &by_red) / r_over_b(&photons, &by_blue);
+    let mut p = s.clone();
+    p.num_antialias_samples = 256;
+    let path = trilux::engines::path::render(&scene, accel.as_ref(), &p).0;
+    let bleed_path = r_over_b(&path, &by_red) / r_over_b(&path, &by_blue);
     let bleed_traced = r_over_b(&traced, &by_red) / r_over_b(&traced, &by_blue);
     println!(
         "R/B by the red wall over R/B by the blue wall: photons {bleed_photons:.3}, ray tracer with ambient {bleed_traced:.3} ({} and {} pixels)",
         by_red.len(),
         by_blue.len()
     );
+    println!("the path tracer's, at 256 paths a pixel: {bleed_path:.3}");
     assert!(by_red.len() > 20 && by_blue.len() > 20);
-    assert!(bleed_photons > 1.05 && bleed_photons > bleed_traced);
+    assert!(bleed_photons > bleed_traced);
+    // Measured over seeds 0, 1, 2: the path tracer 3.58, 3.57, 3.74 (spread 2.6% a seed),
+    // the photons 3.53, 3.45, 3.43 (the density estimate's blur: 1–8% under). Bound: four
+    // standard deviations of the path tracer's (10%), plus 2% for the photons' bias.
+    assert!(
+        (bleed_photons / bleed_path - 1.0).abs() < 0.12,
+        "photons {bleed_photons} against the path tracer's {bleed_path}"
+    );
 }
 
 /// Both Accels store the same photons, bit for bit, for the same seed.

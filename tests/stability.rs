@@ -147,8 +147,12 @@ fn scenes_do_not_depend_on_units_or_position() {
                 let m = metrics::compare(&film, &reference).expect("same size");
                 assert!(all_finite(&film));
                 if held.contains(&(scale, offset)) {
+                    // Measured worst relMSE: 1.0e-11 for a scale alone (rounding of the
+                    // scaled coordinates), 9.4e-6 for offsets up to 1e3 (a few pixels along
+                    // sphere silhouettes). One pixel of 1,024 wholly wrong is about 1e-3.
+                    let bound = if offset == 0.0 { 1e-10 } else { 5e-5 };
                     assert!(
-                        m.relmse <= 1e-3,
+                        m.relmse <= bound,
                         "{name} ({kind}) scale {scale} offset {offset}: {m:?}"
                     );
                 }
