@@ -411,19 +411,10 @@ fn patch_through(
     d: [f64; 3],
     eps: f64,
 ) -> Option<Option<(usize, f64)>> {
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let f64s = |v: trilux::geometry::Vec3| [v.x as f64, v.y as f64, v.z as f64];
+    use common::vec64::{cross, dot, norm, of, sub};
     let mut hits: Vec<(f64, usize, f64)> = Vec::new();
     for (k, p) in solution.patches.iter().enumerate() {
-        let c = p.corners.map(f64s);
+        let c = p.corners.map(of);
         let n = cross(sub(c[1], c[0]), sub(c[2], c[0]));
         let dn = dot(d, n);
         if dn >= 0.0 {
@@ -434,11 +425,11 @@ fn patch_through(
             continue;
         }
         let x = [o[0] + d[0] * t, o[1] + d[1] * t, o[2] + d[2] * t];
-        let n_len = dot(n, n).sqrt();
+        let n_len = norm(n);
         let margin = (0..4)
             .map(|e| {
                 let edge = sub(c[(e + 1) % 4], c[e]);
-                dot(cross(edge, sub(x, c[e])), n) / (n_len * dot(edge, edge).sqrt())
+                dot(cross(edge, sub(x, c[e])), n) / (n_len * norm(edge))
             })
             .fold(f64::INFINITY, f64::min);
         if margin >= -eps {
@@ -509,16 +500,10 @@ fn radiosity_images_show_each_patchs_value() {
             for i in 0..w {
                 let screen = trilux::scene::Camera::screen_point(i, j, 0.5, 0.5, w, h);
                 let ray = view.ray(screen.0, screen.1);
-                let o = [
-                    ray.origin.x as f64,
-                    ray.origin.y as f64,
-                    ray.origin.z as f64,
-                ];
-                let d = [
-                    ray.direction.x as f64,
-                    ray.direction.y as f64,
-                    ray.direction.z as f64,
-                ];
+                let (o, d) = (
+                    common::vec64::of(ray.origin),
+                    common::vec64::of(ray.direction),
+                );
                 let expected = match patch_through(&solution, o, d, 1e-4) {
                     Some(Some((k, margin))) if margin > 1e-4 => value(&solution, k),
                     Some(None) => scene.background,

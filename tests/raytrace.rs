@@ -19,16 +19,7 @@ use trilux::scene::Scene;
 /// Irradiance at `x` (normal `n`) from a polygon of unit radiance, by Lambert's formula:
 /// E = ½ Σ θᵢ (n · γᵢ), γᵢ the unit normal of the plane through x and edge i.
 fn polygon_irradiance(x: [f64; 3], n: [f64; 3], polygon: &[[f64; 3]]) -> f64 {
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let norm = |a: [f64; 3]| dot(a, a).sqrt();
+    use common::vec64::{cross, dot, norm, sub};
     let mut sum = 0.0;
     for i in 0..polygon.len() {
         let a = sub(polygon[i], x);

@@ -4,6 +4,7 @@
 
 pub mod references;
 pub mod shape_oracle;
+pub mod vec64;
 
 use std::path::{Path, PathBuf};
 

@@ -5,15 +5,7 @@
 
 use trilux::geometry::{AnalyticShape, Ray};
 
-type V = [f64; 3];
-
-fn v(p: trilux::geometry::Vec3) -> V {
-    [p.x as f64, p.y as f64, p.z as f64]
-}
-
-fn dot(a: V, b: V) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
+use super::vec64::{dot, of as v, V3 as V};
 
 /// The roots of a t² + b t + c = 0, smaller first (none when a = 0 or the discriminant is
 /// negative).
