@@ -3,7 +3,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 use common::{backends, own_scenes};
@@ -47,19 +47,13 @@ fn assert_backends_write_identical_images(dir: &Path, args: &[&str], output: &st
     );
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("trilux-cli-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
 #[cfg_attr(
     not(feature = "embree"),
     ignore = "compares Embree with the BVH: needs the embree feature"
 )]
 #[test]
 fn every_scene_renders_identically_with_both_backends() {
-    let dir = temp_dir("backends");
+    let dir = common::temp_dir("backends");
     for scene in own_scenes() {
         let input = scene.to_str().unwrap();
         let stem = scene.file_stem().unwrap().to_string_lossy().into_owned();
@@ -87,7 +81,7 @@ fn every_scene_renders_identically_with_both_backends() {
 #[test]
 fn course_command_lines_run_verbatim() {
     let scenes = common::own_scene_dir();
-    let dir = temp_dir("verbatim");
+    let dir = common::temp_dir("verbatim");
     let scene = |name: &str| scenes.join(name).to_string_lossy().into_owned();
     let lines: Vec<Vec<String>> = vec![
         vec![
@@ -182,7 +176,7 @@ fn course_command_lines_run_verbatim() {
 #[test]
 fn plan_reports_what_the_scene_needs() {
     let scenes = common::own_scene_dir();
-    let dir = temp_dir("plan");
+    let dir = common::temp_dir("plan");
     let spheres = ok(&render(
         &dir,
         &[
@@ -245,7 +239,7 @@ fn plan_reports_what_the_scene_needs() {
 #[test]
 fn output_formats_are_linear_and_written_atomically() {
     let scenes = common::own_scene_dir();
-    let dir = temp_dir("formats");
+    let dir = common::temp_dir("formats");
     let input = scenes.join("reflective_spheres.obj");
     for name in ["a.png", "a.jpg", "a.exr", "a.pfm"] {
         ok(&render(
@@ -312,7 +306,7 @@ fn output_formats_are_linear_and_written_atomically() {
 #[test]
 fn thread_count_does_not_change_the_image_of_any_engine() {
     let scenes = common::own_scene_dir();
-    let dir = temp_dir("threads");
+    let dir = common::temp_dir("threads");
     let runs: [(&str, &str, &[&str]); 6] = [
         (
             "raytrace",
@@ -385,7 +379,7 @@ fn thread_count_does_not_change_the_image_of_any_engine() {
 
 #[test]
 fn bad_input_is_a_clear_error() {
-    let dir = temp_dir("bad");
+    let dir = common::temp_dir("bad");
     std::fs::write(
         dir.join("bad.obj"),
         "material\ndiffuse 1 1 1\nm 0\nv 0 0 0\nf 1 2 3 4\n",
@@ -406,7 +400,7 @@ fn bad_input_is_a_clear_error() {
 #[test]
 fn ray_tree_is_written_beside_the_image() {
     let scenes = common::own_scene_dir();
-    let dir = temp_dir("raytree");
+    let dir = common::temp_dir("raytree");
     let input = scenes.join("reflective_spheres.obj");
     // Pixel (32, 24) of a 64×64 image is on the large mirror sphere.
     ok(&render(
@@ -480,7 +474,7 @@ fn course_ray_tracing_commands_give_identical_images_with_both_backends() {
         "-input cornell_box_diffuse_sphere.obj -ambient_light 0.2 0.2 0.2 -num_shadow_samples 100",
     ];
     for (k, command) in commands.iter().enumerate() {
-        let dir = temp_dir(&format!("course-{k}"));
+        let dir = common::temp_dir(&format!("course-{k}"));
         let mut args = common::scene_args(&scenes, command);
         args.push("--quiet".into());
         let argv: Vec<&str> = args.iter().map(String::as_str).collect();
@@ -498,7 +492,7 @@ fn course_ray_tracing_commands_give_identical_images_with_both_backends() {
 
 #[test]
 fn compare_reports_the_errors_of_an_image_against_a_reference() {
-    let dir = temp_dir("compare");
+    let dir = common::temp_dir("compare");
     let mut reference = trilux::film::Film::new(2, 1);
     reference.pixels = vec![
         trilux::geometry::Vec3::splat(1.0),
@@ -544,7 +538,7 @@ fn compare_reports_the_errors_of_an_image_against_a_reference() {
 #[test]
 fn course_radiosity_command_lines_run_verbatim() {
     let scenes = common::own_scene_dir();
-    let dir = temp_dir("radiosity-verbatim");
+    let dir = common::temp_dir("radiosity-verbatim");
     let lines = [
         "-input cornell_box.obj",
         "-size 300 150 -input l.obj",
@@ -582,7 +576,7 @@ fn course_radiosity_command_lines_run_verbatim() {
 #[test]
 fn radiosity_modes_write_their_outputs_identically_with_both_backends() {
     let scenes = common::own_scene_dir();
-    let dir = temp_dir("radiosity-modes");
+    let dir = common::temp_dir("radiosity-modes");
     let l = scenes.join("l.obj").to_string_lossy().into_owned();
     let sphere = scenes
         .join("cornell_box_diffuse_sphere.obj")
@@ -682,7 +676,7 @@ fn radiosity_modes_write_their_outputs_identically_with_both_backends() {
 #[test]
 fn course_photon_command_lines_run_verbatim() {
     let scenes = common::own_scene_dir();
-    let dir = temp_dir("photon-verbatim");
+    let dir = common::temp_dir("photon-verbatim");
     let lines = [
         "-input reflective_ring.obj -num_photons_to_shoot 10000 -num_bounces 2 -num_shadow_samples 10",
         "-input reflective_ring.obj -num_photons_to_shoot 500000 -num_bounces 2 -num_shadow_samples 10 -num_antialias_samples 4",
@@ -713,7 +707,7 @@ fn course_photon_command_lines_run_verbatim() {
 #[test]
 fn photon_maps_are_saved_and_loaded_and_checked() {
     let scenes = common::own_scene_dir();
-    let dir = temp_dir("photon-file");
+    let dir = common::temp_dir("photon-file");
     let cornell = scenes
         .join("cornell_box_diffuse_sphere.obj")
         .to_string_lossy()
@@ -793,7 +787,7 @@ fn photon_maps_are_saved_and_loaded_and_checked() {
 /// version, or cut short; settings that only change the lookups (photons to collect) load.
 #[test]
 fn photon_files_made_otherwise_are_refused() {
-    let dir = temp_dir("photon-refusals");
+    let dir = common::temp_dir("photon-refusals");
     let scene_text = std::fs::read_to_string(common::own_scene_dir().join("cornell_box.obj"))
         .expect("scene reads");
     std::fs::write(dir.join("box.obj"), &scene_text).unwrap();
@@ -950,7 +944,7 @@ fn bench_accel_measures_only_the_cells_asked_for() {
 /// `--stats` names the radiosity solvers' counters: the mesh's, and each solver's own.
 #[test]
 fn stats_name_the_radiosity_counters() {
-    let dir = temp_dir("stats");
+    let dir = common::temp_dir("stats");
     let scene = common::own_scene_dir().join("cornell_box.mgf");
     for (solver, wanted) in [
         ("progressive", "form-factor rows computed"),
@@ -995,7 +989,7 @@ fn stats_name_the_radiosity_counters() {
 /// util-linux/bsdutils, with TERM=xterm), absent when stderr is piped and under `--quiet`.
 #[test]
 fn progress_bar_shows_on_a_terminal_only() {
-    let dir = temp_dir("progress");
+    let dir = common::temp_dir("progress");
     let scene = common::own_scene_dir().join("cornell_box_diffuse_sphere.obj");
     let command = |quiet: bool| {
         format!(

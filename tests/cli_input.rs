@@ -3,6 +3,8 @@
 //! the photon-map fingerprint covers everything that changes the maps. Uses the project's own
 //! scenes only.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -13,12 +15,6 @@ fn scene(name: &str) -> String {
         .join(name)
         .to_string_lossy()
         .into_owned()
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("trilux-cli-input-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// Runs `render` in `dir`; fails the test if it takes longer than `limit` (a check that
@@ -79,7 +75,7 @@ const BEFORE_WORK: Duration = Duration::from_secs(20);
 
 #[test]
 fn non_finite_ambient_light_names_the_flag() {
-    let dir = temp_dir("ambient");
+    let dir = common::temp_dir("ambient");
     let out = cornell_box(&dir, &["-ambient_light", "nan", "nan", "nan"], REFUSED);
     refused(&out, "-ambient_light", "finite numbers ≥ 0");
     let out = cornell_box(&dir, &["-ambient_light", "0.1", "-1", "0.1"], REFUSED);
@@ -89,7 +85,7 @@ fn non_finite_ambient_light_names_the_flag() {
 
 #[test]
 fn thread_count_out_of_range_names_the_flag_and_the_range() {
-    let dir = temp_dir("threads");
+    let dir = common::temp_dir("threads");
     let out = cornell_box(&dir, &["--threads", "100000"], REFUSED);
     refused(&out, "--threads", "from 0 to 1024");
     std::fs::remove_dir_all(&dir).ok();
@@ -97,7 +93,7 @@ fn thread_count_out_of_range_names_the_flag_and_the_range() {
 
 #[test]
 fn zero_samples_per_pixel_names_the_flag() {
-    let dir = temp_dir("spp");
+    let dir = common::temp_dir("spp");
     let out = cornell_box(&dir, &["-num_antialias_samples", "0"], REFUSED);
     refused(&out, "-num_antialias_samples", "from 1 to");
     std::fs::remove_dir_all(&dir).ok();
@@ -105,7 +101,7 @@ fn zero_samples_per_pixel_names_the_flag() {
 
 #[test]
 fn negative_or_non_finite_lens_names_the_flag() {
-    let dir = temp_dir("lens");
+    let dir = common::temp_dir("lens");
     let out = cornell_box(&dir, &["--aperture", "-0.5"], REFUSED);
     refused(&out, "--aperture", "finite number ≥ 0");
     let out = cornell_box(&dir, &["--focus-distance", "inf"], REFUSED);
@@ -115,7 +111,7 @@ fn negative_or_non_finite_lens_names_the_flag() {
 
 #[test]
 fn out_of_range_engine_numbers_name_the_flag() {
-    let dir = temp_dir("engine-numbers");
+    let dir = common::temp_dir("engine-numbers");
     let cases: [(&[&str], &str); 7] = [
         (&["-size", "0", "10"], "-size"),
         (&["--link-error", "0"], "--link-error"),
@@ -136,7 +132,7 @@ fn out_of_range_engine_numbers_name_the_flag() {
 
 #[test]
 fn an_output_whose_folder_is_missing_is_refused_before_the_render() {
-    let dir = temp_dir("no-folder");
+    let dir = common::temp_dir("no-folder");
     let flags: Vec<&str> = ["-o", "missing/out.png"].into_iter().chain(HEAVY).collect();
     let out = cornell_box(&dir, &flags, BEFORE_WORK);
     refused(&out, "missing/out.png", "does not exist");
@@ -145,7 +141,7 @@ fn an_output_whose_folder_is_missing_is_refused_before_the_render() {
 
 #[test]
 fn an_output_of_unknown_format_is_refused_before_the_render() {
-    let dir = temp_dir("format");
+    let dir = common::temp_dir("format");
     let flags: Vec<&str> = ["-o", "out.gif"].into_iter().chain(HEAVY).collect();
     let out = cornell_box(&dir, &flags, BEFORE_WORK);
     refused(
@@ -159,7 +155,7 @@ fn an_output_of_unknown_format_is_refused_before_the_render() {
 
 #[test]
 fn a_scene_without_geometry_is_an_error_that_says_so() {
-    let dir = temp_dir("empty");
+    let dir = common::temp_dir("empty");
     let path = dir.join("empty.obj");
     std::fs::write(&path, "# nothing but a comment\n").unwrap();
     let out = render(&dir, &["-input", path.to_str().unwrap()]);
@@ -194,7 +190,7 @@ fn write_textured_scene(dir: &Path, albedo: &str, texel: u8) {
 /// texture. The same files and flags load.
 #[test]
 fn loading_photons_refuses_maps_made_with_another_mtl_texture_or_sidedness() {
-    let dir = temp_dir("fingerprint");
+    let dir = common::temp_dir("fingerprint");
     write_textured_scene(&dir, "0.5 0.5 0.5", 128);
     let base = [
         "-input",
@@ -259,7 +255,7 @@ fn loading_photons_refuses_maps_made_with_another_mtl_texture_or_sidedness() {
 /// made is refused naming the flag.
 #[test]
 fn camera_flags_override_the_scenes_camera() {
-    let dir = temp_dir("camera");
+    let dir = common::temp_dir("camera");
     let input = scene("glass_sphere_caustic.obj");
     let base = ["-input", input.as_str(), "-size", "24", "24", "--quiet"];
     let run = |extra: &[&str], out: &str| {

@@ -12,12 +12,6 @@ use trilux::scene::Scene;
 
 mod common;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("trilux-mgf-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
@@ -29,7 +23,7 @@ const SQUARE: &str = "v a =\n p 0 0 0\nv b =\n p 1 0 0\nv c =\n p 1 1 0\nv d =\n
 
 #[test]
 fn faces_become_quads_or_triangles() {
-    let dir = temp_dir("faces");
+    let dir = common::temp_dir("faces");
     let text = format!(
         "{SQUARE}v e =\n p 2 0.5 0\n\
          f a b c d\n\
@@ -54,7 +48,7 @@ fn faces_become_quads_or_triangles() {
 
 #[test]
 fn transforms_arrays_mirrors_and_includes_place_vertices_where_used() {
-    let dir = temp_dir("xf");
+    let dir = common::temp_dir("xf");
     write(&dir, "square.mgf", &format!("{SQUARE}f a b c d\n"));
     std::fs::create_dir_all(dir.join("sub")).unwrap();
     // An include relative to the including file, moved by its arguments; an array of three
@@ -80,7 +74,7 @@ fn transforms_arrays_mirrors_and_includes_place_vertices_where_used() {
 
 #[test]
 fn colours_and_emission_follow_mgf_md() {
-    let dir = temp_dir("colour");
+    let dir = common::temp_dir("colour");
     // White ed 575.13 = 183.07 π lm/m² is radiance 1; a grey of rd 0.5 is albedo 0.5 in every
     // channel (equal-energy white is RGB 1 1 1).
     let text = format!(
@@ -105,7 +99,7 @@ fn colours_and_emission_follow_mgf_md() {
 
 #[test]
 fn primitives_are_tessellated_as_renderpark_does() {
-    let dir = temp_dir("prims");
+    let dir = common::temp_dir("prims");
     let text = "v c =\n p 0 0 0\n n 0 0 1\nv t =\n p 0 0 1\n\
                 sph c 1\ncyl c 0.5 t\ncone c 0.5 t 0\nring c 0.2 0.5\ntorus c 0.5 1\n";
     let scene = Scene::load(&write(&dir, "p.mgf", text)).expect("loads");
@@ -120,7 +114,7 @@ fn primitives_are_tessellated_as_renderpark_does() {
 /// Each class of error names file:line:column.
 #[test]
 fn errors_name_the_file_line_and_column() {
-    let dir = temp_dir("errors");
+    let dir = common::temp_dir("errors");
     let cases: [(&str, &str, &str); 6] = [
         (
             "undefined.mgf",
@@ -148,7 +142,7 @@ fn errors_name_the_file_line_and_column() {
 
 #[test]
 fn unknown_entities_warn_once_per_name() {
-    let dir = temp_dir("unknown");
+    let dir = common::temp_dir("unknown");
     let text = format!("{SQUARE}0 0 0\n0 1 1\nfoo 1\nf a b c d\n");
     let scene = Scene::load(&write(&dir, "u.mgf", &text)).expect("loads");
     let unknown: Vec<&String> = scene
@@ -162,7 +156,7 @@ fn unknown_entities_warn_once_per_name() {
 
 #[test]
 fn every_engine_renders_an_mgf_scene() {
-    let dir = temp_dir("engines");
+    let dir = common::temp_dir("engines");
     // A closed box of five walls lit from a ceiling square, seen from inside.
     let text = "m wall =\n c\n  cxy 0.333333 0.333333\n rd 0.5\n\
         v a =\n p 0 0 0\nv b =\n p 1 0 0\nv c =\n p 1 1 0\nv d =\n p 0 1 0\n\
@@ -235,7 +229,7 @@ proptest! {
         ]),
         0..80,
     )) {
-        let dir = temp_dir("soup");
+        let dir = common::temp_dir("soup");
         let text = words.join(" ");
         let path = write(&dir, "soup.mgf", &text);
         let _ = Scene::load(&path);

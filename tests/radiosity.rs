@@ -400,17 +400,21 @@ fn exported_ply_holds_every_patch_with_its_radiance() {
     assert_eq!(next as usize, vertices);
 }
 
+/// What a ray meets among a solution's patches, by `patch_through`.
+enum Through {
+    /// No patch: the background.
+    Nothing,
+    /// This patch, more than `eps` inside its edges and nearer by more than `eps` than any
+    /// other.
+    Patch(usize),
+    /// Within `eps` of a patch's edge or of a second patch: either could be right.
+    Unsure,
+}
+
 /// The nearest patch (front side: quads are one-sided) that the ray from `o` along `d` meets,
 /// intersected with the patch's own corners in f64 (apart from the Accel and from the mesh's
-/// lookup), and how far inside it the point lies (its distance to the nearest edge); None
-/// when it meets no patch, or when the nearest two lie within `eps` of each other along the
-/// ray.
-fn patch_through(
-    solution: &Solution,
-    o: [f64; 3],
-    d: [f64; 3],
-    eps: f64,
-) -> Option<Option<(usize, f64)>> {
+/// lookup).
+fn patch_through(solution: &Solution, o: [f64; 3], d: [f64; 3], eps: f64) -> Through {
     use common::vec64::{cross, dot, norm, of, sub};
     let mut hits: Vec<(f64, usize, f64)> = Vec::new();
     for (k, p) in solution.patches.iter().enumerate() {
@@ -438,9 +442,13 @@ fn patch_through(
     }
     hits.sort_by(|a, b| a.0.total_cmp(&b.0));
     match hits.as_slice() {
-        [] => Some(None),
-        [(_, k, margin)] => Some(Some((*k, *margin))),
-        [(t0, k, margin), (t1, ..), ..] => ((t1 - t0) > eps).then_some(Some((*k, *margin))),
+        [] => Through::Nothing,
+        [(t0, k, margin), rest @ ..]
+            if *margin > eps && rest.first().is_none_or(|(t1, ..)| t1 - t0 > eps) =>
+        {
+            Through::Patch(*k)
+        }
+        _ => Through::Unsure,
     }
 }
 
@@ -505,9 +513,9 @@ fn radiosity_images_show_each_patchs_value() {
                     common::vec64::of(ray.direction),
                 );
                 let expected = match patch_through(&solution, o, d, 1e-4) {
-                    Some(Some((k, margin))) if margin > 1e-4 => value(&solution, k),
-                    Some(None) => scene.background,
-                    _ => continue,
+                    Through::Patch(k) => value(&solution, k),
+                    Through::Nothing => scene.background,
+                    Through::Unsure => continue,
                 };
                 let got = film.get(i, row);
                 assert!(

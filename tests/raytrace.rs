@@ -409,8 +409,7 @@ fn sphere_and_triangle_lights_give_the_closed_form_irradiance() {
     // The triangle faces down (its vertices counter-clockwise seen from below); the floor
     // is seen at (1.5, 0, 0), beside it, where the camera's ray does not meet it first.
     let triangle = [[-1.0, 1.0, -0.5], [1.0, 1.0, -0.5], [0.0, 1.0, 1.0]];
-    let dir = std::env::temp_dir().join(format!("trilux-triangle-light-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::temp_dir("triangle-light");
     std::fs::write(
         dir.join("tri.mtl"),
         format!("newmtl light\nKd 0 0 0\nKe {LE_LIGHT} {LE_LIGHT} {LE_LIGHT}\nnewmtl floor\nKd {RHO_FLOOR} {RHO_FLOOR} {RHO_FLOOR}\n"),
@@ -519,8 +518,7 @@ fn glossy_reflection_spreads_as_its_phong_lobe() {
 /// between texel centres with wrap-around, t = 0 at the image's bottom row. To f32 rounding.
 #[test]
 fn texture_lookup_is_bilinear_wrapping_and_linear() {
-    let dir = std::env::temp_dir().join(format!("trilux-texture-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::temp_dir("texture");
     let texels = [[[128u8, 0, 0], [0, 255, 0]], [[0, 0, 255], [255, 255, 255]]];
     let ppm: String = texels
         .iter()

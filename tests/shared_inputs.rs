@@ -86,7 +86,7 @@ const COURSE_LINES: [&str; 8] = [
 /// it writes from ours — but for the two scenes with textures, whose images are our own.
 fn course_compatibility(course: &Path) {
     own_scenes_match_the_course_scenes(course);
-    let out = std::env::temp_dir().join(format!("trilux-course-compat-{}", std::process::id()));
+    let out = common::temp_dir("course-compat");
     for line in COURSE_LINES {
         let images: Vec<Vec<u8>> = [course.to_path_buf(), common::own_scene_dir()]
             .iter()

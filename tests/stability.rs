@@ -541,8 +541,7 @@ fn interrupted(
 fn ctrl_c_in_every_phase_writes_what_it_has() {
     let scene = common::own_scene_dir().join("cornell_box_diffuse_sphere.obj");
     let scene = scene.to_str().unwrap();
-    let dir = std::env::temp_dir().join(format!("trilux-sigint-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::temp_dir("sigint");
     let phases: [(&str, &[&str], f64); 4] = [
         (
             "path tracer",
@@ -637,8 +636,7 @@ fn ctrl_c_in_every_phase_writes_what_it_has() {
 #[test]
 fn a_second_ctrl_c_quits_at_once() {
     let scene = common::own_scene_dir().join("cornell_box_diffuse_sphere.obj");
-    let dir = std::env::temp_dir().join(format!("trilux-sigint2-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::temp_dir("sigint2");
     let args = [
         "-input",
         scene.to_str().unwrap(),
@@ -667,8 +665,7 @@ fn a_second_ctrl_c_quits_at_once() {
 #[test]
 fn ctrl_c_in_a_report_keeps_only_finished_work() {
     let scene = common::own_scene_dir().join("cornell_box.obj");
-    let dir = std::env::temp_dir().join(format!("trilux-sigint-report-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::temp_dir("sigint-report");
     let scene = scene.to_str().unwrap();
     let report = |extra: &[&str]| -> Vec<String> {
         let mut args: Vec<String> = [
