@@ -26,3 +26,11 @@ pub fn cross(a: V3, b: V3) -> V3 {
 pub fn norm(a: V3) -> f64 {
     dot(a, a).sqrt()
 }
+
+pub fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+pub fn scale(a: V3, s: f64) -> V3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
