@@ -449,6 +449,14 @@ fn both_accels_give_identical_photon_maps() {
 /// The issue asked for 3×; the path tracer, which agrees with the photon image within 2% over
 /// the whole view, puts this scene's caustic at about 2× its surroundings: the 2×2 light
 /// blurs the cusp over about a unit of floor (see the note on issue #5).
+///
+/// Bounds from seeds 0–9 (photons and path tracer alike): the photons' contrast over the path
+/// tracer's is −2.6% ± 4.3% (the brightest-region search picks up each image's noise: 1.93
+/// ± 0.05 against 1.98 ± 0.06), the photons' level in the 9 × 9 pixels around the path
+/// tracer's brightest region −0.4% ± 2.9% of the path tracer's; each bound is the mean's
+/// offset plus four standard deviations. Without photons the contrast is the direct light's
+/// own, 1.20 ± 0.003: the bound of 1.25 says "no caustic" (the path tracer's is 1.98), it is
+/// not a spread.
 #[test]
 fn ring_caustic_stands_out_as_in_the_path_tracer() {
     let dir = common::own_scene_dir();
@@ -511,14 +519,14 @@ fn ring_caustic_stands_out_as_in_the_path_tracer() {
         .0
         .film;
     let without = trilux::engines::raytrace::render(&scene, accel.as_ref(), &s).0;
-    s.num_antialias_samples = 512;
+    s.num_antialias_samples = 1024;
     let reference = trilux::engines::path::render(&scene, accel.as_ref(), &s).0;
     let (on, off, path) = (
         contrast(&with_photons),
         contrast(&without),
         contrast(&reference),
     );
-    let caustic = square(path.1, path.2, 2);
+    let caustic = square(path.1, path.2, 4);
     let (photon_level, path_level) = (
         luminance(mean_over(&with_photons, &caustic)),
         luminance(mean_over(&reference, &caustic)),
@@ -527,7 +535,7 @@ fn ring_caustic_stands_out_as_in_the_path_tracer() {
         "brightest region inside the ring over the floor around it: photons {:.2} at ({}, {}), photons off {:.2}, path tracer {:.2} at ({}, {}); the path tracer's region: photons {photon_level:.4}, path {path_level:.4}",
         on.0, on.1, on.2, off.0, path.0, path.1, path.2
     );
-    assert!(on.0 > 1.5 && off.0 < 1.25, "{on:?} {off:?}");
-    assert!((on.0 / path.0 - 1.0).abs() < 0.15, "{on:?} {path:?}");
-    assert!((photon_level / path_level - 1.0).abs() < 0.1);
+    assert!(off.0 < 1.25, "{off:?}");
+    assert!((on.0 / path.0 - 1.0).abs() < 0.2, "{on:?} {path:?}");
+    assert!((photon_level / path_level - 1.0).abs() < 0.12);
 }
