@@ -15,11 +15,12 @@ use trilux::engines::scattering::diffuse_sample;
 use trilux::geometry::{Ray, Vec3};
 use trilux::scene::Scene;
 
-/// Every input patch of the closed cube within 0.5% of 1/(1 − ρ) for ρ = 0.5, 0.9, 0.99: the
+/// Every input patch of the closed cube within 0.01% of 1/(1 − ρ) for ρ = 0.5, 0.9, 0.99: the
 /// links neither lose nor create light, whether linking starts from every pair of patches or
 /// from the root cluster linked to itself (so that cluster links carry the first bounces).
-/// (Without the solver's leaf scales, leaves near the cube's edges summed their form factors
-/// to between 0.91 and 1.5, and ρ = 0.9 gave 2.3%.)
+/// Measured worst: 0.0011% (ρ = 0.99, the sweeps' stopping rule); the bound is nine times
+/// that. (Without the solver's leaf scales, leaves near the cube's edges summed their form
+/// factors to between 0.91 and 1.5, and ρ = 0.9 gave 2.3%.)
 #[test]
 fn furnace_through_the_hierarchy() {
     for cluster_above in [RadiositySettings::default().cluster_above, 0] {
@@ -40,7 +41,7 @@ fn furnace_through_the_hierarchy() {
                 solution.stop,
                 100.0 * worst
             );
-            assert!(worst < 5e-3, "ρ = {rho}: worst error {worst}");
+            assert!(worst < 1e-4, "ρ = {rho}: worst error {worst}");
         }
     }
 }
@@ -105,6 +106,8 @@ fn furnace_corridor_mgf(rho: f32, length: usize) -> Scene {
 
 /// The MGF corridor furnace from the root cluster: links with a cluster at an end carry part
 /// of the light (asserted), and still every patch is within 0.5% of Le/(1 − ρ), per channel.
+/// Measured worst: 0.19%, 0.17% and 0.085% for ρ = 0.5, 0.9, 0.99 (a cluster link spreads
+/// its light by the cluster's mean, not per patch); the bound is 2.6 times the worst.
 #[test]
 fn furnace_through_the_clusters() {
     for rho in [0.5f32, 0.9, 0.99] {
@@ -150,8 +153,8 @@ fn cornell_box_agrees_with_the_progressive_solver() {
         100.0 * l1,
         100.0 * power_error
     );
-    // Issue #15's aims; measured 1.72% and +0.08% (the reference takes one point per form
-    // factor, so part of the difference is its own).
+    // Issue #15's aims, 2% and 1%; measured 1.72% and +0.54% (the reference takes one point
+    // per form factor, so part of the difference is its own).
     assert!(l1 < 0.02, "relative L1 {l1}");
     assert!(power_error.abs() < 0.01, "reflected power {power_error}");
 }
@@ -304,7 +307,7 @@ fn leaf_elements_tile_their_patches() {
 }
 
 /// A memory budget stops the refinement (with a warning) instead of growing past it, and the
-/// solution still conserves light: the closed cube's furnace stays within 1%.
+/// solution still conserves light: the closed cube's furnace stays exact to f32 rounding.
 #[test]
 fn a_memory_budget_stops_the_refinement() {
     let scene = furnace(0.5);
@@ -332,7 +335,10 @@ fn a_memory_budget_stops_the_refinement() {
     assert!(count(&capped, "link bytes") <= budget);
     assert!(count(&capped, "links") < count(&free, "links"));
     let worst = worst_relative_error(&capped.state.radiance, 2.0);
-    assert!(worst < 0.01, "worst error {worst}");
+    println!("capped furnace: worst error {worst:.2e}");
+    // Light is conserved however coarse the links: measured 4.8e-7 (four f32 roundings of
+    // 2.0); the bound is eight times that.
+    assert!(worst < 4e-6, "worst error {worst}");
 }
 
 /// Two rooms sharing one wall, with `--two-sided` (every quad has a patch on each side): the
@@ -366,7 +372,7 @@ fn two_sided_walls_have_a_patch_on_each_side() {
         let solution = Solution::solve(&scene, accel.as_ref(), &settings, |_| {});
         // 11 quads with their backs, each split in four.
         assert_eq!(solution.patches.len(), 4 * 22, "{solver}");
-        let mut wall_backs = 0;
+        let (mut wall_backs, mut worst) = (0, 0.0f32);
         for (p, l) in solution.patches.iter().zip(&solution.state.radiance) {
             let ahead = p.centre + p.normal * 0.01;
             let inside = ahead.y.abs() < 1.0 && ahead.z.abs() < 1.0;
@@ -379,13 +385,18 @@ fn two_sided_walls_have_a_patch_on_each_side() {
             let error = (l.max_element() - truth)
                 .abs()
                 .max((l.min_element() - truth).abs());
+            worst = worst.max(error / truth.max(1.0));
+            // Measured worst 9.5e-7 (progressive) and 3.0e-7 (hierarchical), f32 rounding
+            // of sums of exact terms: nothing a side sees is wrong, so nothing drifts. The
+            // bound is ten times the worst.
             assert!(
-                error <= 5e-3 * truth.max(1.0),
+                error <= 1e-5 * truth.max(1.0),
                 "{solver}: patch at {:?} facing {:?} has {l:?}, not {truth}",
                 p.centre,
                 p.normal
             );
         }
+        println!("{solver}: worst patch {worst:.2e}");
         assert_eq!(wall_backs, 4, "{solver}");
         let field = solution.field(solution.display_radiance(), false);
         for (from, dir, truth) in [(-0.5f32, 1.0f32, furnace), (2.5, -1.0, 1.0)] {
@@ -395,7 +406,7 @@ fn two_sided_walls_have_a_patch_on_each_side() {
                 .sample(&scene, &hit, -ray.direction, &field)
                 .unwrap();
             assert!(
-                (seen.x - truth).abs() < 5e-3 * truth,
+                (seen.x - truth).abs() < 1e-5 * truth,
                 "{solver}: looking along x = {dir} at the wall shows {seen:?}, not {truth}"
             );
         }
@@ -434,6 +445,8 @@ fn one_refined_link_reproduces_analytic_form_factors() {
             "{name}: {}: F = {f:.6} (exact {truth})",
             solution.solver_report
         );
+        // Issue #4's 1% (the link error refines until the oracle's estimate is within it);
+        // measured +0.24%, +0.42%, +0.40% and −0.05% in the order above.
         assert!((f / truth - 1.0).abs() < 0.01, "{name}: {f} vs {truth}");
     }
 }

@@ -26,8 +26,11 @@ fn furnace_radiance_is_le_over_one_minus_rho() {
             let mean =
                 film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64;
             println!("furnace ρ = {rho} ({kind}): {mean:.4} against {truth:.4}");
+            // Over seeds 0–9: −0.03% ± 0.10% at ρ = 0.5, +0.06% ± 0.27% at ρ = 0.9 (the
+            // roulette's spread): the bounds are four and 3.6 standard deviations.
+            let bound = if rho == 0.5 { 4.5e-3 } else { 0.01 };
             assert!(
-                (mean / truth - 1.0).abs() < 0.01,
+                (mean / truth - 1.0).abs() < bound,
                 "ρ = {rho} ({kind}): {mean} against {truth}"
             );
             assert_eq!(
@@ -58,8 +61,9 @@ fn square_light_matches_the_closed_form() {
         let film = path::render(&scene, accel.as_ref(), &settings).0;
         let mean = film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64;
         println!("square light ({kind}): {mean:.4} against {truth:.4}");
+        // Over seeds 0–9: −0.04% ± 0.094%; the bound is four standard deviations.
         assert!(
-            (mean / truth - 1.0).abs() < 0.01,
+            (mean / truth - 1.0).abs() < 4e-3,
             "{kind}: {mean} against {truth}"
         );
     }

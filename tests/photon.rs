@@ -53,6 +53,9 @@ fn furnace_radiance_is_le_over_one_minus_rho() {
                 maps.truncated
             );
             assert_eq!(maps.truncated, 0);
+            // Measured −0.98% and −0.93% at ρ = 0.5, −0.77% and −0.44% at ρ = 0.9 (direct
+            // lookup, final gathering): the density estimate's bias where the k nearest
+            // photons reach round the cube's edges. The bound is three times the worst.
             assert!(
                 (mean / truth - 1.0).abs() < 0.03,
                 "ρ = {rho}, gather {gather}: {mean} vs {truth}"
@@ -92,6 +95,10 @@ fn mirror_ring_focuses_a_caustic_inside_itself() {
         "{on_floor_inside} of {} caustic photons on the floor inside the ring",
         maps.caustic.len()
     );
+    // Measured 72.7% (the rest reflect off the ring's outside or its rim onto the floor
+    // around it). A bound on where the caustic map's photons go, not on how much light they
+    // carry, which `ring_caustic_stands_out_as_in_the_path_tracer` checks against the path
+    // tracer: "most of them inside" is the claim, so the bound is a half, not a spread.
     assert!(on_floor_inside * 2 > maps.caustic.len());
 }
 
@@ -365,7 +372,10 @@ fn stored_power_is_emitted_power_over_one_minus_rho() {
         "stored {stored:.3}, expected {expected:.3} ({:+.3}%)",
         100.0 * (stored / expected - 1.0)
     );
-    assert!((stored / expected - 1.0).abs() < 0.01);
+    // Roulette at ρ = 0.5 stores a photon a geometric number of times (mean 2, variance 2),
+    // so the total's relative standard deviation is √(2/N)/2 = 0.11% at N = 400,000.
+    // Measured +0.11%; the bound is four standard deviations.
+    assert!((stored / expected - 1.0).abs() < 4.5e-3);
 }
 
 /// Colour bleeding: the floor by the red wall is redder (R/B) than the floor by the blue

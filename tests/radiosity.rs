@@ -76,7 +76,7 @@ fn mean_error(scene: &Scene, accel: &dyn Accel, truth: f64, samples: u32) -> f64
 }
 
 #[test]
-fn analytic_form_factors_within_one_percent_with_falling_error() {
+fn analytic_form_factors_agree_and_their_error_falls_as_stratified() {
     let cases = [
         ("opposed d=1", opposed(1.0), 0.199825),
         ("opposed d=0.5", opposed(0.5), 0.415253),
@@ -102,28 +102,41 @@ fn analytic_form_factors_within_one_percent_with_falling_error() {
             .sum::<f64>()
             / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
         println!("{name}: F = {f:.6} (exact {truth}), mean errors {errors:?}, slope {slope:.2}");
-        assert!((f / truth - 1.0).abs() < 0.01, "{name}: {f} vs {truth}");
+        // Over 8 seeds at 4,096 samples the mean |error| is 0.011–0.032% (perpendicular the
+        // largest), the standard deviation about 1.25 times that: 0.2% is four standard
+        // deviations of the worst case. (Issue #4 asked for 1%.)
+        assert!((f / truth - 1.0).abs() < 2e-3, "{name}: {f} vs {truth}");
+        // Measured −0.86 and −0.87 in all four cases: the points are stratified. Plain Monte
+        // Carlo falls as N^−0.5, so −0.7 catches stratification lost.
         assert!(
-            slope < -0.4,
-            "{name}: error falls as N^{slope:.2}, slower than N^-1/2"
+            slope < -0.7,
+            "{name}: error falls as N^{slope:.2}, slower than stratified sampling's N^-0.86"
         );
     }
 }
 
 #[test]
 fn reciprocity_holds_between_patches_of_different_size() {
-    // A 2 × 0.5 floor strip and a unit wall square, offset.
+    // A 2 × 0.75 floor strip (area 1.5) and a unit wall square facing it, offset: F01 and
+    // F10 differ by the ratio of the areas, so reciprocity is more than F01 = F10.
     let s = scene(
         "material\ndiffuse 0.5 0.5 0.5\n\
-         v 0 0 0\nv 2 0 0\nv 2 0 0.5\nv 0 0 0.5\nv 0.5 0.2 -0.1\nv 1.5 0.2 -0.1\nv 1.5 1.2 -0.1\nv 0.5 1.2 -0.1\n\
+         v 0 0 0\nv 2 0 0\nv 2 0 0.75\nv 0 0 0.75\nv 0.5 0.2 -0.1\nv 1.5 0.2 -0.1\nv 1.5 1.2 -0.1\nv 0.5 1.2 -0.1\n\
          m 0\nf 1 4 3 2\nf 5 6 7 8\n",
     );
     let accel = accel_for(&s);
     let f01 = form_factor(&s, accel.as_ref(), 0, 1, 4096, 1);
     let f10 = form_factor(&s, accel.as_ref(), 1, 0, 4096, 2);
-    let (a0, a1) = (1.0, 1.0);
-    println!("A0 F01 = {:.6}, A1 F10 = {:.6}", a0 * f01, a1 * f10);
-    assert!(f01 > 0.0 && ((a0 * f01) / (a1 * f10) - 1.0).abs() < 0.01);
+    let (a0, a1) = (1.5, 1.0);
+    println!(
+        "F01 = {f01:.6}, F10 = {f10:.6}; A0 F01 = {:.6}, A1 F10 = {:.6}",
+        a0 * f01,
+        a1 * f10
+    );
+    // Measured 0.06% apart. Each side is a 4,096-sample estimate, whose spread over seeds is
+    // about 0.04% (see the analytic cases above): 0.2% is four standard deviations of the
+    // difference of two.
+    assert!(f01 > 0.0 && ((a0 * f01) / (a1 * f10) - 1.0).abs() < 2e-3);
 }
 
 #[test]
@@ -137,6 +150,7 @@ fn rows_of_a_closed_cube_sum_to_one() {
     let sampler = FormFactorSampler::new(&cube, accel.as_ref(), &patches, 256, true, 0);
     let n = patches.len();
     let rows: Vec<Vec<f32>> = (0..n).map(|i| sampler.row(i)).collect();
+    let mut worst = 0.0f64;
     for j in 0..n {
         // Σ_i F_j→i: everything leaving j lands somewhere in the cube.
         let gathered: f64 = (0..n).map(|i| rows[i][j] as f64).sum();
@@ -144,6 +158,8 @@ fn rows_of_a_closed_cube_sum_to_one() {
         let shot: f64 = (0..n)
             .map(|k| rows[j][k] as f64 * patches[k].area as f64 / patches[j].area as f64)
             .sum();
+        worst = worst.max((gathered - 1.0).abs()).max((shot - 1.0).abs());
+        // Measured worst 0.23% at 256 samples a form factor; the bound is 2.2 times it.
         assert!(
             (gathered - 1.0).abs() < 5e-3,
             "patch {j}: Σ F_j→i = {gathered}"
@@ -153,6 +169,7 @@ fn rows_of_a_closed_cube_sum_to_one() {
             "patch {j}: Σ F_j→i (reciprocity) = {shot}"
         );
     }
+    println!("rows and columns sum to one within {worst:.2e}");
 }
 
 fn solve(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> Solution {

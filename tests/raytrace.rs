@@ -76,6 +76,7 @@ fn square_light_matches_the_closed_form() {
         [0.5, 1.0, 0.5],
     ];
     let form_factor = polygon_irradiance([0.0; 3], [0.0, 1.0, 0.0], &square) / PI;
+    // The tabulated value's six digits: it is rounded to ±5e-7.
     assert!(
         (form_factor - 0.239456).abs() < 1e-6,
         "Lambert's formula gives F = {form_factor}"
@@ -88,8 +89,16 @@ fn square_light_matches_the_closed_form() {
             ..quiet(8, 8)
         };
         let m = mean(&render(&scene, &settings, kind));
+        println!(
+            "{kind}: {m:.6} against {truth:.6} ({:+.3}%)",
+            100.0 * (m / truth - 1.0)
+        );
+        // Stratified shadow rays: a pixel's error at 16 is 1.2% (the RMSE of
+        // `jittered_and_stratified_beat_random_sampling`), falling as N^−0.75 to 0.05% at
+        // 1,024 and to 0.007% in the mean of 64 pixels. Measured −0.004%; the bound is seven
+        // of those.
         assert!(
-            (m / truth - 1.0).abs() < 0.01,
+            (m / truth - 1.0).abs() < 5e-4,
             "{kind}: {m} against {truth}"
         );
     }
@@ -99,8 +108,13 @@ fn square_light_matches_the_closed_form() {
         ..quiet(2, 2)
     };
     let m = mean(&render(&scene, &settings, trilux::accel::AccelKind::Bvh));
+    println!(
+        "centre estimate {:.2e} off",
+        (m - (RHO * LE) as f64 / PI).abs()
+    );
+    // Measured 1.7e-8: exact but for the f32 rounding of 1.91, whose spacing is 1.2e-7.
     assert!(
-        (m - (RHO * LE) as f64 / PI).abs() < 1e-4,
+        (m - (RHO * LE) as f64 / PI).abs() < 1.2e-7,
         "centre estimate {m}"
     );
 }
@@ -169,9 +183,16 @@ fn mirror_shows_its_reflectance_times_the_emitter() {
             ..quiet(8, 8)
         };
         let film = render(&scene, &settings, kind);
+        let worst = film
+            .pixels
+            .iter()
+            .map(|p| (p.x - r * LE).abs())
+            .fold(0.0, f32::max);
+        println!("{kind}: mirror {worst:.2e} off");
+        // Measured exactly r·Le; the bound is ten f32 spacings at 7 (4.8e-7 each).
         for p in &film.pixels {
             assert!(
-                (p.x - r * LE).abs() < 1e-4,
+                (p.x - r * LE).abs() < 4.8e-6,
                 "{kind}: {p:?}, expected {}",
                 r * LE
             );
@@ -201,8 +222,10 @@ fn glass_sphere_in_a_white_furnace_is_invisible() {
             .map(|p| (p.x - 1.0).abs())
             .fold(0.0f32, f32::max);
         println!("{kind}: largest deviation from the background {worst}");
+        // Measured 3.1e-4: the branches pruned below a weight of 1e-4 (`MIN_WEIGHT`) and the
+        // light still inside after 30 bounces. The bound is 3.3 times it.
         assert!(
-            worst < 0.01,
+            worst < 1e-3,
             "{kind}: a pixel is {worst} off the white background"
         );
     }
@@ -289,10 +312,19 @@ fn depth_of_field_matches_the_thin_lens() {
     };
     // In focus: every lens ray of a pixel meets the plane where the pinhole ray does.
     let sharp = columns(0.0);
+    println!(
+        "in focus: worst column {:.2e} off",
+        sharp
+            .iter()
+            .enumerate()
+            .map(|(i, &(m, _))| (m - if i < SIZE as usize / 2 { 1.0 } else { 0.0 }).abs())
+            .fold(0.0, f64::max)
+    );
     for (i, &(mean, _)) in sharp.iter().enumerate() {
         let truth = if i < SIZE as usize / 2 { 1.0 } else { 0.0 };
+        // Measured exactly 0 or 1: every lens ray lands on the same side of the edge.
         assert!(
-            (mean - truth).abs() < 1e-3,
+            (mean - truth).abs() < 1e-9,
             "in focus, column {i}: {mean} where the edge is sharp"
         );
     }
@@ -460,8 +492,16 @@ fn sphere_and_triangle_lights_give_the_closed_form_irradiance() {
                     "{name} light, {engine}, {kind}: {m:.5} against {truth:.5} ({:+.2}%)",
                     100.0 * (m / truth - 1.0)
                 );
+                // Measured +0.05% and +0.06% (ray tracer, 1,024 shadow rays), +0.42% and
+                // +0.20% (path tracer, 4,096 paths a pixel, the sphere's the noisier): the
+                // bounds are eight and 2.4 times the worst of each.
+                let bound = if engine == trilux::engines::EngineKind::Path {
+                    0.01
+                } else {
+                    5e-3
+                };
                 assert!(
-                    (m / truth - 1.0).abs() < 0.01,
+                    (m / truth - 1.0).abs() < bound,
                     "{name}, {engine}, {kind}: {m} against {truth}"
                 );
             }

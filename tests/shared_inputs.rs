@@ -174,14 +174,16 @@ fn shipped_mgf_scenes_load_with_renderparks_patch_counts(dir: &Path) {
         assert!(patches(file) > 0, "{file}");
     }
     assert_eq!(patches("cube.mgf"), 66);
-    // RenderPark: 24,982 for the hospital, 13,948 for graz (one-sided).
+    // RenderPark: 24,982 for the hospital, 13,948 for graz (one-sided). Graz matches exactly;
+    // the hospital gives 25,083, 101 more (+0.40%, not yet traced to a cause), so its bound
+    // is 1%, 2.5 times that.
     let hospital = patches("hospital/hosp.mgf") as f64;
     assert!(
         (hospital / 24_982.0 - 1.0).abs() < 0.01,
         "hospital: {hospital}"
     );
     let graz = patches("office1/graz.mgf") as f64;
-    assert!((graz / 13_948.0 - 1.0).abs() < 0.01, "graz: {graz}");
+    assert_eq!(graz, 13_948.0, "graz");
     // What `--plan` prints as the radiosity mesh's patches; `--two-sided` gives each face a
     // back (RenderPark: 27,896 for graz two-sided).
     let planned = |file: &str, flags: &[&str]| -> f64 {
@@ -207,10 +209,7 @@ fn shipped_mgf_scenes_load_with_renderparks_patch_counts(dir: &Path) {
     );
     assert_eq!(planned("office1/graz.mgf", &[]), graz);
     let two_sided = planned("office1/graz.mgf", &["--two-sided"]);
-    assert!(
-        (two_sided / 27_896.0 - 1.0).abs() < 0.01,
-        "plan, graz two-sided: {two_sided}"
-    );
+    assert_eq!(two_sided, 27_896.0, "plan, graz two-sided");
 }
 
 /// office3 (RenderPark's office: 12,628 input patches, one 21 m² floor), hierarchical,

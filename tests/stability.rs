@@ -68,6 +68,9 @@ fn stiff_radiosity_furnace_converges_with_automatic_over_relaxation() {
                 continue;
             }
             assert_eq!(solution.stop, Stop::Converged, "ρ = {rho}, {relaxation:?}");
+            // The solver stops at a residual of 1e-3 of the emitted power, and 16-sample
+            // form factors add their own error: measured worst 0.11% (ρ = 0.99, plain).
+            // The bound is 4.5 times it.
             assert!(worst < 0.005, "ρ = {rho}, {relaxation:?}: {worst}");
         }
     }
@@ -107,6 +110,8 @@ fn stiff_path_and_photon_furnace() {
         let photons = render(EngineKind::Photon, &scene, kind, &s);
         let (p, ph) = (mean(&path), mean(&photons));
         println!("{kind}: ρ = 0.99 furnace: path {p:.3}, photons {ph:.3}, truth {truth:.3}");
+        // Measured +0.20% (paths) and −0.70% (photons: the density estimate's bias near the
+        // cube's edges); the bounds are five and four times those.
         assert!((p / truth - 1.0).abs() < 0.01, "{kind}: {p}");
         assert!((ph / truth - 1.0).abs() < 0.03, "{kind}: {ph}");
     }
@@ -171,7 +176,7 @@ fn scenes_do_not_depend_on_units_or_position() {
 }
 
 /// Emitted radiance of 1e-30 and 1e30: every engine's image scales with it (relMSE of the image
-/// divided by the factor against the image at 1, below 1e-6), and nothing overflows.
+/// divided by the factor against the image at 1, below 1e-12), and nothing overflows.
 #[test]
 fn emitted_radiance_from_1e_minus_30_to_1e30_scales_linearly() {
     let dir = common::own_scene_dir();
@@ -212,7 +217,9 @@ fn emitted_radiance_from_1e_minus_30_to_1e30_scales_linearly() {
                 "{kind}: {engine}, emitted × {factor:e}: relMSE {:.2e}",
                 m.relmse
             );
-            assert!(m.relmse < 1e-6, "{kind}: {engine} × {factor:e}: {m:?}");
+            // Measured at most 1.3e-13 (radiosity; 4e-15 for the others): f32 rounding of
+            // the products, nothing else. The bound is 7.6 times it.
+            assert!(m.relmse < 1e-12, "{kind}: {engine} × {factor:e}: {m:?}");
         }
     }
 }
@@ -240,8 +247,11 @@ fn albedo_zero_and_one_under_a_square_light() {
                 let mean =
                     film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64;
                 println!("{kind}: ρ = {rho}, {engine}: {mean:.5} against {truth:.5}");
+                // Measured +0.012% (ray tracer, 256 stratified shadow rays) and +0.058% (path
+                // tracer, 2,048 paths a pixel); ρ = 0 is exactly 0. The bound is 8.6 times the
+                // path tracer's.
                 assert!(
-                    (mean - truth).abs() <= 0.01 * truth.max(1e-9),
+                    (mean - truth).abs() <= 5e-3 * truth.max(1e-9),
                     "{kind}: {engine} ρ = {rho}: {mean}"
                 );
             }
@@ -271,8 +281,11 @@ fn tiny_and_huge_spheres_and_a_paper_thin_ring() {
                 )
                 .expect("hits");
                 let off = (hit.point.length() / r - 1.0).abs();
+                println!("radius {r} ({kind}): hit {off:.2e} off the sphere");
+                // Measured at most 6.0e-8, one rounding of f32 (unit roundoff 2⁻²⁴): the
+                // bound is ten of them.
                 assert!(
-                    off < 1e-4,
+                    off < 6e-7,
                     "radius {r} ({kind}): {:?} off by {off}",
                     hit.point
                 );
@@ -295,7 +308,10 @@ fn tiny_and_huge_spheres_and_a_paper_thin_ring() {
             &trilux::geometry::Ray::new(on_cap, down),
         )
         .expect("the top annulus, 1e-4 wide, is hit");
-        assert!((hit.point.y - h).abs() < 1e-5, "{kind}: {:?}", hit.point);
+        // Cap and wall: measured exactly on them; the bounds are ten roundings of the
+        // coordinate (f32 spacing 6e-8 at 0.5, 1.2e-7 at 1).
+        println!("ring ({kind}): cap {:.2e} off", (hit.point.y - h).abs());
+        assert!((hit.point.y - h).abs() < 6e-7, "{kind}: {:?}", hit.point);
         let through = trilux::accel::closest_surface(
             accel.as_ref(),
             &scene,
@@ -308,8 +324,12 @@ fn tiny_and_huge_spheres_and_a_paper_thin_ring() {
             &trilux::geometry::Ray::new(vec3(3.0, 0.25, 0.0), vec3(-1.0, 0.0, 0.0)),
         )
         .expect("the outer wall");
+        println!(
+            "ring ({kind}): wall {:.2e} off",
+            (side.point.x - r_out).abs()
+        );
         assert!(
-            (side.point.x - r_out).abs() < 1e-5,
+            (side.point.x - r_out).abs() < 1.2e-6,
             "{kind}: {:?}",
             side.point
         );
@@ -598,6 +618,9 @@ fn ctrl_c_in_every_phase_writes_what_it_has() {
         let (status, stderr, after) = interrupted(&dir, &args, &[1500]);
         assert!(!status.success(), "{phase}: exit status {status}");
         assert!(stderr.contains("interrupted"), "{phase}: {stderr}");
+        // Not a spread: how long a user waits before pressing again. Measured 0.03 s
+        // (progressive), 2.2 s (photons) and 6.7 s (hierarchical, which hears Ctrl-C between
+        // sweeps but not while it refines links), the pixels included.
         assert!(after < 10.0, "{phase}: ran on {after:.1} s after Ctrl-C");
         let image = image::open(dir.join("partial.png"))
             .unwrap_or_else(|e| panic!("{phase}: the partial image is not a readable PNG: {e}"))
