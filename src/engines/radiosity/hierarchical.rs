@@ -820,9 +820,10 @@ impl Hierarchical {
         links: &mut Vec<Link>,
     ) -> bool {
         let mut capped = false;
-        // The node of a pair to split, if either can be (none once over the memory budget).
-        let pick = |h: &Hierarchy, r: u32, s: u32, capped: bool| -> Option<u32> {
-            if capped {
+        // The node of a pair to split, if either can be (none once over the memory budget
+        // or after Ctrl-C).
+        let pick = |h: &Hierarchy, r: u32, s: u32, stop: bool| -> Option<u32> {
+            if stop {
                 return None;
             }
             let splittable = |n: u32| {
@@ -840,12 +841,15 @@ impl Hierarchical {
             // breadth-first refinement, so a level may overshoot it by what it adds.
             let bytes = (links.len() + candidates.len()) * LINK_BYTES + h.nodes.len() * NODE_BYTES;
             capped |= bytes as u64 > self.memory_budget;
+            // After Ctrl-C nothing is split further: the pairs at hand become links as they
+            // are, so the light they carry is kept, and the solve stops at its next sweep.
+            let stop = capped || crate::interrupt::requested();
             let mut next = Vec::new();
             let mut evaluate = Vec::new();
             for (r, s) in candidates {
                 let clustered = h.node(r).is_cluster() || h.node(s).is_cluster();
                 if r == s || (clustered && !h.separated(r, s)) {
-                    match pick(h, r, s, capped) {
+                    match pick(h, r, s, stop) {
                         Some(n) => split_pair(h, r, s, n, &mut next),
                         None => evaluate.push((r, s)),
                     }
@@ -862,7 +866,7 @@ impl Hierarchical {
                     continue;
                 }
                 let (r, s) = (link.receiver, link.source);
-                match pick(h, r, s, capped).filter(|_| link_error(h, &link) > threshold) {
+                match pick(h, r, s, stop).filter(|_| link_error(h, &link) > threshold) {
                     Some(n) => split_pair(h, r, s, n, &mut next),
                     None if link.form_factor > 0.0 => links.push(link),
                     None => {}
