@@ -17,7 +17,7 @@ use crate::engines::radiosity::{
 };
 use crate::engines::{EngineKind, IndirectKind, RenderSettings};
 use crate::geometry::{vec3, Vec3};
-use crate::sampling::Pattern;
+use crate::sampling::LightSampling;
 use crate::scene::{Camera, Projection};
 
 fn rs() -> RenderSettings {
@@ -269,9 +269,11 @@ pub struct RayTraceArgs {
     /// Ambient radiance R G B [default: 0.1 0.1 0.1].
     #[arg(long, num_args = 3, value_names = ["R", "G", "B"], allow_negative_numbers = true)]
     pub ambient_light: Option<Vec<f32>>,
-    /// Placement of the points on each light for soft shadows.
+    /// Placement of the points on each light for soft shadows: uniform in the solid angle a
+    /// rectangular light subtends, or by area (random, stratified or jittered, as in the
+    /// course).
     #[arg(long, value_enum, default_value_t = rs().light_sampling)]
-    pub light_sampling: Pattern,
+    pub light_sampling: LightSampling,
     /// Diffuse indirect light: the constant -ambient_light, or the radiosity solution.
     #[arg(long, value_enum, default_value_t = rs().indirect)]
     pub indirect: IndirectKind,

@@ -184,8 +184,8 @@ pub struct RenderSettings {
     pub indirect: IndirectKind,
     /// What the photon engine reads (photon count, density estimates, final gathering).
     pub photon: photon::PhotonSettings,
-    /// Placement of points on lights (`--light-sampling`, default jittered).
-    pub light_sampling: crate::sampling::Pattern,
+    /// Placement of points on lights (`--light-sampling`, default solid-angle).
+    pub light_sampling: crate::sampling::LightSampling,
     /// Thin-lens radius (`--aperture`, default 0: a pinhole camera).
     pub aperture: f32,
     /// Distance of the plane in focus (`--focus-distance`, default: the camera's distance
@@ -209,7 +209,7 @@ impl Default for RenderSettings {
             radiosity: Default::default(),
             indirect: IndirectKind::Ambient,
             photon: Default::default(),
-            light_sampling: crate::sampling::Pattern::Jittered,
+            light_sampling: crate::sampling::LightSampling::SolidAngle,
             aperture: 0.0,
             focus_distance: None,
             seed: 0,

@@ -16,7 +16,7 @@ use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, vec3, Ray, Vec3};
 use crate::render::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
 use crate::render::{render_pixels, Ambient, CameraSampler, Counts, IndirectLight, RenderStats};
-use crate::sampling::{Rng, Strata};
+use crate::sampling::{LightSampling, Rng, Strata};
 use crate::scene::{Color, Scene, SurfaceHit};
 
 /// Branches of the ray tree whose weight falls below this are not traced: their
@@ -174,7 +174,25 @@ impl Tracer<'_> {
                 // copied out of the light, held in registers: read through `light` the normal
                 // was re-read for every ray, and the read stalled on store forwarding (perf:
                 // a fifth of `shade`).
+                let by_solid_angle = match light.shape {
+                    LightShape::Parallelogram(quad)
+                        if self.settings.light_sampling == LightSampling::SolidAngle =>
+                    {
+                        quad.spherical_rectangle(s.point)
+                    }
+                    _ => None,
+                };
                 match light.shape {
+                    // Uniform in solid angle every point weighs Ω/(N·π) times the
+                    // receiver's cosine: bounded, however near the light the point is.
+                    LightShape::Parallelogram(_) if by_solid_angle.is_some() => {
+                        let rect = by_solid_angle.expect("matched");
+                        batch.per_sample =
+                            (rect.solid_angle() / (count as f64 * std::f64::consts::PI)) as f32;
+                        for (u, v) in self.light_strata.samples(rng) {
+                            batch.push_in_solid_angle(rect.sample(u, v));
+                        }
+                    }
                     LightShape::Parallelogram(quad) => {
                         let mut samples = self.light_strata.samples(rng);
                         let (mut u, mut v) = ([0.0; LANES], [0.0; LANES]);
@@ -240,6 +258,18 @@ impl ShadowBatch<'_> {
     fn push(&mut self, p: LightPoint) {
         if let Some(g) = geometric_term(self.x, self.n, &p) {
             self.add(p.point, g);
+        }
+    }
+
+    /// Adds the ray to `point`, sampled uniformly in the solid angle of its light: its weight
+    /// is the receiver's cosine (times `per_sample`, Ω/(N·π)), nothing if it lies below the
+    /// surface.
+    #[inline(always)]
+    fn push_in_solid_angle(&mut self, point: Vec3) {
+        let w = point - self.x;
+        let along_surface = self.n.dot(w);
+        if along_surface > 0.0 {
+            self.add(point, along_surface / w.length());
         }
     }
 
@@ -324,7 +354,10 @@ pub fn render_with(
         accel,
         settings,
         lights: Light::collect(scene),
-        light_strata: Strata::new(settings.light_sampling, settings.num_shadow_samples),
+        light_strata: Strata::new(
+            settings.light_sampling.pattern(),
+            settings.num_shadow_samples,
+        ),
         tree: None,
     };
     render_pixels(
@@ -352,7 +385,10 @@ pub fn ray_tree(
         accel,
         settings,
         lights: Light::collect(scene),
-        light_strata: Strata::new(settings.light_sampling, settings.num_shadow_samples),
+        light_strata: Strata::new(
+            settings.light_sampling.pattern(),
+            settings.num_shadow_samples,
+        ),
         tree: Some(std::sync::Mutex::new(Vec::new())),
     };
     let camera = CameraSampler::new(scene, &settings.image());

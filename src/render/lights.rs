@@ -1,6 +1,7 @@
 //! The scene's emitters as area lights: every primitive whose material emits. Each can be
 //! sampled uniformly by area, and has a centre for the course's one-shadow-ray mode.
 
+use super::solid_angle::{SphericalRectangle, MIN_SOLID_ANGLE};
 use crate::geometry::{AnalyticShape, Shape, Vec3};
 use crate::scene::{Color, PrimKind, PrimRef, Scene};
 
@@ -58,6 +59,24 @@ impl Parallelogram {
     /// The unit normal of the emitting side.
     pub fn normal(&self) -> Vec3 {
         self.normal
+    }
+
+    /// The light as a spherical rectangle seen from `x`, to be sampled by solid angle; None
+    /// when `x` is behind it or in its plane (it sends `x` nothing), when its edges are not
+    /// perpendicular (a parallelogram that is no rectangle: sampled by area), or when it
+    /// subtends less than `MIN_SOLID_ANGLE`. The first sampling axis runs along the longer
+    /// edge, as in `sample`.
+    pub fn spherical_rectangle(&self, x: Vec3) -> Option<SphericalRectangle> {
+        if (x - self.origin).dot(self.normal) <= 0.0 {
+            return None;
+        }
+        let (a, b) = (self.edge_u, self.edge_v);
+        if a.dot(b).abs() > 1e-5 * a.length() * b.length() {
+            return None;
+        }
+        let (first, second) = if self.swap_axes { (b, a) } else { (a, b) };
+        SphericalRectangle::new(x, self.origin, first, second)
+            .filter(|r| r.solid_angle() >= MIN_SOLID_ANGLE)
     }
 }
 

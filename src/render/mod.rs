@@ -5,6 +5,7 @@
 
 pub mod indirect;
 pub mod lights;
+pub mod solid_angle;
 
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 

@@ -60,6 +60,33 @@ pub enum Pattern {
     Jittered,
 }
 
+/// How the ray tracer places its shadow rays on a light (`--light-sampling`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum LightSampling {
+    /// Uniform in the solid angle a rectangular light subtends, one jittered point per
+    /// stratum of that parametrisation (other lights, and rectangles too small or far to
+    /// matter, by area with jittered points).
+    #[default]
+    SolidAngle,
+    /// Independent uniform points by area (the course's comparison).
+    Random,
+    /// The centres of a grid of strata by area (no randomness).
+    Stratified,
+    /// One uniform point by area in each stratum of the grid.
+    Jittered,
+}
+
+impl LightSampling {
+    /// The pattern of the (u, v) points, in whichever parametrisation.
+    pub fn pattern(self) -> Pattern {
+        match self {
+            LightSampling::SolidAngle | LightSampling::Jittered => Pattern::Jittered,
+            LightSampling::Random => Pattern::Random,
+            LightSampling::Stratified => Pattern::Stratified,
+        }
+    }
+}
+
 /// `n` samples in [0,1)² placed by a pattern over a grid of strata: √n × √n when n is a
 /// square, else n × 1 (n strata along the first axis, which callers align with the longer
 /// edge).
