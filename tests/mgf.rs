@@ -1,7 +1,7 @@
 //! The MGF reader: geometry, transforms, includes, colours and emission against what mgf.md
 //! says they are; every error class with its file:line:column; token soup never panics; every
-//! engine renders an MGF scene; and the patch counts of the shipped MGF scenes (when
-//! `../shared/mgf-scenes` is beside the checkout; skipped with a note otherwise).
+//! engine renders an MGF scene. (The shipped MGF scenes' patch counts are checked by
+//! `shared_inputs.rs`, which reads `../shared/mgf-scenes`.)
 
 use std::path::{Path, PathBuf};
 

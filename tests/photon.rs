@@ -154,16 +154,7 @@ fn glass_sphere_floor_oracle(samples: u64, seed: u64) -> (Vec<(f64, f64, f64)>, 
         z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
     };
-    let fresnel = |cos_i: f64, eta_i: f64, eta_t: f64| {
-        let sin_t = eta_i / eta_t * (1.0 - cos_i * cos_i).max(0.0).sqrt();
-        if sin_t >= 1.0 {
-            return 1.0;
-        }
-        let cos_t = (1.0 - sin_t * sin_t).sqrt();
-        let rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
-        let rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
-        0.5 * (rs * rs + rp * rp)
-    };
+    let fresnel = common::fresnel;
     let (mut near, mut far) = (Vec::new(), 0.0);
     let mut land = |o: V3, d: V3, w: f64| {
         if d[1] < 0.0 {

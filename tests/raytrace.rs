@@ -356,16 +356,7 @@ fn depth_of_field_matches_the_thin_lens() {
 /// For n = 1.3 it is 50.3°: the hypotenuse lets 1 − R45 = 0.79 through.
 #[test]
 fn a_glass_prism_refracts_by_snells_law_and_reflects_totally_past_the_critical_angle() {
-    let fresnel = |cos_i: f64, n_i: f64, n_t: f64| -> f64 {
-        let sin_t = n_i / n_t * (1.0 - cos_i * cos_i).sqrt();
-        if sin_t >= 1.0 {
-            return 1.0;
-        }
-        let cos_t = (1.0 - sin_t * sin_t).sqrt();
-        let s = (n_i * cos_i - n_t * cos_t) / (n_i * cos_i + n_t * cos_t);
-        let p = (n_i * cos_t - n_t * cos_i) / (n_i * cos_t + n_t * cos_i);
-        0.5 * (s * s + p * p)
-    };
+    let fresnel = common::fresnel;
     for n in [1.5f64, 1.3] {
         let mut scene = load(&format!(
             "material\ndiffuse 0 0 0\ntransmitted 1 1 1\nior {n}\n\
@@ -770,19 +761,9 @@ fn direct_light_by_solid_angle_has_no_fireflies() {
                 brightest(&film)
             );
         }
-        errors.push(m.relmse.ln());
+        errors.push(m.relmse);
     }
-    let xs: Vec<f64> = counts.iter().map(|&n| (n as f64).ln()).collect();
-    let (mx, my) = (
-        xs.iter().sum::<f64>() / 3.0,
-        errors.iter().sum::<f64>() / 3.0,
-    );
-    let slope = xs
-        .iter()
-        .zip(&errors)
-        .map(|(x, y)| (x - mx) * (y - my))
-        .sum::<f64>()
-        / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
+    let slope = common::log_log_slope(&counts, &errors);
     println!(
         "by area at 16: brightest pixel {by_area:.1}×; solid angle's relMSE falls as N^{slope:.2}"
     );

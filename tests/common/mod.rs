@@ -231,3 +231,31 @@ pub fn square_light(le: f32, rho: f32) -> Scene {
     );
     Scene::parse_dialect(Path::new("square.obj"), &text).expect("square light parses")
 }
+
+/// The least-squares slope of log `values` against log `counts`: the power of N an error
+/// falls as (values floored at 1e-300 so an exact zero stays finite).
+pub fn log_log_slope(counts: &[u32], values: &[f64]) -> f64 {
+    let xs: Vec<f64> = counts.iter().map(|&n| (n as f64).ln()).collect();
+    let ys: Vec<f64> = values.iter().map(|v| v.max(1e-300).ln()).collect();
+    let n = xs.len() as f64;
+    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
+    xs.iter()
+        .zip(&ys)
+        .map(|(x, y)| (x - mx) * (y - my))
+        .sum::<f64>()
+        / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>()
+}
+
+/// The Fresnel reflectance of unpolarised light at a smooth dielectric boundary, in f64 and
+/// written apart from `engines::scattering`: the mean of the s and p amplitudes squared, 1
+/// under total internal reflection.
+pub fn fresnel(cos_i: f64, eta_i: f64, eta_t: f64) -> f64 {
+    let sin_t = eta_i / eta_t * (1.0 - cos_i * cos_i).max(0.0).sqrt();
+    if sin_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin_t * sin_t).sqrt();
+    let s = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    let p = (eta_i * cos_t - eta_t * cos_i) / (eta_i * cos_t + eta_t * cos_i);
+    0.5 * (s * s + p * p)
+}
