@@ -145,15 +145,8 @@ fn glass_sphere_floor_oracle(samples: u64, seed: u64) -> (Vec<(f64, f64, f64)>, 
     use common::vec64::{add, dot, norm, scale, sub, V3};
     let (le, side, light_y) = (60.0, 0.5, 4.0);
     let (centre, radius, ior, kept): (V3, f64, f64, f64) = ([0.0, 1.2, 0.0], 0.8, 1.5, 0.95);
-    let mut state = seed;
-    let mut uniform = move || {
-        // splitmix64
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = trilux::sampling::Rng::new(seed, 0, 0);
+    let mut uniform = move || rng.next_f32() as f64;
     let fresnel = common::fresnel;
     let (mut near, mut far) = (Vec::new(), 0.0);
     let mut land = |o: V3, d: V3, w: f64| {

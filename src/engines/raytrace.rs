@@ -170,10 +170,6 @@ impl Tracer<'_> {
             if samples == 1 {
                 batch.push(light.centre(s.point));
             } else {
-                // Quad lights (the common case) take their own loop with the parallelogram
-                // copied out of the light, held in registers: read through `light` the normal
-                // was re-read for every ray, and the read stalled on store forwarding (perf:
-                // a fifth of `shade`).
                 let by_solid_angle = match light.shape {
                     LightShape::Parallelogram(quad)
                         if self.settings.light_sampling == LightSampling::SolidAngle =>
@@ -182,18 +178,21 @@ impl Tracer<'_> {
                     }
                     _ => None,
                 };
-                match light.shape {
+                match (light.shape, by_solid_angle) {
                     // Uniform in solid angle every point weighs Ω/(N·π) times the
                     // receiver's cosine: bounded, however near the light the point is.
-                    LightShape::Parallelogram(_) if by_solid_angle.is_some() => {
-                        let rect = by_solid_angle.expect("matched");
+                    (_, Some(rect)) => {
                         batch.per_sample =
                             (rect.solid_angle() / (count as f64 * std::f64::consts::PI)) as f32;
                         for (u, v) in self.light_strata.samples(rng) {
                             batch.push_in_solid_angle(rect.sample(u, v));
                         }
                     }
-                    LightShape::Parallelogram(quad) => {
+                    // Quad lights sampled by area take their own loop with the parallelogram
+                    // copied out of the light, held in registers: read through `light` the
+                    // normal was re-read for every ray, and the read stalled on store
+                    // forwarding (perf: a fifth of `shade`).
+                    (LightShape::Parallelogram(quad), None) => {
                         let mut samples = self.light_strata.samples(rng);
                         let (mut u, mut v) = ([0.0; LANES], [0.0; LANES]);
                         let mut left = count;

@@ -27,6 +27,8 @@ pub struct Parallelogram {
     edge_v: Vec3,
     normal: Vec3,
     swap_axes: bool,
+    /// The edges are perpendicular: the light can be sampled by solid angle.
+    rectangle: bool,
 }
 
 impl Parallelogram {
@@ -70,10 +72,10 @@ impl Parallelogram {
         if (x - self.origin).dot(self.normal) <= 0.0 {
             return None;
         }
-        let (a, b) = (self.edge_u, self.edge_v);
-        if a.dot(b).abs() > 1e-5 * a.length() * b.length() {
+        if !self.rectangle {
             return None;
         }
+        let (a, b) = (self.edge_u, self.edge_v);
         let (first, second) = if self.swap_axes { (b, a) } else { (a, b) };
         SphericalRectangle::new(x, self.origin, first, second)
             .filter(|r| r.solid_angle() >= MIN_SOLID_ANGLE)
@@ -128,6 +130,8 @@ impl Light {
                         edge_v: v3 - v0,
                         normal: q.normal,
                         swap_axes: (v3 - v0).length() > (v1 - v0).length(),
+                        rectangle: (v1 - v0).dot(v3 - v0).abs()
+                            <= 1e-5 * (v1 - v0).length() * (v3 - v0).length(),
                     }),
                     emitted: e,
                     area: q.area(),

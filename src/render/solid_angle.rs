@@ -13,8 +13,9 @@
 use crate::geometry::Vec3;
 use glam::DVec3;
 
-/// Below this solid angle (steradians) a light is sampled by area: its cosθ'/r² then varies
-/// by less than about 1e-4 over the light, so area sampling is as good, and cheaper.
+/// Below this solid angle (steradians) a light is sampled by area: it is then small beside
+/// its distance (a unit square 100 away), its cosθ'/r² varies by about a percent over it and
+/// stays bounded, so area sampling is about as good, and cheaper.
 pub const MIN_SOLID_ANGLE: f64 = 1e-4;
 
 /// A rectangle seen from a point: the frame and the constants its samples are made from.
