@@ -13,6 +13,7 @@ pub mod bench;
 pub mod cli;
 pub mod color;
 pub mod engines;
+pub mod farm;
 pub mod film;
 pub mod generate;
 pub mod geometry;

@@ -105,6 +105,7 @@ fn radiosity_photon_and_path_images_agree_on_flat_regions() {
                     ..base.clone()
                 },
             )
+            .expect("radiosity render")
             .0;
             println!(
                 "radiosity ({solver}): {:.1} s",

@@ -7,7 +7,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{backends, furnace, own_scenes, square_light, worst_relative_error};
+use common::{backends, furnace, interrupted, own_scenes, square_light, worst_relative_error};
 use trilux::accel::{self, AccelOptions};
 use trilux::engines::radiosity::solver::{Relaxation, Stop};
 use trilux::engines::radiosity::{RadiositySettings, Solution};
@@ -513,42 +513,6 @@ fn max_memory_takes_suffixes_and_defaults_to_80_percent_of_physical_memory() {
             "--max-memory {bad}: {stderr}"
         );
     }
-}
-
-/// Runs `render` with `args` in `dir`, sends SIGINT at each of `signals` (milliseconds after
-/// the start), and returns how it ended, its stderr, and the seconds it ran on after the
-/// last signal.
-fn interrupted(
-    dir: &Path,
-    args: &[&str],
-    signals: &[u64],
-) -> (std::process::ExitStatus, String, f64) {
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
-        .args(args)
-        .current_dir(dir)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("starts");
-    let start = std::time::Instant::now();
-    for &ms in signals {
-        std::thread::sleep(std::time::Duration::from_millis(ms).saturating_sub(start.elapsed()));
-        let killed = std::process::Command::new("kill")
-            .args(["-INT", &child.id().to_string()])
-            .status()
-            .expect("kill runs");
-        assert!(
-            killed.success(),
-            "{args:?}: the process ended before the signal at {ms} ms"
-        );
-    }
-    let last = start.elapsed();
-    let out = child.wait_with_output().expect("ends");
-    let after = (start.elapsed() - last).as_secs_f64();
-    (
-        out.status,
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-        after,
-    )
 }
 
 /// Ctrl-C in each long phase: the pixels of the path tracer, the progressive and the

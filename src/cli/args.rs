@@ -16,6 +16,7 @@ use crate::engines::radiosity::{
     self, settings::SolverKind, solver::Relaxation, RadiositySettings,
 };
 use crate::engines::{EngineKind, IndirectKind, RenderSettings};
+use crate::film::part::Window;
 use crate::geometry::{vec3, Vec3};
 use crate::sampling::LightSampling;
 use crate::scene::{Camera, Projection};
@@ -43,6 +44,8 @@ pub struct RenderArgs {
     pub radiosity: RadiosityArgs,
     #[command(flatten)]
     pub photon: PhotonArgs,
+    #[command(flatten)]
+    pub part: PartArgs,
     /// The argument ids given on the command line (filled from clap's value sources after
     /// parsing), by group.
     #[arg(skip)]
@@ -103,6 +106,66 @@ pub struct CommonArgs {
     /// cracks along quad diagonals and shared edges for a little speed.
     #[arg(long, default_value_t = AccelOptions::default().embree_robust, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
     pub embree_robust: bool,
+}
+
+/// Splitting a render over machines: a part of the image or of its samples, and the
+/// pre-pass a farm computes once (read by every engine; `render farm` writes them).
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Splitting a render (render farms)")]
+pub struct PartArgs {
+    /// Render only this window of the image, as fractions (x from the left, y from the top,
+    /// as pbrt; each edge at ⌈side × fraction⌉). Written to .exr, it is a part for `render
+    /// merge`; to another format, the window's pixels alone.
+    #[arg(long, num_args = 4, value_names = ["X0", "X1", "Y0", "Y1"], allow_negative_numbers = true)]
+    pub crop_window: Option<Vec<f64>>,
+    /// Take only samples A ≤ s < B of each pixel's -num_antialias_samples (the same samples
+    /// the whole render takes). Written to .exr, it is a part for `render merge`.
+    #[arg(long, num_args = 2, value_names = ["A", "B"])]
+    pub pixel_samples: Option<Vec<u32>>,
+    /// Compute the engine's pre-pass (photon maps, radiosity solution), save it with
+    /// --save-photons or --save-radiosity, and render no image.
+    #[arg(long)]
+    pub pre_pass_only: bool,
+}
+
+impl PartArgs {
+    /// The window `--crop-window` names, in pixels of a `width` × `height` image.
+    pub fn window(&self, width: u32, height: u32) -> Option<Window> {
+        self.crop_window
+            .as_ref()
+            .map(|f| Window::from_fractions([f[0], f[1], f[2], f[3]], width, height))
+    }
+
+    fn validate(&self, width: u32, height: u32, spp: u32) -> Result<(), String> {
+        if let Some(f) = &self.crop_window {
+            if f.iter()
+                .any(|v| !(v.is_finite() && (0.0..=1.0).contains(v)))
+                || f[0] >= f[1]
+                || f[2] >= f[3]
+            {
+                return Err(format!(
+                    "--crop-window {} {} {} {}: expected fractions X0 < X1 and Y0 < Y1 in [0, 1]",
+                    f[0], f[1], f[2], f[3]
+                ));
+            }
+            let window = self.window(width, height).unwrap_or(Window::full(0, 0));
+            if window.is_empty() {
+                return Err(format!(
+                    "--crop-window {} {} {} {}: holds no pixel of the {width}×{height} image",
+                    f[0], f[1], f[2], f[3]
+                ));
+            }
+        }
+        if let Some(s) = &self.pixel_samples {
+            if !(s[0] < s[1] && s[1] <= spp) {
+                return Err(format!(
+                    "--pixel-samples {} {}: expected A < B ≤ -num_antialias_samples ({spp})",
+                    s[0], s[1]
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// What `--visualize` can show: the radiosity engine's modes and the photon engine's.
@@ -357,6 +420,14 @@ pub struct RadiosityArgs {
     /// vertex colours.
     #[arg(long, value_name = "FILE.ply")]
     pub export_radiosity: Option<PathBuf>,
+    /// Write the solution to FILE (versioned, with a fingerprint of scene and settings), so
+    /// that other renders can load it.
+    #[arg(long, value_name = "FILE")]
+    pub save_radiosity: Option<PathBuf>,
+    /// Read the solution from FILE instead of solving; refused if made for another scene or
+    /// other settings.
+    #[arg(long, value_name = "FILE")]
+    pub load_radiosity: Option<PathBuf>,
 }
 
 /// The photon engine's flags.
@@ -426,6 +497,8 @@ impl RadiosityArgs {
             log_convergence: self.log_convergence.is_some(),
             display: visualize.and_then(Visualize::radiosity).unwrap_or_default(),
             export: self.export_radiosity.clone(),
+            save: self.save_radiosity.clone(),
+            load: self.load_radiosity.clone(),
         }
     }
 }
@@ -478,6 +551,8 @@ impl RenderArgs {
             focus_distance: self.camera.focus_distance,
             seed: self.common.seed,
             quiet: self.common.quiet,
+            window: self.part.window(self.common.size[0], self.common.size[1]),
+            pixel_samples: self.part.pixel_samples.as_ref().map(|s| (s[0], s[1])),
         }
     }
 
@@ -655,6 +730,8 @@ impl RenderArgs {
             1..=u32::MAX,
         )?;
         check_count("final_gather_rays", p.final_gather_rays, 1..=u32::MAX)?;
+        self.part
+            .validate(c.size[0], c.size[1], self.camera.num_antialias_samples)?;
         if let (Some(xy), &[w, h]) = (&self.ray_trace.ray_tree, &c.size[..]) {
             if xy[0] >= w || xy[1] >= h {
                 return Err(format!(
@@ -665,6 +742,15 @@ impl RenderArgs {
         }
         if let Some(output) = &c.output {
             crate::film::ImageFormat::check_output(output).map_err(|e| e.to_string())?;
+        }
+        for (id, path) in [
+            ("save_photons", &p.save_photons),
+            ("save_radiosity", &r.save_radiosity),
+        ] {
+            if let Some(path) = path {
+                crate::output::check_folder(path)
+                    .map_err(|e| format!("{}: {e}", super::flag_name(id)))?;
+            }
         }
         for (id, path, extension) in [
             ("export_radiosity", &r.export_radiosity, "ply"),

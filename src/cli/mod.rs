@@ -4,6 +4,7 @@
 //! viewer or a test runs the same code.
 
 pub mod args;
+pub mod farm;
 pub mod render;
 pub mod tools;
 
@@ -85,6 +86,24 @@ pub enum Command {
         /// Also write a heat map of the per-pixel error.
         #[arg(long)]
         heatmap: Option<PathBuf>,
+    },
+    /// Splits a render into tiles or sample batches run as a Slurm job array (after a
+    /// pre-pass job where the engine has one), then merged: writes the batch scripts into a
+    /// folder; --submit submits them, --wait waits for them and reports which job failed.
+    /// Usage: render farm SCENE [render flags] --tiles N | --sample-batches N [--partition P]
+    /// [--time MIN] [--cpus-per-task N] [--dir DIR] [--submit [--wait]].
+    Farm(farm::FarmArgs),
+    /// Merges the parts of a split render (EXR files written with --crop-window or
+    /// --pixel-samples) into the whole image: tiles placed, sample batches added as sums and
+    /// divided once. Refuses parts of different renders, interrupted parts, and sets that
+    /// leave pixels or samples out.
+    Merge {
+        /// The parts, in any order.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// The merged image (.png, .jpg, .exr or .pfm).
+        #[arg(short, long)]
+        output: PathBuf,
     },
     /// Each engine's error against run time on a scene, and Embree against the BVH: a CSV, a
     /// log-log plot (PNG) and a markdown summary.

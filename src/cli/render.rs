@@ -72,6 +72,37 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             plan.memory_summary(),
         ));
     }
+    let engine_impl = engines::engine(engine);
+    if settings.pixel_samples.is_some() && !engine_impl.samples_pixels(&settings) {
+        return Err(format!(
+            "--pixel-samples: the {engine} engine's image{} is not a mean of pixel samples, so its samples cannot be split; split it into tiles with --crop-window instead",
+            match engine {
+                engines::EngineKind::Raycast => "",
+                _ => " with these display flags",
+            }
+        ));
+    }
+    if args.part.pre_pass_only {
+        match engine_impl.pre_pass(&settings) {
+            None => {
+                return Err(format!(
+                    "--pre-pass-only: the {engine} engine has no pre-pass{}",
+                    if engine == engines::EngineKind::Raytrace {
+                        " (only with --indirect radiosity)"
+                    } else {
+                        ""
+                    }
+                ))
+            }
+            Some(p) if !p.saved => {
+                return Err(format!(
+                    "--pre-pass-only: give {} FILE to keep the {} it computes",
+                    p.save_flag, p.name
+                ))
+            }
+            Some(_) => {}
+        }
+    }
     // What the plan leaves of --max-memory bounds what the hierarchical solver refines.
     settings.radiosity.memory_budget = max_memory - plan.memory;
     crate::interrupt::install();
@@ -88,6 +119,16 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     let build_s = build_start.elapsed().as_secs_f64();
     let render_start = Instant::now();
     let accel = accel.as_ref();
+    if args.part.pre_pass_only {
+        let summary = pool.install(|| engine_impl.run_pre_pass(&scene, accel, &settings))?;
+        if !settings.quiet {
+            summary.iter().for_each(|line| eprintln!("{line}"));
+        }
+        if crate::interrupt::requested() {
+            return Err("interrupted: the pre-pass was cut short and nothing was saved".into());
+        }
+        return Ok(());
+    }
     let rendered = pool.install(|| engines::render(engine, &scene, accel, &settings))?;
     let render_s = render_start.elapsed().as_secs_f64();
     report(&rendered, &settings);
@@ -105,11 +146,17 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(input));
-    film.write(&output).map_err(|e| e.to_string())?;
-    if crate::interrupt::requested() {
+    let interrupted = crate::interrupt::requested();
+    write_image(&film, &scene, &settings, &output, !interrupted)?;
+    if interrupted {
         return Err(format!(
-            "interrupted: wrote the image rendered so far to {}",
-            output.display()
+            "interrupted: wrote the image rendered so far to {}{}",
+            output.display(),
+            if settings.window.is_some() || settings.pixel_samples.is_some() {
+                " (marked incomplete: render merge will not take it)"
+            } else {
+                ""
+            }
         ));
     }
     if let Some(xy) = &args.ray_trace.ray_tree {
@@ -141,6 +188,44 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         eprintln!("wrote {}", output.display());
     }
     Ok(())
+}
+
+/// Writes the image. A part of a split render (`--crop-window`, `--pixel-samples`) written as
+/// EXR is a part file for `render merge` (its sums, its window, its samples, the fingerprint
+/// of scene and settings, and whether the render ran to its end); in another format, a window
+/// is written alone.
+fn write_image(
+    film: &Film,
+    scene: &Scene,
+    settings: &RenderSettings,
+    output: &Path,
+    complete: bool,
+) -> Result<(), String> {
+    let image = settings.image();
+    if !image.is_part() {
+        return film.write(output).map_err(|e| e.to_string());
+    }
+    let window = image.window();
+    if crate::film::ImageFormat::from_path(output) != Some(crate::film::ImageFormat::Exr) {
+        return film
+            .cropped(window)
+            .write(output)
+            .map_err(|e| e.to_string());
+    }
+    let sums = match &film.samples {
+        Some(sums) => sums.clone(),
+        None => crate::film::part::SampleSums::of_pixels(film, window),
+    };
+    let range = image.sample_range();
+    let info = crate::film::part::PartInfo {
+        width: settings.width,
+        height: settings.height,
+        samples: (range.start, range.end),
+        spp: settings.num_antialias_samples.max(1),
+        fingerprint: settings.fingerprint(scene),
+        complete,
+    };
+    crate::film::part::write(output, film, &sums, &info).map_err(|e| e.to_string())
 }
 
 /// What the engine had to say, and the samples that came out NaN or infinite.

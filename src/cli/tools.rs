@@ -1,4 +1,4 @@
-//! The subcommands beside rendering: `bench-accel`, `report` and `compare`.
+//! The subcommands beside rendering: `bench-accel`, `report`, `compare` and `merge`.
 
 use std::path::{Path, PathBuf};
 
@@ -197,4 +197,17 @@ pub fn compare(image: &Path, reference: &Path, heatmap: Option<&Path>) -> Result
         "rmse {:.6e}\nrelmse {:.6e}\nmape {:.6e}\nmax_error {:.6e}\n",
         m.rmse, m.relmse, m.mape, m.max_error
     ))
+}
+
+/// `render merge PART... -o OUT`.
+pub fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {
+    crate::film::ImageFormat::check_output(output).map_err(|e| e.to_string())?;
+    let read: Vec<(PathBuf, crate::film::part::Part)> = parts
+        .iter()
+        .map(|p| crate::film::part::read(p).map(|part| (p.clone(), part)))
+        .collect::<Result<_, _>>()?;
+    let film = crate::film::part::merge(read)?;
+    film.write(output).map_err(|e| e.to_string())?;
+    eprintln!("merged {} parts into {}", parts.len(), output.display());
+    Ok(())
 }

@@ -5,6 +5,7 @@
 
 use std::sync::atomic::Ordering::Relaxed;
 
+use super::engine::PrePass;
 use super::radiosity::{self, RadiosityIndirect};
 use super::{photon, raytrace};
 use super::{Budget, Engine, EngineKind, EnginePlan, IndirectKind, RenderSettings, Rendered};
@@ -32,6 +33,19 @@ impl Engine for RayTraceEngine {
         }
     }
 
+    fn pre_pass(&self, settings: &RenderSettings) -> Option<PrePass> {
+        (settings.indirect == IndirectKind::Radiosity).then(|| radiosity::pre_pass(settings))
+    }
+
+    fn run_pre_pass(
+        &self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+    ) -> Result<Vec<String>, String> {
+        radiosity::run_pre_pass(scene, accel, settings)
+    }
+
     fn render(
         &self,
         scene: &Scene,
@@ -44,7 +58,7 @@ impl Engine for RayTraceEngine {
                 Rendered::plain(film, stats)
             }
             IndirectKind::Radiosity => {
-                let solution = radiosity::solve_with_progress(scene, accel, settings);
+                let solution = radiosity::solve_with_progress(scene, accel, settings)?;
                 let indirect = RadiosityIndirect::new(&solution, settings.radiosity.interpolate);
                 let (film, stats) = raytrace::render_with(scene, accel, settings, &indirect);
                 stats.form_factor_rays.store(solution.rays, Relaxed);
@@ -88,6 +102,25 @@ impl Engine for PhotonEngine {
 
     fn plan(&self, scene: &Scene, settings: &RenderSettings) -> EnginePlan {
         photon::plan(scene, settings)
+    }
+
+    /// The photons shown as they are (`--visualize photons|kdtree`) are not samples.
+    fn samples_pixels(&self, settings: &RenderSettings) -> bool {
+        settings.photon.display == photon::Display::Image
+    }
+
+    fn pre_pass(&self, settings: &RenderSettings) -> Option<PrePass> {
+        Some(photon::pre_pass(settings))
+    }
+
+    fn run_pre_pass(
+        &self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+    ) -> Result<Vec<String>, String> {
+        let maps = photon::maps(scene, accel, settings)?;
+        Ok(vec![maps.summary()])
     }
 
     fn render(

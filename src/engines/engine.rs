@@ -3,6 +3,7 @@
 //! plan, the budgets of the report's ladder, the rendered result.
 
 use crate::accel::Accel;
+use crate::film::part::Window;
 use crate::film::Film;
 use crate::geometry::Vec3;
 use crate::render::{ImageSettings, RenderStats};
@@ -78,12 +79,50 @@ pub trait Engine: Sync {
         settings: &RenderSettings,
     ) -> Result<Rendered, String>;
 
+    /// Whether the image is the mean of camera samples taken by the shared pixel loop, and
+    /// nothing drawn over them, so that `--pixel-samples` can split a pixel's samples between
+    /// renders (default yes; no for the MATERIALS view, drawings such as `--wireframe`, and
+    /// the photons shown as they are).
+    fn samples_pixels(&self, _settings: &RenderSettings) -> bool {
+        true
+    }
+
+    /// What this engine computes before its pixels that a render farm computes once and
+    /// every task loads (photon maps, a radiosity solution), or None.
+    fn pre_pass(&self, _settings: &RenderSettings) -> Option<PrePass> {
+        None
+    }
+
+    /// Computes the pre-pass and saves it where the settings say (`--pre-pass-only`);
+    /// returns what the engine has to say. Only called when `pre_pass` is Some.
+    fn run_pre_pass(
+        &self,
+        _scene: &Scene,
+        _accel: &dyn Accel,
+        _settings: &RenderSettings,
+    ) -> Result<Vec<String>, String> {
+        Err(format!("the {} engine has no pre-pass", self.kind()))
+    }
+
     /// The settings of budget `level` (0, 1, 2, …) of the report's error-against-time
     /// ladder, each about twice the work of the one before; None past the last level.
     fn budget(&self, level: u32, base: &RenderSettings) -> Option<Budget>;
 
     /// The colour of the engine's curve in the report's plot (sRGB).
     fn colour(&self) -> (u8, u8, u8);
+}
+
+/// An engine's pre-pass as a render farm runs it: what it is, and the flags that save and
+/// load it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrePass {
+    /// "photon maps", "radiosity solution".
+    pub name: &'static str,
+    /// The flag that saves it (`--save-photons`) and the one that loads it.
+    pub save_flag: &'static str,
+    pub load_flag: &'static str,
+    /// Whether the settings already ask to save it.
+    pub saved: bool,
 }
 
 /// What an engine would build, for `--plan` and `--max-memory`.
@@ -195,6 +234,10 @@ pub struct RenderSettings {
     pub seed: u64,
     /// No progress bars (`--quiet`).
     pub quiet: bool,
+    /// Only the pixels of this window (`--crop-window`, default None: the whole image).
+    pub window: Option<Window>,
+    /// Only samples `first ≤ s < end` of each pixel (`--pixel-samples`, default None: all).
+    pub pixel_samples: Option<(u32, u32)>,
 }
 
 impl Default for RenderSettings {
@@ -214,6 +257,8 @@ impl Default for RenderSettings {
             focus_distance: None,
             seed: 0,
             quiet: false,
+            window: None,
+            pixel_samples: None,
         }
     }
 }
@@ -229,6 +274,35 @@ impl RenderSettings {
             focus_distance: self.focus_distance,
             seed: self.seed,
             quiet: self.quiet,
+            window: self.window,
+            samples: self.pixel_samples,
         }
+    }
+
+    /// A hash of the scene and of every setting that changes a pixel's value, for the parts
+    /// of a split render (`render merge` refuses parts whose fingerprints differ). Left out:
+    /// the window and the sample range (what tells parts apart), the output and progress,
+    /// the files pre-passes are saved to or loaded from (a loaded pre-pass equals the computed
+    /// one: its own fingerprint is checked), and the memory budget. Settings are hashed as
+    /// their Debug text, which prints every field and floats in their shortest exact form.
+    pub fn fingerprint(&self, scene: &Scene) -> u64 {
+        let mut s = self.clone();
+        s.quiet = false;
+        s.window = None;
+        s.pixel_samples = None;
+        s.photon.save = None;
+        s.photon.load = None;
+        s.radiosity.save = None;
+        s.radiosity.load = None;
+        s.radiosity.export = None;
+        s.radiosity.log_convergence = false;
+        s.radiosity.memory_budget = 0;
+        crate::scene::hash_text(&format!(
+            "trilux {} {:016x} {:?} {:?} {s:?}",
+            env!("CARGO_PKG_VERSION"),
+            scene.content_hash(),
+            scene.camera(),
+            scene.background
+        ))
     }
 }

@@ -54,6 +54,11 @@ impl Engine for RaycastEngine {
         EngineKind::Raycast
     }
 
+    /// One ray through each pixel's centre: no samples to split.
+    fn samples_pixels(&self, _settings: &RenderSettings) -> bool {
+        false
+    }
+
     fn unread_flags(&self) -> &'static [&'static str] {
         &[
             "num_bounces",

@@ -43,6 +43,7 @@ pub fn read_image(path: &Path) -> Result<Film, String> {
                 width,
                 height,
                 pixels,
+                samples: None,
             })
         }
         Some(ImageFormat::Png | ImageFormat::Jpeg) => {
@@ -63,6 +64,7 @@ pub fn read_image(path: &Path) -> Result<Film, String> {
                 width,
                 height,
                 pixels,
+                samples: None,
             })
         }
         None => Err(format!(
@@ -131,5 +133,6 @@ pub fn heatmap(image: &Film, reference: &Film) -> Film {
         width: image.width,
         height: image.height,
         pixels,
+        samples: None,
     }
 }

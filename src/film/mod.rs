@@ -3,6 +3,7 @@
 //! renamed over it, so an interrupted render never leaves a broken image.
 
 pub mod metrics;
+pub mod part;
 pub mod ray_tree;
 
 use std::fs::File;
@@ -18,6 +19,10 @@ pub struct Film {
     pub height: u32,
     /// Row-major, row 0 at the top of the image.
     pub pixels: Vec<Color>,
+    /// The sums of the samples behind each pixel of the window a partial render took
+    /// (`--crop-window`, `--pixel-samples`): what a part file keeps for an exact merge. None
+    /// for a whole render.
+    pub samples: Option<part::SampleSums>,
 }
 
 /// Quality of `.jpg` output (1–100): high enough that the 8-bit image shows no blocking.
@@ -62,7 +67,21 @@ impl Film {
             width,
             height,
             pixels: vec![Color::ZERO; width as usize * height as usize],
+            samples: None,
         }
+    }
+
+    /// The pixels inside `window`, as an image of the window's size.
+    pub fn cropped(&self, window: part::Window) -> Film {
+        let mut film = Film::new(window.width(), window.height());
+        for (k, row) in (window.y0..window.y1).enumerate() {
+            let from = row as usize * self.width as usize;
+            let to = k * window.width() as usize;
+            film.pixels[to..to + window.width() as usize].copy_from_slice(
+                &self.pixels[from + window.x0 as usize..from + window.x1 as usize],
+            );
+        }
+        film
     }
 
     /// The pixel in column `i` and row `row` counted from the top.

@@ -15,6 +15,7 @@ pub use indirect::{Ambient, IndirectLight};
 
 use crate::accel::Accel;
 use crate::color::Color;
+use crate::film::part::{SampleSums, Window};
 use crate::film::Film;
 use crate::geometry::Ray;
 use crate::sampling::{Pattern, Rng, Strata};
@@ -39,6 +40,33 @@ pub struct ImageSettings {
     pub seed: u64,
     /// No progress bars (`--quiet`).
     pub quiet: bool,
+    /// Only the pixels of this window (`--crop-window`; None: every pixel).
+    pub window: Option<Window>,
+    /// Only samples `first ≤ s < end` of each pixel's `num_antialias_samples`
+    /// (`--pixel-samples`; None: all of them).
+    pub samples: Option<(u32, u32)>,
+}
+
+impl ImageSettings {
+    /// The pixels to render: the window, or the whole image.
+    pub fn window(&self) -> Window {
+        self.window
+            .unwrap_or_else(|| Window::full(self.width, self.height))
+    }
+
+    /// The samples of each pixel to take: the range asked for, or all of them.
+    pub fn sample_range(&self) -> std::ops::Range<u32> {
+        let (first, end) = self
+            .samples
+            .unwrap_or((0, self.num_antialias_samples.max(1)));
+        first..end
+    }
+
+    /// Whether this render is one part of a split render: then the film keeps the sums of
+    /// its samples, for `render merge`.
+    pub fn is_part(&self) -> bool {
+        self.window.is_some() || self.samples.is_some()
+    }
 }
 
 /// Counters of one render, printed by `--stats`.
@@ -135,7 +163,8 @@ pub const CHUNK_SAMPLES: usize = 4096;
 /// The pixel loop every sampling engine shares: rows in parallel, the camera rays of a row
 /// traced as one batch, `-num_antialias_samples` per pixel averaged with a box filter, and
 /// samples that come out NaN or infinite left out and counted. `radiance` gives the radiance
-/// along a camera ray from its closest hit.
+/// along a camera ray from its closest hit. Only the pixels of the settings' window and the
+/// samples of their range are taken; a part of a split render keeps its sums in the film.
 pub fn render_pixels(
     scene: &Scene,
     accel: &dyn Accel,
@@ -145,32 +174,39 @@ pub fn render_pixels(
 ) -> (Film, RenderStats) {
     let (w, h) = (settings.width, settings.height);
     let camera = CameraSampler::new(scene, settings);
-    let spp = settings.num_antialias_samples.max(1) as usize;
+    let window = settings.window();
+    let samples = settings.sample_range();
+    let spp = samples.len();
     let stats = RenderStats::default();
     let mut film = Film::new(w, h);
-    let bar = crate::progress::bar(h as u64, label, settings.quiet);
+    let bar = crate::progress::bar(window.height() as u64, label, settings.quiet);
     // Ctrl-C during what came before (a radiosity solve, photon tracing) stopped that, and
     // the pixels show what it made; Ctrl-C during the pixels stops them.
     let interrupted_before = crate::interrupt::requested();
-    film.pixels
+    let rows: Vec<Vec<([f64; 3], u32)>> = film
+        .pixels
         .par_chunks_mut(w as usize)
         .enumerate()
-        .for_each(|(row, out)| {
+        .skip(window.y0 as usize)
+        .take(window.height() as usize)
+        .map(|(row, out)| {
             let j = h - 1 - row as u32;
             let mut counts = Counts::default();
+            let mut row_sums = Vec::with_capacity(window.width() as usize);
             // A row in chunks of about CHUNK_SAMPLES camera samples: one batch of camera rays
             // each, memory bounded whatever the samples per pixel, and Ctrl-C heard between
-            // chunks (the pixels not yet rendered stay black).
-            let chunk = (CHUNK_SAMPLES / spp).max(1);
+            // chunks (the pixels not yet rendered stay black, with no samples).
+            let chunk = (CHUNK_SAMPLES / spp.max(1)).max(1);
+            let out = &mut out[window.x0 as usize..window.x1 as usize];
             for (c, pixels) in out.chunks_mut(chunk).enumerate() {
                 if !interrupted_before && crate::interrupt::requested() {
                     break;
                 }
-                let first = (c * chunk) as u32;
+                let first = window.x0 + (c * chunk) as u32;
                 let mut rngs = Vec::with_capacity(pixels.len() * spp);
                 let mut rays = Vec::with_capacity(pixels.len() * spp);
                 for i in first..first + pixels.len() as u32 {
-                    for k in 0..spp as u32 {
+                    for k in samples.clone() {
                         let (ray, rng) = camera.sample((i, j), k);
                         rays.push(ray);
                         rngs.push(rng);
@@ -203,6 +239,9 @@ pub fn render_pixels(
                         (sum[1] / n) as f32,
                         (sum[2] / n) as f32,
                     );
+                    if settings.is_part() {
+                        row_sums.push((sum, good));
+                    }
                 }
             }
             stats.camera_rays.fetch_add(counts.camera, Relaxed);
@@ -212,7 +251,25 @@ pub fn render_pixels(
                 .non_finite_samples
                 .fetch_add(counts.non_finite, Relaxed);
             bar.inc(1);
-        });
+            row_sums
+        })
+        .collect();
     bar.finish_and_clear();
+    if settings.is_part() {
+        let mut sums = SampleSums {
+            window,
+            sums: Vec::with_capacity(window.pixels()),
+            counts: Vec::with_capacity(window.pixels()),
+        };
+        for mut row in rows {
+            // A row Ctrl-C cut short: its remaining pixels took no samples.
+            row.resize(window.width() as usize, ([0.0; 3], 0));
+            for (sum, count) in row {
+                sums.sums.push(sum);
+                sums.counts.push(count);
+            }
+        }
+        film.samples = Some(sums);
+    }
     (film, stats)
 }

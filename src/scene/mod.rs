@@ -413,8 +413,16 @@ impl Scene {
     }
 }
 
+/// A stable 64-bit hash of `text`: the same in every build and on every machine.
+pub fn hash_text(text: &str) -> u64 {
+    use std::fmt::Write;
+    let mut h = ContentHasher::default();
+    let _ = h.write_str(text);
+    h.finish()
+}
+
 /// A stable 64-bit hash of a stream of text and words (the same in every build, unlike the
-/// standard library's hasher), for `Scene::content_hash`.
+/// standard library's hasher), for `Scene::content_hash` and `hash_text`.
 #[derive(Default)]
 struct ContentHasher {
     state: u64,

@@ -259,3 +259,39 @@ pub fn fresnel(cos_i: f64, eta_i: f64, eta_t: f64) -> f64 {
     let p = (eta_i * cos_t - eta_t * cos_i) / (eta_i * cos_t + eta_t * cos_i);
     0.5 * (s * s + p * p)
 }
+
+/// Runs `render` with `args` in `dir`, sends SIGINT at each of `signals` (milliseconds after
+/// the start), and returns how it ended, its stderr, and the seconds it ran on after the
+/// last signal.
+pub fn interrupted(
+    dir: &Path,
+    args: &[&str],
+    signals: &[u64],
+) -> (std::process::ExitStatus, String, f64) {
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+        .args(args)
+        .current_dir(dir)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("starts");
+    let start = std::time::Instant::now();
+    for &ms in signals {
+        std::thread::sleep(std::time::Duration::from_millis(ms).saturating_sub(start.elapsed()));
+        let killed = std::process::Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .expect("kill runs");
+        assert!(
+            killed.success(),
+            "{args:?}: the process ended before the signal at {ms} ms"
+        );
+    }
+    let last = start.elapsed();
+    let out = child.wait_with_output().expect("ends");
+    let after = (start.elapsed() - last).as_secs_f64();
+    (
+        out.status,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+        after,
+    )
+}

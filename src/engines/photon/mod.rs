@@ -17,7 +17,7 @@ pub use map::PhotonMap;
 pub use settings::{Display, PhotonSettings};
 pub use trace::{Aim, PathKind, Photon};
 
-use super::engine::{EnginePlan, RenderSettings};
+use super::engine::{EnginePlan, PrePass, RenderSettings};
 use crate::accel::Accel;
 use crate::film::Film;
 use crate::geometry::{Bounds3, Vec3};
@@ -274,11 +274,22 @@ pub fn maps(
         Some(path) => PhotonMaps::load(path, scene, settings)?,
         None => PhotonMaps::build(scene, accel, settings),
     };
-    if let Some(path) = &p.save {
+    // Maps Ctrl-C cut short are not saved: a farm's tasks must not take them as the maps.
+    if let (Some(path), false) = (&p.save, crate::interrupt::requested()) {
         maps.save(path, file::fingerprint(scene, settings))
             .map_err(|e| e.to_string())?;
     }
     Ok(maps)
+}
+
+/// The photon maps as a render farm's pre-pass.
+pub fn pre_pass(settings: &RenderSettings) -> PrePass {
+    PrePass {
+        name: "photon maps",
+        save_flag: "--save-photons",
+        load_flag: "--load-photons",
+        saved: settings.photon.save.is_some(),
+    }
 }
 
 /// The image of a display mode other than `Display::Image` (`--visualize photons|kdtree`),

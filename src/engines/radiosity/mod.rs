@@ -3,6 +3,7 @@
 //! against the original geometry, progressive refinement with the ambient term, and the
 //! solved mesh seen from the camera in several visualization modes.
 
+pub mod file;
 pub mod form_factor;
 pub mod hierarchical;
 pub mod mesh;
@@ -21,7 +22,7 @@ pub use display::render_solution;
 use patch::Patch;
 use solver::{FormFactorSampler, PatchLight, RadiositySolver, SolveLimits, Step, Stop};
 
-use super::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSettings, Rendered};
+use super::engine::{Budget, Engine, EngineKind, EnginePlan, PrePass, RenderSettings, Rendered};
 use crate::accel::Accel;
 use crate::engines::radiosity::mesh::{QuadMesh, NONE};
 use crate::film::Film;
@@ -55,6 +56,9 @@ pub struct Solution {
     pub solver_warning: Option<String>,
     /// Rounds of adaptive subdivision done.
     pub adaptive_rounds: u32,
+    /// The faces split in each round of adaptive subdivision, in order: with the scene and
+    /// the settings, what rebuilds the mesh of a saved solution.
+    pub splits: Vec<Vec<u32>>,
     /// The solver that ran (`--radiosity-solver auto` resolved).
     pub solver: SolverKind,
     /// Patches that coincide with an earlier one (`patch::twins`), solved as one.
@@ -69,6 +73,15 @@ pub struct PatchField {
     corners: Option<Vec<[Color; 4]>>,
     /// `values` are per element of `PatchLight::elements` (shown at the leaves).
     per_element: bool,
+}
+
+/// For each mesh face, its patch (`NONE` for faces that were split).
+fn patch_of_face(mesh: &QuadMesh, patches: &[Patch]) -> Vec<u32> {
+    let mut of_face = vec![NONE; mesh.faces.len()];
+    for (k, p) in patches.iter().enumerate() {
+        of_face[p.face as usize] = k as u32;
+    }
+    of_face
 }
 
 /// Whether every quad of the scene lies in front of (or on) every other quad's plane and there
@@ -118,19 +131,11 @@ impl Solution {
         on_progress: impl Fn(f32),
     ) -> Solution {
         let r = &settings.radiosity;
-        let mut mesh = QuadMesh::from_scene(scene, r.tessellation());
-        // `auto` chooses by the scene's own faces, before --subdivide.
-        let kind = r.solver.resolve(mesh.leaves.len());
-        mesh.subdivide(r.subdivide);
-        let (visibility, visibility_reason) = if settings.num_shadow_samples == 0 {
-            (false, "off (-num_shadow_samples 0)")
-        } else if convex_enclosure(scene) {
-            (false, "skipped: the scene is a convex enclosure")
-        } else {
-            (true, "one occlusion ray per point pair")
-        };
+        let (mut mesh, kind) = Solution::initial_mesh(scene, r);
+        let (visibility, visibility_reason) = Solution::visibility(scene, settings);
         let mut rays = 0;
         let mut round = 0;
+        let mut splits = Vec::new();
         loop {
             let patches = patch::patches(scene, &mesh);
             // Coincident twins take no part: the solvers see them with no area.
@@ -160,15 +165,11 @@ impl Solution {
             let (mut state, stop) = (solved.light, solved.stop);
             state.copy_twins(&twin_of);
             rays += sampler.rays.load(Relaxed);
-            let mut patch_of_face = vec![NONE; mesh.faces.len()];
-            for (k, p) in patches.iter().enumerate() {
-                patch_of_face[p.face as usize] = k as u32;
-            }
             let ambient = solver::ambient(&solved_patches, &state.undistributed);
             let solution = Solution {
+                patch_of_face: patch_of_face(&mesh, &patches),
                 mesh,
                 patches,
-                patch_of_face,
                 state,
                 stop,
                 ambient,
@@ -179,6 +180,7 @@ impl Solution {
                 solver_counters: solved.counters,
                 solver_warning: solved.warning,
                 adaptive_rounds: round,
+                splits: splits.clone(),
                 solver: kind,
                 twins,
             };
@@ -195,7 +197,28 @@ impl Solution {
             }
             mesh = solution.mesh;
             mesh.split_many(&split);
+            splits.push(split);
             round += 1;
+        }
+    }
+
+    /// The mesh a solve starts from: the scene's faces, subdivided `--subdivide` times; and
+    /// the solver `auto` chooses for it, by the scene's own faces (before subdividing).
+    fn initial_mesh(scene: &Scene, r: &RadiositySettings) -> (QuadMesh, SolverKind) {
+        let mut mesh = QuadMesh::from_scene(scene, r.tessellation());
+        let kind = r.solver.resolve(mesh.leaves.len());
+        mesh.subdivide(r.subdivide);
+        (mesh, kind)
+    }
+
+    /// Whether form factors are tested for visibility, and why (not).
+    fn visibility(scene: &Scene, settings: &RenderSettings) -> (bool, &'static str) {
+        if settings.num_shadow_samples == 0 {
+            (false, "off (-num_shadow_samples 0)")
+        } else if convex_enclosure(scene) {
+            (false, "skipped: the scene is a convex enclosure")
+        } else {
+            (true, "one occlusion ray per point pair")
         }
     }
 
@@ -413,11 +436,11 @@ pub fn render(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
-) -> (Film, RenderStats, Solution) {
-    let solution = solve_with_progress(scene, accel, settings);
+) -> Result<(Film, RenderStats, Solution), String> {
+    let solution = solve_with_progress(scene, accel, settings)?;
     let (film, stats) = render_solution(scene, accel, settings, &solution);
     stats.form_factor_rays.store(solution.rays, Relaxed);
-    (film, stats, solution)
+    Ok((film, stats, solution))
 }
 
 /// A solution's indirect light for the ray tracer (`--indirect radiosity`): the incident
@@ -453,23 +476,57 @@ impl IndirectLight for RadiosityIndirect<'_> {
     }
 }
 
-/// Solves with a progress bar: the bar fills as log(residual) approaches log(tolerance).
+/// Solves with a progress bar (the bar fills as log(residual) approaches log(tolerance)), or
+/// reads the solution `--load-radiosity` names; writes it where `--save-radiosity` asks.
 pub fn solve_with_progress(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
-) -> Solution {
+) -> Result<Solution, String> {
     const STEPS: u64 = 1000;
-    let bar = crate::progress::bar(STEPS, "radiosity", settings.quiet);
-    let tolerance = settings.radiosity.tolerance.clamp(1e-30, 0.5);
-    let solution = Solution::solve(scene, accel, settings, |residual| {
-        if residual > 0.0 && residual.is_finite() {
-            let done = (residual.ln() / tolerance.ln()).clamp(0.0, 1.0);
-            bar.set_position((done * STEPS as f32) as u64);
+    let r = &settings.radiosity;
+    let solution = match &r.load {
+        Some(path) => Solution::load(path, scene, settings)?,
+        None => {
+            let bar = crate::progress::bar(STEPS, "radiosity", settings.quiet);
+            let tolerance = r.tolerance.clamp(1e-30, 0.5);
+            let solution = Solution::solve(scene, accel, settings, |residual| {
+                if residual > 0.0 && residual.is_finite() {
+                    let done = (residual.ln() / tolerance.ln()).clamp(0.0, 1.0);
+                    bar.set_position((done * STEPS as f32) as u64);
+                }
+            });
+            bar.finish_and_clear();
+            solution
         }
-    });
-    bar.finish_and_clear();
-    solution
+    };
+    // A solve Ctrl-C cut short is not saved: a farm's tasks must not take it as the solution.
+    if let (Some(path), false) = (&r.save, crate::interrupt::requested()) {
+        solution
+            .save(path, file::fingerprint(scene, settings))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(solution)
+}
+
+/// The radiosity solution as a render farm's pre-pass.
+pub fn pre_pass(settings: &RenderSettings) -> PrePass {
+    PrePass {
+        name: "radiosity solution",
+        save_flag: "--save-radiosity",
+        load_flag: "--load-radiosity",
+        saved: settings.radiosity.save.is_some(),
+    }
+}
+
+/// Solves (or loads) and saves the solution, for `--pre-pass-only`: its summary.
+pub fn run_pre_pass(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+) -> Result<Vec<String>, String> {
+    let solution = solve_with_progress(scene, accel, settings)?;
+    Ok(vec![solution.summary(settings)])
 }
 
 /// Bytes per radiosity patch: mesh face and its links, patch, solver state, interpolation.
@@ -498,13 +555,33 @@ impl Engine for RadiosityEngine {
         mesh_plan(scene, settings)
     }
 
+    /// The outlines of `--wireframe` and of the form factors' source are drawn over the
+    /// samples.
+    fn samples_pixels(&self, settings: &RenderSettings) -> bool {
+        let r = &settings.radiosity;
+        !r.wireframe && r.display != Display::FormFactors
+    }
+
+    fn pre_pass(&self, settings: &RenderSettings) -> Option<PrePass> {
+        Some(pre_pass(settings))
+    }
+
+    fn run_pre_pass(
+        &self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+    ) -> Result<Vec<String>, String> {
+        run_pre_pass(scene, accel, settings)
+    }
+
     fn render(
         &self,
         scene: &Scene,
         accel: &dyn Accel,
         settings: &RenderSettings,
     ) -> Result<Rendered, String> {
-        let (film, stats, solution) = render(scene, accel, settings);
+        let (film, stats, solution) = render(scene, accel, settings)?;
         solution.rendered(film, stats, settings)
     }
 

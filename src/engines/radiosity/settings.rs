@@ -46,6 +46,11 @@ pub struct RadiositySettings {
     pub display: Display,
     /// Write the solved patches to this PLY file (`--export-radiosity`, default: none).
     pub export: Option<std::path::PathBuf>,
+    /// Write the solution to this file after solving (`--save-radiosity`, default: none).
+    pub save: Option<std::path::PathBuf>,
+    /// Read the solution from this file instead of solving (`--load-radiosity`, default:
+    /// none); refused if made for another scene or other settings.
+    pub load: Option<std::path::PathBuf>,
     /// Which solver (`--radiosity-solver`, default auto: hierarchical above
     /// `HIERARCHICAL_ABOVE` input patches, progressive up to it).
     pub solver: SolverKind,
@@ -134,6 +139,8 @@ impl Default for RadiositySettings {
             wireframe: false,
             ff_source: None,
             log_convergence: false,
+            save: None,
+            load: None,
             display: Display::Radiance,
             export: None,
             solver: SolverKind::Auto,

@@ -1,0 +1,389 @@
+//! Split renders (`--crop-window`, `--pixel-samples`, `render merge`) and shared pre-passes
+//! (`--save-radiosity` / `--load-radiosity`, `--pre-pass-only`), run as a user runs them: the
+//! `render` program. The oracle is the single render of the same scene and flags: every
+//! random number is a function of (seed, pixel, sample), so tiles must merge into its very
+//! bytes and sample batches into its values up to f32 rounding of the sums. The same through
+//! Slurm is in `farm_slurm.rs`.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use trilux::film::{read_pfm, Film};
+
+fn render(dir: &Path, args: &[String]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_render"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("render runs")
+}
+
+/// Runs `render` and insists that it succeeds.
+fn ok(dir: &Path, args: &[String]) -> Output {
+    let out = render(dir, args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Runs `render` and insists that it fails; its stderr.
+fn fails(dir: &Path, args: &[String]) -> String {
+    let out = render(dir, args);
+    assert!(!out.status.success(), "{args:?} succeeded");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn words(line: &str) -> Vec<String> {
+    line.split_whitespace().map(str::to_string).collect()
+}
+
+fn scene(name: &str) -> String {
+    common::own_scene_dir()
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// The linear pixels of an EXR (the merge's output).
+fn read_exr(path: &Path) -> Vec<[f32; 3]> {
+    let image = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb32f();
+    image.pixels().map(|p| [p[0], p[1], p[2]]).collect()
+}
+
+/// Tiles of uneven sizes (edges at ⌈48 × 0.3⌉ = 15 and ⌈48 × 0.6⌉ = 29) and sample batches
+/// of uneven lengths.
+const TILES: [&str; 4] = ["0 0.3 0 0.6", "0.3 1 0 0.6", "0 0.3 0.6 1", "0.3 1 0.6 1"];
+const BATCHES: [&str; 4] = ["0 1", "1 3", "3 6", "6 8"];
+
+/// For the ray tracer, the path tracer and the photon engine on two course scenes: four tiles
+/// merged give the single render's bytes (PFM), four sample batches its values to 1e-6
+/// relative in every pixel (EXR, as the issue asks; measured: identical).
+#[test]
+fn tiles_and_sample_batches_merge_into_the_single_render() {
+    let dir = common::temp_dir("farm-merge");
+    let engines = [
+        "--engine raytrace -num_shadow_samples 4 -num_bounces 2",
+        "--engine path",
+        "-num_photons_to_shoot 20000 -num_shadow_samples 4 -num_bounces 2",
+    ];
+    for scene_name in ["cornell_box_diffuse_sphere.obj", "reflective_spheres.obj"] {
+        for flags in engines {
+            let mut base = words(&format!(
+                "-input {} -size 48 48 -num_antialias_samples 8 --quiet {flags}",
+                scene(scene_name)
+            ));
+            base.push("--seed".into());
+            base.push("7".into());
+            let with =
+                |extra: &str| -> Vec<String> { base.iter().cloned().chain(words(extra)).collect() };
+            ok(&dir, &with("-o single.pfm"));
+            ok(&dir, &with("-o single.exr"));
+            let mut tiles = Vec::new();
+            for (k, t) in TILES.iter().enumerate() {
+                let part = format!("tile{k}.exr");
+                ok(&dir, &with(&format!("--crop-window {t} -o {part}")));
+                tiles.push(part);
+            }
+            let mut merge = vec!["merge".to_string()];
+            merge.extend(tiles.iter().rev().cloned());
+            merge.extend(words("-o tiles.pfm"));
+            ok(&dir, &merge);
+            let single = std::fs::read(dir.join("single.pfm")).expect("single");
+            let merged = std::fs::read(dir.join("tiles.pfm")).expect("merged");
+            assert!(
+                single == merged,
+                "{scene_name} {flags}: the merged tiles differ from the single render"
+            );
+
+            let mut batches = Vec::new();
+            for (k, b) in BATCHES.iter().enumerate() {
+                let part = format!("batch{k}.exr");
+                ok(&dir, &with(&format!("--pixel-samples {b} -o {part}")));
+                batches.push(part);
+            }
+            let mut merge = vec!["merge".to_string()];
+            merge.extend(batches);
+            merge.extend(words("-o batches.exr"));
+            ok(&dir, &merge);
+            let single = read_exr(&dir.join("single.exr"));
+            let merged = read_exr(&dir.join("batches.exr"));
+            let worst = single
+                .iter()
+                .zip(&merged)
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c], b[c])))
+                .map(|(a, b)| (a - b).abs() / a.abs().max(1e-30))
+                .fold(0.0f32, f32::max);
+            println!("{scene_name} {flags}: batches within {worst:.1e} of the single render");
+            assert!(
+                worst <= 1e-6,
+                "{scene_name} {flags}: merged batches {worst:e} from the single render"
+            );
+        }
+    }
+}
+
+/// The merge refuses parts of another seed or scene, a set with a tile missing (naming the
+/// pixels and samples) or with parts overlapping, a part whose render was interrupted, and an
+/// EXR that is not a part.
+#[test]
+fn merge_refuses_parts_that_do_not_make_one_render() {
+    let dir = common::temp_dir("farm-refuse");
+    let part = |name: &str, scene_name: &str, extra: &str| {
+        ok(
+            &dir,
+            &words(&format!(
+                "-input {} -size 32 32 -num_antialias_samples 4 --quiet {extra} -o {name}",
+                scene(scene_name)
+            )),
+        );
+        name.to_string()
+    };
+    let left = part("left.exr", "cornell_box.obj", "--crop-window 0 0.5 0 1");
+    let right = part("right.exr", "cornell_box.obj", "--crop-window 0.5 1 0 1");
+    let other_seed = part(
+        "seed.exr",
+        "cornell_box.obj",
+        "--crop-window 0.5 1 0 1 --seed 9",
+    );
+    let other_scene = part("scene.exr", "l.obj", "--crop-window 0.5 1 0 1");
+    let merge = |parts: &[&str]| {
+        let mut args = vec!["merge".to_string()];
+        args.extend(parts.iter().map(|p| p.to_string()));
+        args.extend(words("-o merged.png"));
+        fails(&dir, &args)
+    };
+    for other in [&other_seed, &other_scene] {
+        let e = merge(&[&left, other]);
+        assert!(
+            e.contains("fingerprint differs") && e.contains(other.as_str()),
+            "{e}"
+        );
+    }
+    let e = merge(&[&left]);
+    assert!(
+        e.contains("missing samples 0..4 of 512 pixels within columns 16..32, rows 0..32"),
+        "{e}"
+    );
+    let e = merge(&[&left, &right, &left]);
+    assert!(e.contains("in another part too"), "{e}");
+    ok(
+        &dir,
+        &words(&format!(
+            "-input {} -size 8 8 --quiet -o plain.exr",
+            scene("l.obj")
+        )),
+    );
+    let e = merge(&[&left, "plain.exr"]);
+    assert!(e.contains("not a part of a split render"), "{e}");
+
+    // A part Ctrl-C cut short is written (a valid, partial image) but marked incomplete.
+    let slow = words(&format!(
+        "-input {} --engine path -size 64 64 -num_antialias_samples 4000 --crop-window 0.5 1 0 1 --quiet -o cut.exr",
+        scene("cornell_box.obj")
+    ));
+    let slow: Vec<&str> = slow.iter().map(String::as_str).collect();
+    let (status, stderr, _) = common::interrupted(&dir, &slow, &[1500]);
+    assert!(!status.success(), "{stderr}");
+    assert!(stderr.contains("marked incomplete"), "{stderr}");
+    let e = merge(&[&left, "cut.exr"]);
+    assert!(e.contains("was interrupted"), "{e}");
+}
+
+/// A crop written to PNG or PFM is the window's pixels alone (as pbrt writes a cropped image),
+/// the same as those pixels of the whole render.
+#[test]
+fn a_crop_written_as_pfm_is_the_windows_pixels() {
+    let dir = common::temp_dir("farm-crop");
+    let base = format!(
+        "-input {} -size 40 30 -num_shadow_samples 2 --quiet",
+        scene("cornell_box_diffuse_sphere.obj")
+    );
+    ok(&dir, &words(&format!("{base} -o whole.pfm")));
+    ok(
+        &dir,
+        &words(&format!(
+            "{base} --crop-window 0.25 0.75 0.1 0.5 -o crop.pfm"
+        )),
+    );
+    let whole = read_pfm(&dir.join("whole.pfm")).expect("whole");
+    let crop: Film = read_pfm(&dir.join("crop.pfm")).expect("crop");
+    // Columns ⌈10⌉..⌈30⌉ = 10..30, rows ⌈3⌉..⌈15⌉ = 3..15.
+    assert_eq!((crop.width, crop.height), (20, 12));
+    for row in 0..12 {
+        for x in 0..20 {
+            assert_eq!(crop.get(x, row), whole.get(x + 10, row + 3), "({x}, {row})");
+        }
+    }
+}
+
+/// `--save-radiosity` then `--load-radiosity` gives the same image for both solvers and after
+/// adaptive subdivision (whose splits the file keeps); a file made with another seed, or cut
+/// short, is refused; `--pre-pass-only` saves without rendering, and is refused where there
+/// is nothing to save.
+#[test]
+fn a_saved_radiosity_solution_renders_the_same_image() {
+    let dir = common::temp_dir("farm-radiosity");
+    let cases = [
+        "--engine radiosity --subdivide 2 -num_shadow_samples 1 -interpolate",
+        "--engine radiosity --radiosity-solver hierarchical -num_shadow_samples 1",
+        "--engine radiosity -num_shadow_samples 1 --adaptive-subdivide 0.05",
+        "--indirect radiosity --subdivide 1 -num_shadow_samples 4",
+    ];
+    for (k, flags) in cases.iter().enumerate() {
+        let base = format!(
+            "-input {} -size 32 32 --quiet {flags}",
+            scene("cornell_box_diffuse_sphere.obj")
+        );
+        let file = format!("solution{k}.bin");
+        ok(
+            &dir,
+            &words(&format!("{base} --save-radiosity {file} -o solved.pfm")),
+        );
+        let out = render(
+            &dir,
+            &words(&format!(
+                "-input {} -size 32 32 {flags} --load-radiosity {file} -o loaded.pfm",
+                scene("cornell_box_diffuse_sphere.obj")
+            )),
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains("loaded from"),
+            "{flags}: the summary says where the solution came from"
+        );
+        let solved = std::fs::read(dir.join("solved.pfm")).expect("solved");
+        let loaded = std::fs::read(dir.join("loaded.pfm")).expect("loaded");
+        assert!(
+            solved == loaded,
+            "{flags}: the loaded solution renders differently"
+        );
+
+        let e = fails(
+            &dir,
+            &words(&format!("{base} --seed 3 --load-radiosity {file} -o x.pfm")),
+        );
+        assert!(e.contains("another scene or other settings"), "{e}");
+    }
+    let bytes = std::fs::read(dir.join("solution0.bin")).expect("file");
+    std::fs::write(dir.join("cut.bin"), &bytes[..bytes.len() / 2]).expect("write");
+    let base = format!(
+        "-input {} -size 32 32 --quiet --engine radiosity --subdivide 2 -num_shadow_samples 1 -interpolate",
+        scene("cornell_box_diffuse_sphere.obj")
+    );
+    let e = fails(&dir, &words(&format!("{base} --load-radiosity cut.bin")));
+    assert!(e.contains("truncated"), "{e}");
+
+    std::fs::remove_file(dir.join("pre.bin")).ok();
+    let out = ok(
+        &dir,
+        &words(&format!(
+            "{base} --pre-pass-only --save-radiosity pre.bin -o none.png"
+        )),
+    );
+    assert!(dir.join("pre.bin").exists() && !dir.join("none.png").exists());
+    assert!(out.stdout.is_empty());
+    let e = fails(&dir, &words(&format!("{base} --pre-pass-only")));
+    assert!(e.contains("give --save-radiosity FILE"), "{e}");
+    let e = fails(
+        &dir,
+        &words(&format!(
+            "-input {} --engine path --pre-pass-only",
+            scene("cornell_box.obj")
+        )),
+    );
+    assert!(e.contains("the path engine has no pre-pass"), "{e}");
+}
+
+/// `--pixel-samples` is refused, before any work, where the image is not a mean of samples;
+/// bad windows and ranges name the flag.
+#[test]
+fn split_flags_are_checked_before_the_work() {
+    let dir = common::temp_dir("farm-flags");
+    let cornell = scene("cornell_box.obj");
+    for (line, expected) in [
+        (
+            "--engine raycast --pixel-samples 0 1",
+            "--pixel-samples: the raycast engine",
+        ),
+        (
+            "--engine radiosity --wireframe --pixel-samples 0 1",
+            "--pixel-samples: the radiosity engine",
+        ),
+        (
+            "-num_antialias_samples 4 --pixel-samples 2 5",
+            "expected A < B ≤ -num_antialias_samples (4)",
+        ),
+        ("--crop-window 0.5 0.4 0 1", "expected fractions X0 < X1"),
+        ("--crop-window 0 1 0 1.5", "expected fractions X0 < X1"),
+        (
+            "-size 4 4 --crop-window 0.3 0.4 0 1",
+            "holds no pixel of the 4×4 image",
+        ),
+    ] {
+        let mut args = vec!["-input".to_string(), cornell.clone()];
+        args.extend(words(line));
+        let e = fails(&dir, &args);
+        assert!(e.contains(expected), "{line}: {e}");
+    }
+}
+
+/// `render farm` without `--submit` writes the scripts: a pre-pass where the engine has one,
+/// the array with one line per part, the merge after it; its refusals name the flag.
+#[test]
+fn farm_writes_its_scripts() {
+    let dir = common::temp_dir("farm-scripts");
+    let cornell = scene("cornell_box_diffuse_sphere.obj");
+    let farm_dir: PathBuf = dir.join("f");
+    ok(
+        &dir,
+        &words(&format!(
+            "farm {cornell} -num_photons_to_shoot 1000 --tiles 6 -o out.png --dir {}",
+            farm_dir.display()
+        )),
+    );
+    let parts = std::fs::read_to_string(farm_dir.join("parts.sbatch")).expect("parts");
+    let pre = std::fs::read_to_string(farm_dir.join("prepass.sbatch")).expect("prepass");
+    let submit = std::fs::read_to_string(farm_dir.join("submit.sh")).expect("submit");
+    assert!(parts.contains("#SBATCH --array=0-5"), "{parts}");
+    assert_eq!(parts.matches("--crop-window").count(), 6, "{parts}");
+    assert!(parts.contains("--load-photons"), "{parts}");
+    assert!(pre.contains("--pre-pass-only --save-photons"), "{pre}");
+    assert!(
+        submit.contains("--dependency=afterok:$prepass")
+            && submit.contains("--dependency=afterok:$parts"),
+        "{submit}"
+    );
+    for (line, expected) in [
+        (
+            "--tiles 4 --pixel-samples 0 1",
+            "--pixel-samples: not with render farm",
+        ),
+        (
+            "--tiles 4 --sample-batches 2",
+            "give one of --tiles N and --sample-batches N",
+        ),
+        (
+            "--sample-batches 3",
+            "expected 1 to -num_antialias_samples (1) batches",
+        ),
+        ("--engine raycast --sample-batches 1", "use --tiles"),
+        ("--tiles 4 --wait", "--wait: only with --submit"),
+    ] {
+        let mut args = vec!["farm".to_string(), cornell.clone()];
+        args.extend(words(line));
+        args.extend(words(&format!("--dir {}", dir.join("g").display())));
+        let e = fails(&dir, &args);
+        assert!(e.contains(expected), "{line}: {e}");
+    }
+}
