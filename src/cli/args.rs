@@ -45,6 +45,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub photon: PhotonArgs,
     #[command(flatten)]
+    pub sppm: SppmArgs,
+    #[command(flatten)]
     pub part: PartArgs,
     /// The argument ids given on the command line (filled from clap's value sources after
     /// parsing), by group.
@@ -96,6 +98,12 @@ pub struct CommonArgs {
     /// Print counters (rays cast, build and render time) after rendering.
     #[arg(long)]
     pub stats: bool,
+    /// Render for about this many seconds, from the start (scene loading included): engines
+    /// that can refine add pixel samples (passes of -num_antialias_samples), SPPM passes or
+    /// radiosity shots until the time is spent, then write the image and say what they
+    /// reached.
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub time_limit: Option<f64>,
     /// Make quads opaque from both sides.
     #[arg(long)]
     pub two_sided: bool,
@@ -106,6 +114,19 @@ pub struct CommonArgs {
     /// cracks along quad diagonals and shared edges for a little speed.
     #[arg(long, default_value_t = AccelOptions::default().embree_robust, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
     pub embree_robust: bool,
+}
+
+/// The SPPM engine's flags (its passes are -num_antialias_samples).
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Stochastic progressive photon mapping (--engine sppm)")]
+pub struct SppmArgs {
+    /// Photons traced a pass [default: one per pixel of the image].
+    #[arg(long, value_name = "N")]
+    pub sppm_photons: Option<u64>,
+    /// The initial gathering radius, as a fraction of the scene's diagonal (each pixel's
+    /// radius then shrinks as photons arrive).
+    #[arg(long, value_name = "F", default_value_t = photon_defaults().sppm_radius, allow_negative_numbers = true)]
+    pub sppm_radius: f32,
 }
 
 /// Splitting a render over machines: a part of the image or of its samples, and the
@@ -447,7 +468,8 @@ pub struct PhotonArgs {
     /// Final gathering for indirect light.
     #[arg(long)]
     pub gather_indirect: bool,
-    /// Bounces a photon may make.
+    /// Bounces a photon may make: a safety cap (Russian roulette ends photon paths long
+    /// before it).
     #[arg(long, default_value_t = photon_defaults().max_photon_depth)]
     pub max_photon_depth: u32,
     /// Largest radius of a photon density estimate, as a fraction of the scene's diagonal.
@@ -518,14 +540,18 @@ impl PhotonArgs {
             save: self.save_photons.clone(),
             load: self.load_photons.clone(),
             display: visualize.and_then(Visualize::photon).unwrap_or_default(),
+            // Set from the SPPM group by `RenderArgs::settings`.
+            sppm_photons: photon_defaults().sppm_photons,
+            sppm_radius: photon_defaults().sppm_radius,
         }
     }
 }
 
 /// The clap group of each engine's own flags, and the engine it implies.
-pub const ENGINE_GROUPS: [(&str, EngineKind); 2] = [
+pub const ENGINE_GROUPS: [(&str, EngineKind); 3] = [
     ("PhotonArgs", EngineKind::Photon),
     ("RadiosityArgs", EngineKind::Radiosity),
+    ("SppmArgs", EngineKind::Sppm),
 ];
 
 impl RenderArgs {
@@ -545,7 +571,11 @@ impl RenderArgs {
                 .map_or(rs().ambient_light, |a| vec3(a[0], a[1], a[2])),
             radiosity: self.radiosity.settings(visualize),
             indirect: self.ray_trace.indirect,
-            photon: self.photon.settings(visualize),
+            photon: PhotonSettings {
+                sppm_photons: self.sppm.sppm_photons,
+                sppm_radius: self.sppm.sppm_radius,
+                ..self.photon.settings(visualize)
+            },
             light_sampling: self.ray_trace.light_sampling,
             aperture: self.camera.aperture,
             focus_distance: self.camera.focus_distance,
@@ -553,6 +583,8 @@ impl RenderArgs {
             quiet: self.common.quiet,
             window: self.part.window(self.common.size[0], self.common.size[1]),
             pixel_samples: self.part.pixel_samples.as_ref().map(|s| (s[0], s[1])),
+            // Set by the render command when it starts the clock (`--time-limit`).
+            deadline: None,
         }
     }
 
@@ -679,6 +711,17 @@ impl RenderArgs {
             check_count("size", *side, 1..=MAX_IMAGE_SIDE)?;
         }
         check_count("threads", c.threads, 0..=MAX_THREADS)?;
+        if let Some(t) = c.time_limit {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(format!(
+                    "--time-limit {t}: expected a finite number of seconds > 0"
+                ));
+            }
+            let part = self.part.crop_window.is_some() || self.part.pixel_samples.is_some();
+            if part || self.part.pre_pass_only {
+                return Err("--time-limit: not with --crop-window, --pixel-samples or --pre-pass-only (the parts of a split render must take known samples)".into());
+            }
+        }
         check_count(
             "num_antialias_samples",
             self.camera.num_antialias_samples,
@@ -730,6 +773,10 @@ impl RenderArgs {
             1..=u32::MAX,
         )?;
         check_count("final_gather_rays", p.final_gather_rays, 1..=u32::MAX)?;
+        check_number("sppm_radius", self.sppm.sppm_radius, 0.0, true)?;
+        if let Some(n) = self.sppm.sppm_photons {
+            check_count("sppm_photons", n, 1..=u64::MAX)?;
+        }
         self.part
             .validate(c.size[0], c.size[1], self.camera.num_antialias_samples)?;
         if let (Some(xy), &[w, h]) = (&self.ray_trace.ray_tree, &c.size[..]) {

@@ -21,6 +21,10 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     crate::parallel::worker_start();
 
     let load_start = Instant::now();
+    settings.deadline = args
+        .common
+        .time_limit
+        .map(|t| load_start + std::time::Duration::from_secs_f64(t));
     let mut scene = Scene::load(input).map_err(|e| e.to_string())?;
     scene.two_sided_quads = args.common.two_sided;
     for w in &scene.warnings {
@@ -236,6 +240,21 @@ fn report(rendered: &Rendered, settings: &RenderSettings) {
     if !settings.quiet {
         for line in &rendered.summary {
             eprintln!("{line}");
+        }
+        let reached = rendered.stats.samples_reached.load(Relaxed);
+        if let (Some(deadline), true) = (settings.deadline, reached > 0) {
+            let over = std::time::Instant::now().saturating_duration_since(deadline);
+            eprintln!(
+                "time limit: {reached} samples per pixel{}",
+                if over.as_secs_f64() >= 0.005 {
+                    format!(
+                        " (the last pass ended {:.2} s past the limit)",
+                        over.as_secs_f64()
+                    )
+                } else {
+                    String::new()
+                }
+            );
         }
     }
     let non_finite = rendered.stats.non_finite_samples.load(Relaxed);

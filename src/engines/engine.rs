@@ -25,6 +25,9 @@ pub enum EngineKind {
     Photon,
     /// The unbiased reference path tracer.
     Path,
+    /// Stochastic progressive photon mapping: photon passes with shrinking radii, which
+    /// converges to the reference.
+    Sppm,
 }
 
 impl EngineKind {
@@ -35,6 +38,7 @@ impl EngineKind {
             EngineKind::Radiosity => "radiosity",
             EngineKind::Photon => "photon",
             EngineKind::Path => "path",
+            EngineKind::Sppm => "sppm",
         }
     }
 }
@@ -238,6 +242,9 @@ pub struct RenderSettings {
     pub window: Option<Window>,
     /// Only samples `first ≤ s < end` of each pixel (`--pixel-samples`, default None: all).
     pub pixel_samples: Option<(u32, u32)>,
+    /// Render until then (`--time-limit`, default None): engines that can refine go on
+    /// refining (samples, passes, shots) until the time is spent.
+    pub deadline: Option<std::time::Instant>,
 }
 
 impl Default for RenderSettings {
@@ -259,6 +266,7 @@ impl Default for RenderSettings {
             quiet: false,
             window: None,
             pixel_samples: None,
+            deadline: None,
         }
     }
 }
@@ -276,6 +284,7 @@ impl RenderSettings {
             quiet: self.quiet,
             window: self.window,
             samples: self.pixel_samples,
+            deadline: self.deadline,
         }
     }
 
@@ -290,6 +299,7 @@ impl RenderSettings {
         s.quiet = false;
         s.window = None;
         s.pixel_samples = None;
+        s.deadline = None;
         s.photon.save = None;
         s.photon.load = None;
         s.radiosity.save = None;

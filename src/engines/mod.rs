@@ -1,6 +1,6 @@
 //! The lighting engines. Each takes the scene, an `Accel` and the settings and fills a `Film`:
-//! `raycast` (the course's MATERIALS view), `raytrace`, `radiosity`, `photon` and the
-//! reference `path` tracer, each implementing `Engine` (`engine.rs`). The pure engines know
+//! `raycast` (the course's MATERIALS view), `raytrace`, `radiosity`, `photon` (with `sppm`,
+//! stochastic progressive photon mapping) and the reference `path` tracer, each implementing `Engine` (`engine.rs`). The pure engines know
 //! no other engine; `compose` wires the two that combine them (the ray tracer with its
 //! `--indirect` light, the photon engine). `engine()` is the one registration point.
 
@@ -26,6 +26,7 @@ pub fn engine(kind: EngineKind) -> &'static dyn Engine {
         EngineKind::Radiosity => &radiosity::RadiosityEngine,
         EngineKind::Photon => &compose::PhotonEngine,
         EngineKind::Path => &path::PathEngine,
+        EngineKind::Sppm => &photon::sppm::SppmEngine,
     }
 }
 

@@ -221,6 +221,50 @@ impl Light {
     }
 }
 
+/// A point on a light for next-event estimation from a shading point: where the shadow ray
+/// goes, and what the light sends through it per unit of emitted radiance, as irradiance / π
+/// (so that reflected radiance is albedo × Le × `weight`, unoccluded).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectSample {
+    pub point: Vec3,
+    pub weight: f32,
+}
+
+impl Light {
+    /// One point of this light for the shading point `x` with unit normal `n` (on its lit
+    /// side), from (u, v) in [0,1)²: uniform in the solid angle a rectangle subtends (each
+    /// point weighs cosθ·Ω/π: bounded however near the light `x` is), else uniform by area
+    /// (cosθ·cosθ'·A/(π·r²)). None where the point sends `x` nothing (behind either surface).
+    pub fn sample_towards(&self, x: Vec3, n: Vec3, u: f32, v: f32) -> Option<DirectSample> {
+        if let LightShape::Parallelogram(quad) = self.shape {
+            if let Some(rect) = quad.spherical_rectangle(x) {
+                let point = rect.sample(u, v);
+                let w = point - x;
+                let cos = n.dot(w) / w.length();
+                return (cos > 0.0).then(|| DirectSample {
+                    point,
+                    weight: (rect.solid_angle() / std::f64::consts::PI) as f32 * cos,
+                });
+            }
+        }
+        let p = self.sample(u, v);
+        let w = p.point - x;
+        let r2 = w.length_squared();
+        let r = r2.sqrt();
+        let cos = n.dot(w) / r;
+        let cos_light = -p.normal.dot(w) / r;
+        let cos_light = if p.one_sided {
+            cos_light
+        } else {
+            cos_light.abs()
+        };
+        (r2 > 0.0 && cos > 0.0 && cos_light > 0.0).then(|| DirectSample {
+            point: p.point,
+            weight: cos * cos_light * self.area / (std::f32::consts::PI * r2),
+        })
+    }
+}
+
 fn prim(kind: PrimKind, index: usize) -> PrimRef {
     PrimRef {
         kind,

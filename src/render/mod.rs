@@ -8,6 +8,7 @@ pub mod lights;
 pub mod solid_angle;
 
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::time::Instant;
 
 use rayon::prelude::*;
 
@@ -45,6 +46,9 @@ pub struct ImageSettings {
     /// Only samples `first ≤ s < end` of each pixel's `num_antialias_samples`
     /// (`--pixel-samples`; None: all of them).
     pub samples: Option<(u32, u32)>,
+    /// Render until then (`--time-limit`): passes of `num_antialias_samples` samples per
+    /// pixel, as many as fit (None: exactly `num_antialias_samples`).
+    pub deadline: Option<Instant>,
 }
 
 impl ImageSettings {
@@ -81,6 +85,8 @@ pub struct RenderStats {
     pub photon_rays: AtomicU64,
     /// Samples that came out NaN or infinite: excluded from the image, and counted here.
     pub non_finite_samples: AtomicU64,
+    /// Under `--time-limit`: the samples per pixel (or passes) reached.
+    pub samples_reached: AtomicU64,
 }
 
 impl RenderStats {
@@ -112,6 +118,10 @@ pub struct CameraSampler {
     pixel_strata: Strata,
     /// Per pixel, 1 for one ray through the centre.
     spp: u32,
+    /// Samples without a known count (`--time-limit`): sample k of a pixel is point k of the
+    /// R2 sequence (Roberts 2018), shifted by a random offset per pixel, so that any number
+    /// of them is spread evenly over the pixel.
+    open_ended: bool,
     aperture: f32,
     focus_distance: f32,
     seed: u64,
@@ -127,6 +137,7 @@ impl CameraSampler {
             view: camera.view(),
             pixel_strata: Strata::new(Pattern::Jittered, spp),
             spp,
+            open_ended: settings.deadline.is_some(),
             aperture: settings.aperture,
             focus_distance: settings
                 .focus_distance
@@ -142,8 +153,19 @@ impl CameraSampler {
     #[inline]
     pub fn sample(&self, (i, j): (u32, u32), k: u32) -> (Ray, Rng) {
         let (w, h) = (self.width, self.height);
-        let mut rng = Rng::new(self.seed, j as u64 * w as u64 + i as u64, k as u64);
-        let (dx, dy) = if self.spp == 1 {
+        let pixel = j as u64 * w as u64 + i as u64;
+        let mut rng = Rng::new(self.seed, pixel, k as u64);
+        let (dx, dy) = if self.open_ended {
+            // The R2 sequence's steps are the inverse powers of the plastic number.
+            const STEP: (f64, f64) = (0.754_877_666_246_692_8, 0.569_840_290_998_053_3);
+            let mut shift = Rng::new(self.seed ^ 0x0b2e_5eed, pixel, 0);
+            let (sx, sy) = (shift.next_f32() as f64, shift.next_f32() as f64);
+            let k = k as f64;
+            (
+                (sx + k * STEP.0).fract() as f32,
+                (sy + k * STEP.1).fract() as f32,
+            )
+        } else if self.spp == 1 {
             (0.5, 0.5)
         } else {
             self.pixel_strata.sample(k, &mut rng)
@@ -160,11 +182,17 @@ impl CameraSampler {
 /// Camera samples traced as one batch (a row is cut into chunks of about this many).
 pub const CHUNK_SAMPLES: usize = 4096;
 
+/// A pixel's samples summed (in f64) and counted.
+type PixelSum = ([f64; 3], u32);
+
 /// The pixel loop every sampling engine shares: rows in parallel, the camera rays of a row
 /// traced as one batch, `-num_antialias_samples` per pixel averaged with a box filter, and
 /// samples that come out NaN or infinite left out and counted. `radiance` gives the radiance
 /// along a camera ray from its closest hit. Only the pixels of the settings' window and the
 /// samples of their range are taken; a part of a split render keeps its sums in the film.
+/// Under `--time-limit` the samples come in passes of `-num_antialias_samples` per pixel
+/// until the deadline (at least one pass; a pass is started only if the last one's time
+/// still fits).
 pub fn render_pixels(
     scene: &Scene,
     accel: &dyn Accel,
@@ -172,19 +200,118 @@ pub fn render_pixels(
     label: &str,
     radiance: impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, &mut Counts) -> Color + Sync,
 ) -> (Film, RenderStats) {
-    let (w, h) = (settings.width, settings.height);
     let camera = CameraSampler::new(scene, settings);
     let window = settings.window();
-    let samples = settings.sample_range();
-    let spp = samples.len();
     let stats = RenderStats::default();
-    let mut film = Film::new(w, h);
-    let bar = crate::progress::bar(window.height() as u64, label, settings.quiet);
+    let mut film = Film::new(settings.width, settings.height);
+    let Some(deadline) = settings.deadline else {
+        let bar = crate::progress::bar(window.height() as u64, label, settings.quiet);
+        let rows = take_samples(
+            scene,
+            accel,
+            &camera,
+            (window, settings.sample_range()),
+            &mut film,
+            &stats,
+            &bar,
+            settings.is_part(),
+            &radiance,
+        );
+        bar.finish_and_clear();
+        if settings.is_part() {
+            film.samples = Some(sample_sums(window, rows));
+        }
+        return (film, stats);
+    };
+    let per_pass = settings.num_antialias_samples.max(1);
+    let start = Instant::now();
+    let budget = deadline.saturating_duration_since(start).as_secs_f64();
+    let bar = crate::progress::bar(1000, label, settings.quiet);
+    let mut total = vec![([0.0f64; 3], 0u32); window.pixels()];
+    let mut taken = 0u32;
+    loop {
+        let pass_start = Instant::now();
+        let rows = take_samples(
+            scene,
+            accel,
+            &camera,
+            (window, taken..taken + per_pass),
+            &mut film,
+            &stats,
+            &indicatif::ProgressBar::hidden(),
+            true,
+            &radiance,
+        );
+        for (t, (sum, count)) in total.iter_mut().zip(rows.into_iter().flatten()) {
+            for (a, b) in t.0.iter_mut().zip(sum) {
+                *a += b;
+            }
+            t.1 += count;
+        }
+        taken += per_pass;
+        let now = Instant::now();
+        bar.set_position(
+            (1000.0 * (now - start).as_secs_f64() / budget.max(1e-9)).min(1000.0) as u64,
+        );
+        if crate::interrupt::requested() || now + (now - pass_start) > deadline {
+            break;
+        }
+    }
+    bar.finish_and_clear();
+    stats.samples_reached.store(taken as u64, Relaxed);
+    for (k, (sum, count)) in total.iter().enumerate() {
+        let (x, row) = (
+            window.x0 as usize + k % window.width() as usize,
+            window.y0 as usize + k / window.width() as usize,
+        );
+        let n = (*count).max(1) as f64;
+        film.pixels[row * settings.width as usize + x] = crate::geometry::vec3(
+            (sum[0] / n) as f32,
+            (sum[1] / n) as f32,
+            (sum[2] / n) as f32,
+        );
+    }
+    (film, stats)
+}
+
+/// The sums of a window's pixels, row by row (a row Ctrl-C cut short took no samples in its
+/// remaining pixels).
+fn sample_sums(window: Window, rows: Vec<Vec<PixelSum>>) -> SampleSums {
+    let mut sums = SampleSums {
+        window,
+        sums: Vec::with_capacity(window.pixels()),
+        counts: Vec::with_capacity(window.pixels()),
+    };
+    for mut row in rows {
+        row.resize(window.width() as usize, ([0.0; 3], 0));
+        for (sum, count) in row {
+            sums.sums.push(sum);
+            sums.counts.push(count);
+        }
+    }
+    sums
+}
+
+/// Takes samples `samples` of every pixel of `window`, rows in parallel, and writes each
+/// pixel's mean into `film`; with `keep`, returns each pixel's sum and count too, row by row.
+#[allow(clippy::too_many_arguments)]
+fn take_samples(
+    scene: &Scene,
+    accel: &dyn Accel,
+    camera: &CameraSampler,
+    (window, samples): (Window, std::ops::Range<u32>),
+    film: &mut Film,
+    stats: &RenderStats,
+    bar: &indicatif::ProgressBar,
+    keep: bool,
+    radiance: &(impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, &mut Counts) -> Color + Sync),
+) -> Vec<Vec<PixelSum>> {
+    let (w, h) = (film.width, film.height);
+    let spp = samples.len();
     // Ctrl-C during what came before (a radiosity solve, photon tracing) stopped that, and
     // the pixels show what it made; Ctrl-C during the pixels stops them.
     let interrupted_before = crate::interrupt::requested();
-    let rows: Vec<Vec<([f64; 3], u32)>> = film
-        .pixels
+    film.pixels
         .par_chunks_mut(w as usize)
         .enumerate()
         .skip(window.y0 as usize)
@@ -192,7 +319,7 @@ pub fn render_pixels(
         .map(|(row, out)| {
             let j = h - 1 - row as u32;
             let mut counts = Counts::default();
-            let mut row_sums = Vec::with_capacity(window.width() as usize);
+            let mut row_sums = Vec::with_capacity(if keep { window.width() as usize } else { 0 });
             // A row in chunks of about CHUNK_SAMPLES camera samples: one batch of camera rays
             // each, memory bounded whatever the samples per pixel, and Ctrl-C heard between
             // chunks (the pixels not yet rendered stay black, with no samples).
@@ -239,7 +366,7 @@ pub fn render_pixels(
                         (sum[1] / n) as f32,
                         (sum[2] / n) as f32,
                     );
-                    if settings.is_part() {
+                    if keep {
                         row_sums.push((sum, good));
                     }
                 }
@@ -253,23 +380,5 @@ pub fn render_pixels(
             bar.inc(1);
             row_sums
         })
-        .collect();
-    bar.finish_and_clear();
-    if settings.is_part() {
-        let mut sums = SampleSums {
-            window,
-            sums: Vec::with_capacity(window.pixels()),
-            counts: Vec::with_capacity(window.pixels()),
-        };
-        for mut row in rows {
-            // A row Ctrl-C cut short: its remaining pixels took no samples.
-            row.resize(window.width() as usize, ([0.0; 3], 0));
-            for (sum, count) in row {
-                sums.sums.push(sum);
-                sums.counts.push(count);
-            }
-        }
-        film.samples = Some(sums);
-    }
-    (film, stats)
+        .collect()
 }

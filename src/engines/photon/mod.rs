@@ -8,6 +8,7 @@ pub mod file;
 pub mod gather;
 pub mod map;
 pub mod settings;
+pub mod sppm;
 pub mod trace;
 
 use std::sync::atomic::Ordering::Relaxed;

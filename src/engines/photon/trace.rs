@@ -11,12 +11,13 @@
 
 use rayon::prelude::*;
 
+use super::settings::MAX_SURVIVAL;
 use crate::accel::{closest_surface, Accel};
 use crate::engines::scattering::{glossy_reflection, sample_cone, sample_lobe, Dielectric};
 use crate::geometry::{offset_ray_origin, point_error, Ray, Vec3};
 use crate::render::lights::Light;
 use crate::sampling::Rng;
-use crate::scene::{Color, Scene};
+use crate::scene::{Color, Scene, SurfaceHit};
 
 /// How a stored photon got where it is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,6 +73,101 @@ pub struct Traced {
     pub truncated: u64,
 }
 
+/// The emitters as photon sources: each chosen in proportion to its flux.
+pub struct Emitters {
+    lights: Vec<Light>,
+    /// Flux of each light: π·Le·A for a one-sided Lambertian emitter, twice that for two
+    /// sides.
+    flux: Vec<Color>,
+    /// The probability of choosing each light, and their running sum.
+    probability: Vec<f32>,
+    cdf: Vec<f64>,
+}
+
+impl Emitters {
+    pub fn new(scene: &Scene) -> Emitters {
+        let lights = Light::collect(scene);
+        let flux: Vec<Color> = lights
+            .iter()
+            .map(|l| {
+                let sides = if l.sample(0.5, 0.5).one_sided {
+                    1.0
+                } else {
+                    2.0
+                };
+                l.emitted * (std::f32::consts::PI * l.area * sides)
+            })
+            .collect();
+        let weights: Vec<f64> = flux.iter().map(|f| mean(*f) as f64).collect();
+        let total: f64 = weights.iter().sum();
+        let probability = weights
+            .iter()
+            .map(|w| if total > 0.0 { (w / total) as f32 } else { 0.0 })
+            .collect();
+        let cdf = weights
+            .iter()
+            .scan(0.0, |acc, w| {
+                *acc += w / total;
+                Some(*acc)
+            })
+            .collect();
+        Emitters {
+            lights,
+            flux,
+            probability,
+            cdf,
+        }
+    }
+
+    /// Whether anything emits.
+    pub fn any(&self) -> bool {
+        self.flux.iter().any(|f| mean(*f) > 0.0)
+    }
+
+    /// Photon `k` of `count` with the generator it draws from, aimed as `aim` says, followed
+    /// until absorbed (or `max_depth` bounces); `visit` hears every diffuse surface it
+    /// reaches. Returns the rays it cast and whether the depth limit stopped it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace(
+        &self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        count: u64,
+        max_depth: u32,
+        aim: Aim,
+        rng: &mut Rng,
+        visit: &mut dyn FnMut(&Hit),
+    ) -> (u64, bool) {
+        let pick = rng.next_f32() as f64;
+        let l = self
+            .cdf
+            .iter()
+            .position(|&c| pick < c)
+            .unwrap_or(self.lights.len() - 1);
+        let power = self.flux[l] * (self.probability[l] * count as f32).recip();
+        trace_one(
+            scene,
+            accel,
+            &self.lights[l],
+            power,
+            max_depth,
+            aim,
+            rng,
+            visit,
+        )
+    }
+}
+
+/// A photon at a diffuse surface, as photon tracing reports it.
+pub struct Hit<'a> {
+    pub surface: &'a SurfaceHit,
+    /// The normal on the side the photon arrived from.
+    pub normal: Vec3,
+    pub direction: Vec3,
+    pub power: Color,
+    pub kind: PathKind,
+}
+
 /// Traces `count` photons aimed as `aim` says. Photon k draws from hash(seed, k): the result
 /// does not depend on threads.
 pub fn trace_photons(
@@ -83,35 +179,14 @@ pub fn trace_photons(
     seed: u64,
     on_block: impl Fn() + Sync,
 ) -> Traced {
-    let lights = Light::collect(scene);
-    // Flux of each light: π·Le·A for a one-sided Lambertian emitter, twice that for two sides.
-    let flux: Vec<Color> = lights
-        .iter()
-        .map(|l| {
-            let sides = if l.sample(0.5, 0.5).one_sided {
-                1.0
-            } else {
-                2.0
-            };
-            l.emitted * (std::f32::consts::PI * l.area * sides)
-        })
-        .collect();
-    let weights: Vec<f64> = flux.iter().map(|f| mean(*f) as f64).collect();
-    let total: f64 = weights.iter().sum();
-    if count == 0 || total <= 0.0 {
+    let emitters = Emitters::new(scene);
+    if count == 0 || !emitters.any() {
         return Traced {
             photons: Vec::new(),
             rays: 0,
             truncated: 0,
         };
     }
-    let cdf: Vec<f64> = weights
-        .iter()
-        .scan(0.0, |acc, w| {
-            *acc += w / total;
-            Some(*acc)
-        })
-        .collect();
     let blocks = count.div_ceil(BLOCK);
     let results: Vec<Traced> = (0..blocks)
         .into_par_iter()
@@ -130,22 +205,22 @@ pub fn trace_photons(
                     Aim::Caustics { .. } => 0xca05,
                 };
                 let mut rng = Rng::new(seed, k, stream);
-                let pick = rng.next_f32() as f64;
-                let l = cdf
-                    .iter()
-                    .position(|&c| pick < c)
-                    .unwrap_or(lights.len() - 1);
-                let probability = (weights[l] / total) as f32;
-                let power = flux[l] * (probability * count as f32).recip();
-                let (r, cut) = trace_one(
+                let (r, cut) = emitters.trace(
                     scene,
                     accel,
-                    &lights[l],
-                    power,
+                    count,
                     max_depth,
                     aim,
                     &mut rng,
-                    &mut stored,
+                    &mut |hit: &Hit| {
+                        stored.push(Photon {
+                            position: hit.surface.point,
+                            direction: hit.direction,
+                            power: hit.power,
+                            normal: hit.normal,
+                            kind: hit.kind,
+                        })
+                    },
                 );
                 rays += r;
                 truncated += cut as u64;
@@ -176,7 +251,7 @@ fn trace_one(
     max_depth: u32,
     aim: Aim,
     rng: &mut Rng,
-    stored: &mut Vec<Photon>,
+    visit: &mut dyn FnMut(&Hit),
 ) -> (u64, bool) {
     let p = light.sample(rng.next_f32(), rng.next_f32());
     let mut normal = p.normal;
@@ -233,18 +308,28 @@ fn trace_one(
             } else {
                 PathKind::Caustic
             };
-            stored.push(Photon {
-                position: s.point,
+            visit(&Hit {
+                surface: &s,
+                normal: n,
                 direction: ray.direction,
                 power,
-                normal: n,
                 kind,
             });
         }
         if depth == max_depth {
             return (rays, true);
         }
-        let (pd, pr, pt) = (mean(albedo), mean(m.reflective), mean(m.transmitted));
+        let (mut pd, mut pr, mut pt) = (
+            albedo.max_element(),
+            m.reflective.max_element(),
+            m.transmitted.max_element(),
+        );
+        // Roulette keeps the photon with probability pd + pr + pt, at most MAX_SURVIVAL.
+        let survive = pd + pr + pt;
+        if survive > MAX_SURVIVAL {
+            let cut = MAX_SURVIVAL / survive;
+            (pd, pr, pt) = (pd * cut, pr * cut, pt * cut);
+        }
         let xi = rng.next_f32();
         let dir = if xi < pd {
             if caustics_only {

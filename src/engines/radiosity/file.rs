@@ -57,6 +57,7 @@ fn stop_code(stop: Stop) -> u8 {
         Stop::Cap => 2,
         Stop::NoLight => 3,
         Stop::Interrupted => 4,
+        Stop::TimeLimit => 5,
     }
 }
 
@@ -204,6 +205,7 @@ impl Solution {
                 Stop::Cap,
                 Stop::NoLight,
                 Stop::Interrupted,
+                Stop::TimeLimit,
             ]
             .into_iter()
             .find(|&s| stop_code(s) == code)

@@ -1111,6 +1111,10 @@ impl RadiositySolver for Hierarchical {
                     stop = Stop::Interrupted;
                     break;
                 }
+                if limits.out_of_time() {
+                    stop = Stop::TimeLimit;
+                    break;
+                }
                 // `--radiosity-iterations K` stops after K sweeps, refinement rounds included.
                 match limits.iterations {
                     Some(k) if sweeps >= k => stop = Stop::Iterations,

@@ -160,6 +160,12 @@ impl Solution {
                 iterations: r.iterations,
                 cap: r.max_shots_per_patch.saturating_mul(patches.len() as u64),
                 log: r.log_convergence,
+                // The solve takes four fifths of what is left of `--time-limit`; the pixels
+                // the rest.
+                deadline: settings.deadline.map(|d| {
+                    let now = std::time::Instant::now();
+                    now + d.saturating_duration_since(now).mul_f64(0.8)
+                }),
             };
             let solved = solver(r, kind).solve(&sampler, &limits, &on_progress);
             let (mut state, stop) = (solved.light, solved.stop);
@@ -713,6 +719,10 @@ impl Solution {
             Stop::Iterations => format!("stopped after {} {steps} as asked", state.iterations),
             Stop::NoLight => "nothing emits".to_string(),
             Stop::Interrupted => format!("interrupted after {} {steps}", state.iterations),
+            Stop::TimeLimit => format!(
+                "stopped by the time limit after {} {steps}",
+                state.iterations
+            ),
             Stop::Cap => String::new(),
         };
         let mut mesh_notes = if self.adaptive_rounds > 0 {

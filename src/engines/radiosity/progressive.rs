@@ -104,6 +104,9 @@ impl Progressive {
             if crate::interrupt::requested() {
                 break Stop::Interrupted;
             }
+            if limits.out_of_time() {
+                break Stop::TimeLimit;
+            }
             match limits.iterations {
                 Some(k) if s.iterations >= k => break Stop::Iterations,
                 None if s.residual <= limits.tolerance => break Stop::Converged,

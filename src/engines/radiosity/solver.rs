@@ -222,6 +222,8 @@ pub enum Stop {
     NoLight,
     /// Ctrl-C stopped the solve: the solution is incomplete.
     Interrupted,
+    /// `--time-limit` stopped the solve (the ambient term shows the light not yet shot).
+    TimeLimit,
 }
 
 /// One line of `--log-convergence`: a step of the solver (a shot, a sweep), with the
@@ -346,6 +348,16 @@ pub struct SolveLimits {
     pub cap: u64,
     /// Keep a record of every step.
     pub log: bool,
+    /// Stop stepping then (`--time-limit`'s share for the solve).
+    pub deadline: Option<std::time::Instant>,
+}
+
+impl SolveLimits {
+    /// Whether the time for the solve is spent.
+    pub fn out_of_time(&self) -> bool {
+        self.deadline
+            .is_some_and(|d| std::time::Instant::now() >= d)
+    }
 }
 
 /// What a solve returns: the light, why it stopped, and a line of the solver's own counters.
