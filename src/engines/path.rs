@@ -1,8 +1,9 @@
 //! The unbiased reference path tracer, the yardstick every error figure is measured against.
 //!
 //! At each diffuse vertex: next-event estimation (one light chosen in proportion to its power,
-//! one point on it uniform by area) combined with cosine-weighted sampling of the Lambertian
-//! BRDF by multiple importance sampling (power heuristic). Mirrors, glossy lobes and glass are
+//! one point on it uniform in the solid angle it subtends for rectangles and spheres, by area
+//! for the rest) combined with cosine-weighted sampling of the Lambertian BRDF by multiple
+//! importance sampling (power heuristic). Mirrors, glossy lobes and glass are
 //! sampled as in the ray tracer, one branch at a time (glass chooses reflection with the
 //! Fresnel probability). Paths end by Russian roulette on their throughput from the fourth
 //! vertex on, which keeps the estimate unbiased. `-num_antialias_samples` is the number of
@@ -86,13 +87,8 @@ impl PathTracer<'_> {
     /// Solid-angle density with which next-event estimation picks the direction from `from`
     /// to `hit` on light `k`.
     fn light_pdf(&self, k: usize, from: Vec3, hit: &SurfaceHit) -> f32 {
-        let w = hit.point - from;
-        let r2 = w.length_squared();
-        let cos_light = (hit.geometric_normal.dot(w) / r2.sqrt()).abs();
-        if cos_light <= 0.0 {
-            return 0.0;
-        }
-        self.selection_probability(k) * r2 / (cos_light * self.lights[k].area)
+        self.selection_probability(k)
+            * self.lights[k].pdf_towards(from, hit.point, hit.geometric_normal)
     }
 
     /// Next-event estimation at a diffuse point: radiance reflected per unit albedo from one
@@ -111,29 +107,23 @@ impl PathTracer<'_> {
         if light.prim == s.prim {
             return Vec3::ZERO;
         }
-        let p = light.sample(rng.next_f32(), rng.next_f32());
-        let w = p.point - s.point;
-        let r2 = w.length_squared();
-        let r = r2.sqrt();
-        let cos_surface = n.dot(w) / r;
-        let cos_light = -p.normal.dot(w) / r;
-        let cos_light = if p.one_sided {
-            cos_light
-        } else {
-            cos_light.abs()
+        // By solid angle for rectangles and spheres that subtend enough, else by area.
+        let Some(d) = light.sample_towards(s.point, n, rng.next_f32(), rng.next_f32()) else {
+            return Vec3::ZERO;
         };
-        if r2.is_nan() || r2 <= 0.0 || cos_surface <= 0.0 || cos_light <= 0.0 {
+        if !(d.weight.is_finite() && d.pdf > 0.0) {
             return Vec3::ZERO;
         }
-        let light_pdf = self.selection_probability(k) * r2 / (cos_light * light.area);
-        let bsdf_pdf = cos_surface / std::f32::consts::PI;
-        let weight = light_pdf * light_pdf / (light_pdf * light_pdf + bsdf_pdf * bsdf_pdf);
+        let light_pdf = self.selection_probability(k) * d.pdf;
+        // The receiver's cosine over π: the BSDF sampling's density in that direction.
+        let bsdf_pdf = d.weight * d.pdf;
+        let mis = light_pdf * light_pdf / (light_pdf * light_pdf + bsdf_pdf * bsdf_pdf);
         counts.shadow += 1;
         let origin = offset_ray_origin(s.point, n, s.error);
-        if self.accel.occluded(&shadow_ray(origin, p.point)) {
+        if self.accel.occluded(&shadow_ray(origin, d.point)) {
             return Vec3::ZERO;
         }
-        light.emitted * (cos_surface / std::f32::consts::PI * weight / light_pdf)
+        light.emitted * (d.weight * mis / self.selection_probability(k))
     }
 
     /// The radiance arriving along `ray`, from one path.

@@ -170,17 +170,15 @@ impl Tracer<'_> {
             if samples == 1 {
                 batch.push(light.centre(s.point));
             } else {
-                let by_solid_angle = match light.shape {
-                    LightShape::Parallelogram(quad)
-                        if self.settings.light_sampling == LightSampling::SolidAngle =>
-                    {
-                        quad.spherical_rectangle(s.point)
-                    }
-                    _ => None,
+                let by_solid_angle = if self.settings.light_sampling == LightSampling::SolidAngle {
+                    light.solid_angle_sampler(s.point)
+                } else {
+                    None
                 };
                 match (light.shape, by_solid_angle) {
-                    // Uniform in solid angle every point weighs Ω/(N·π) times the
-                    // receiver's cosine: bounded, however near the light the point is.
+                    // Uniform in solid angle (rectangles, spheres by their cone) every point
+                    // weighs Ω/(N·π) times the receiver's cosine: bounded, however near the
+                    // light the point is.
                     (_, Some(rect)) => {
                         batch.per_sample =
                             (rect.solid_angle() / (count as f64 * std::f64::consts::PI)) as f32;

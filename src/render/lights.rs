@@ -221,31 +221,119 @@ impl Light {
     }
 }
 
+/// A light seen from a shading point, sampled uniformly in the solid angle it subtends there:
+/// every point it gives weighs the same, Ω, however near the light the shading point is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SolidAngleSampler {
+    /// A rectangle: Ureña, Fajardo & King's spherical rectangle.
+    Rectangle(SphericalRectangle),
+    /// A sphere seen from outside: the cone of directions that meet it (pbrt's and Mitsuba's
+    /// sphere sampling), Ω = 2π(1 − cos θmax).
+    Cone {
+        origin: Vec3,
+        centre: Vec3,
+        radius: f32,
+        axis: Vec3,
+        cos_max: f32,
+        solid_angle: f64,
+    },
+}
+
+impl SolidAngleSampler {
+    /// The solid angle the light subtends (steradians).
+    pub fn solid_angle(&self) -> f64 {
+        match self {
+            SolidAngleSampler::Rectangle(r) => r.solid_angle(),
+            SolidAngleSampler::Cone { solid_angle, .. } => *solid_angle,
+        }
+    }
+
+    /// The point of the light at (u, v) in [0,1)²: uniform in solid angle for uniform (u, v),
+    /// and stratified where (u, v) are.
+    pub fn sample(&self, u: f32, v: f32) -> Vec3 {
+        match *self {
+            SolidAngleSampler::Rectangle(r) => r.sample(u, v),
+            SolidAngleSampler::Cone {
+                origin,
+                centre,
+                radius,
+                axis,
+                cos_max,
+                ..
+            } => {
+                // The nearer crossing of the sphere along the direction, the discriminant held
+                // at zero where rounding puts a direction at the rim just outside.
+                let dir = crate::sampling::sample_cone(axis, cos_max, u, v);
+                let to_centre = centre - origin;
+                let b = dir.dot(to_centre);
+                let c = to_centre.length_squared() - radius * radius;
+                let t = b - (b * b - c).max(0.0).sqrt();
+                origin + dir * t
+            }
+        }
+    }
+}
+
 /// A point on a light for next-event estimation from a shading point: where the shadow ray
-/// goes, and what the light sends through it per unit of emitted radiance, as irradiance / π
-/// (so that reflected radiance is albedo × Le × `weight`, unoccluded).
+/// goes, what the light sends through it per unit of emitted radiance, as irradiance / π (so
+/// that reflected radiance is albedo × Le × `weight`, unoccluded), and the density in solid
+/// angle with which its direction was chosen (for multiple importance sampling).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DirectSample {
     pub point: Vec3,
     pub weight: f32,
+    pub pdf: f32,
 }
 
 impl Light {
-    /// One point of this light for the shading point `x` with unit normal `n` (on its lit
-    /// side), from (u, v) in [0,1)²: uniform in the solid angle a rectangle subtends (each
-    /// point weighs cosθ·Ω/π: bounded however near the light `x` is), else uniform by area
-    /// (cosθ·cosθ'·A/(π·r²)). None where the point sends `x` nothing (behind either surface).
-    pub fn sample_towards(&self, x: Vec3, n: Vec3, u: f32, v: f32) -> Option<DirectSample> {
-        if let LightShape::Parallelogram(quad) = self.shape {
-            if let Some(rect) = quad.spherical_rectangle(x) {
-                let point = rect.sample(u, v);
-                let w = point - x;
-                let cos = n.dot(w) / w.length();
-                return (cos > 0.0).then(|| DirectSample {
-                    point,
-                    weight: (rect.solid_angle() / std::f64::consts::PI) as f32 * cos,
-                });
+    /// The light seen from `x`, to be sampled by solid angle: a rectangle (seen from its
+    /// front, subtending at least `MIN_SOLID_ANGLE`) or a sphere seen from outside (likewise);
+    /// None for the rest, which are sampled by area.
+    pub fn solid_angle_sampler(&self, x: Vec3) -> Option<SolidAngleSampler> {
+        match self.shape {
+            LightShape::Parallelogram(quad) => quad
+                .spherical_rectangle(x)
+                .map(SolidAngleSampler::Rectangle),
+            LightShape::Shape(AnalyticShape::Sphere(sphere)) => {
+                let to_centre = (sphere.centre - x).as_dvec3();
+                let d2 = to_centre.length_squared();
+                let r2 = (sphere.radius as f64).powi(2);
+                if d2 <= r2 * (1.0 + 1e-4) {
+                    return None;
+                }
+                // 1 − cos θmax without the cancellation of 1 − √(1 − sin²).
+                let sin2 = r2 / d2;
+                let cos_max = (1.0 - sin2).sqrt();
+                let solid_angle = std::f64::consts::TAU * sin2 / (1.0 + cos_max);
+                (solid_angle >= MIN_SOLID_ANGLE).then(|| SolidAngleSampler::Cone {
+                    origin: x,
+                    centre: sphere.centre,
+                    radius: sphere.radius,
+                    axis: (to_centre / d2.sqrt()).as_vec3(),
+                    cos_max: cos_max as f32,
+                    solid_angle,
+                })
             }
+            _ => None,
+        }
+    }
+
+    /// One point of this light for the shading point `x` with unit normal `n` (on its lit
+    /// side), from (u, v) in [0,1)²: uniform in solid angle where `solid_angle_sampler` gives
+    /// one (each point weighs cosθ·Ω/π, bounded however near the light `x` is), else uniform
+    /// by area (cosθ·cosθ'·A/(π·r²)). None where the point sends `x` nothing (behind either
+    /// surface).
+    pub fn sample_towards(&self, x: Vec3, n: Vec3, u: f32, v: f32) -> Option<DirectSample> {
+        if let Some(sampler) = self.solid_angle_sampler(x) {
+            let point = sampler.sample(u, v);
+            let w = point - x;
+            let cos = n.dot(w) / w.length();
+            let omega = sampler.solid_angle();
+            return (cos > 0.0).then(|| DirectSample {
+                point,
+                weight: (omega / std::f64::consts::PI) as f32 * cos,
+                pdf: (1.0 / omega) as f32,
+            });
         }
         let p = self.sample(u, v);
         let w = p.point - x;
@@ -261,7 +349,24 @@ impl Light {
         (r2 > 0.0 && cos > 0.0 && cos_light > 0.0).then(|| DirectSample {
             point: p.point,
             weight: cos * cos_light * self.area / (std::f32::consts::PI * r2),
+            pdf: r2 / (cos_light * self.area),
         })
+    }
+
+    /// The density in solid angle with which `sample_towards` from `x` gives the point `p`
+    /// of this light, of unit normal `normal` there: what multiple importance sampling weighs
+    /// a direction that found the light by other means with.
+    pub fn pdf_towards(&self, x: Vec3, p: Vec3, normal: Vec3) -> f32 {
+        if let Some(sampler) = self.solid_angle_sampler(x) {
+            return (1.0 / sampler.solid_angle()) as f32;
+        }
+        let w = p - x;
+        let r2 = w.length_squared();
+        let cos_light = (normal.dot(w) / r2.sqrt()).abs();
+        if cos_light <= 0.0 || r2 <= 0.0 {
+            return 0.0;
+        }
+        r2 / (cos_light * self.area)
     }
 }
 

@@ -1,5 +1,8 @@
 //! Random numbers that depend only on (seed, stream, index): an image never depends on thread
-//! scheduling or on how work is split.
+//! scheduling or on how work is split; strata of them, and the maps from them to points on a
+//! disk and directions in a cone.
+
+use crate::geometry::Vec3;
 
 /// SplitMix64's finaliser: a strong 64-bit mix.
 #[inline]
@@ -167,6 +170,35 @@ pub fn sample_disk(u: f32, v: f32) -> (f32, f32) {
         )
     };
     (r * phi.cos(), r * phi.sin())
+}
+
+/// A direction uniformly distributed over the cone of half-angle acos(`cos_max`) around the
+/// unit vector `axis` (solid angle 2π(1 − cos_max)), from (u, v) in [0,1)².
+pub fn sample_cone(axis: Vec3, cos_max: f32, u: f32, v: f32) -> Vec3 {
+    let cos_t = 1.0 - u * (1.0 - cos_max);
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * v;
+    let (t, b) = orthonormal_basis(axis);
+    (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + axis * cos_t).normalize_or_zero()
+}
+
+/// Two unit vectors that complete `n` to an orthonormal basis (Duff et al. 2017).
+pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3 {
+            x: 1.0 + sign * n.x * n.x * a,
+            y: sign * b,
+            z: -sign * n.x,
+        },
+        Vec3 {
+            x: b,
+            y: sign + n.y * n.y * a,
+            z: -n.y,
+        },
+    )
 }
 
 #[cfg(test)]
