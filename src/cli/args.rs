@@ -481,7 +481,8 @@ pub struct PhotonArgs {
     /// Ward's irradiance-cache error a: records are used where their weight exceeds 1/a.
     #[arg(long, default_value_t = photon_defaults().irradiance_cache_error, allow_negative_numbers = true)]
     pub irradiance_cache_error: f32,
-    /// Irradiance-cache records are gathered at every n-th pixel in x and y.
+    /// The irradiance cache's first pass visits every n-th pixel centre in x and y (its finest
+    /// level): a record is gathered where a visited point is not covered.
     #[arg(long, default_value_t = photon_defaults().irradiance_cache_spacing)]
     pub irradiance_cache_spacing: u32,
     /// Write both photon maps to FILE (versioned, with a fingerprint of scene and settings).

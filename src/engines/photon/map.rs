@@ -15,7 +15,7 @@ use crate::scene::Color;
 const CONE_K: f32 = 1.1;
 /// Photons whose surface normal differs more than this (cosine) from the query's are left
 /// out: they lie on another surface, e.g. the other side of a thin wall.
-const NORMAL_COS: f32 = 0.9;
+pub const NORMAL_COS: f32 = 0.9;
 
 pub struct PhotonMap {
     pub photons: Vec<Photon>,

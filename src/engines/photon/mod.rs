@@ -11,8 +11,6 @@ pub mod settings;
 pub mod sppm;
 pub mod trace;
 
-use std::sync::atomic::Ordering::Relaxed;
-
 pub use gather::IrradianceCache;
 pub use map::PhotonMap;
 pub use settings::{Display, PhotonSettings};
@@ -369,18 +367,5 @@ impl PhotonMaps {
             "{} of {emitted} photons were still carrying light when --max-photon-depth {max_photon_depth} stopped them; their light is missing from the image (raise the depth: Russian roulette alone keeps paths finite)",
             self.truncated
         ))
-    }
-}
-
-impl IrradianceCache {
-    /// One line on the cache for the user.
-    pub fn summary(&self) -> String {
-        format!(
-            "irradiance cache: {} records in {:.3} s; lookups interpolated {}, gathered afresh {}",
-            self.records.len(),
-            self.build_seconds,
-            self.interpolated.load(Relaxed),
-            self.fresh.load(Relaxed)
-        )
     }
 }

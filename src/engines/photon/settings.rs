@@ -51,8 +51,10 @@ pub struct PhotonSettings {
     pub save: Option<std::path::PathBuf>,
     /// Read the maps from this file instead of tracing (`--load-photons`).
     pub load: Option<std::path::PathBuf>,
-    /// Cache records are computed at every n-th pixel in x and y (`--irradiance-cache-spacing`,
-    /// default 4); the rest interpolate, or gather afresh where no record is close enough.
+    /// The irradiance cache's first pass visits every n-th pixel centre in x and y, finest
+    /// level (`--irradiance-cache-spacing`, default 1); records are made where a visited point
+    /// is not covered, and the pixels interpolate, or gather afresh where no record is close
+    /// enough.
     pub irradiance_cache_spacing: u32,
     /// What the image shows (`--visualize photons|kdtree`, default the image).
     pub display: Display,
@@ -75,7 +77,7 @@ impl Default for PhotonSettings {
             gather_indirect: false,
             final_gather_rays: 128,
             irradiance_cache_error: 0.15,
-            irradiance_cache_spacing: 4,
+            irradiance_cache_spacing: 1,
             save: None,
             load: None,
             display: Display::Image,

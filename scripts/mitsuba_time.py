@@ -1,0 +1,32 @@
+"""Renders the course Cornell box with the diffuse sphere in Mitsuba 3 and prints the wall time.
+
+    python3 scripts/mitsuba_time.py SPP OUT.exr [RES] [SEED]
+
+The scene is ../shared/peers/mitsuba_cornell.py's (our conventions: one-sided emitter, box
+filter, camera through the front face). One render at the same sample count comes first and is
+not timed, so that the time is the render's own and not Dr.Jit's kernel compilation (its
+kernels are also cached on disk across runs). Used by scripts/vs-mitsuba.sh.
+"""
+import os
+import sys
+import time
+
+here = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(here, "..", "..", "shared", "peers"))
+import mitsuba as mi  # noqa: E402
+
+mi.set_variant(os.environ.get("MITSUBA_VARIANT", "llvm_ad_rgb"))
+import mitsuba_cornell  # noqa: E402
+
+spp, out = int(sys.argv[1]), sys.argv[2]
+res = int(sys.argv[3]) if len(sys.argv) > 3 else 256
+seed = int(sys.argv[4]) if len(sys.argv) > 4 else 0
+scene = mi.load_dict(mitsuba_cornell.cornell(True, res=res))
+mi.Bitmap(mi.render(scene, spp=spp, seed=seed + 7919))  # the untimed first render
+start = time.perf_counter()
+image = mi.render(scene, spp=spp, seed=seed)
+# Evaluating the image into a bitmap is part of the render: Dr.Jit is lazy.
+bitmap = mi.Bitmap(image)
+elapsed = time.perf_counter() - start
+bitmap.write(out)
+print(f"{elapsed:.4f}")
