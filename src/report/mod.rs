@@ -104,6 +104,83 @@ pub struct Report {
     pub total_seconds: f64,
 }
 
+/// The relMSE levels whose time the report gives per curve.
+const TARGET_ERRORS: [f64; 2] = [1e-2, 2e-3];
+
+/// `y` at `x` on the curve through `points` (x increasing), interpolated on log-log axes;
+/// None outside the curve.
+fn log_log_at(points: &[(f64, f64)], x: f64) -> Option<f64> {
+    let i = points.windows(2).position(|w| w[0].0 <= x && x <= w[1].0)?;
+    let ((x0, y0), (x1, y1)) = (points[i], points[i + 1]);
+    if x1 <= x0 {
+        return Some(y0);
+    }
+    let f = (x.ln() - x0.ln()) / (x1.ln() - x0.ln());
+    Some((y0.ln() + f * (y1.ln() - y0.ln())).exp())
+}
+
+/// The time at which the curve through `points` (time, relMSE) first comes down to `error`,
+/// interpolated on log-log axes; None when it never does.
+fn time_to(points: &[(f64, f64)], error: f64) -> Option<f64> {
+    if points.first()?.1 <= error {
+        return Some(points[0].0);
+    }
+    let i = points.windows(2).position(|w| w[1].1 <= error)?;
+    let ((t0, e0), (t1, e1)) = (points[i], points[i + 1]);
+    let f = (error.ln() - e0.ln()) / (e1.ln() - e0.ln());
+    Some((t0.ln() + f * (t1.ln() - t0.ln())).exp())
+}
+
+/// The engines compared at equal time: each curve's relMSE at powers of two seconds (read off
+/// the curve between its measured points), and the time each needs for the target errors.
+fn equal_time(md: &mut String, series: &[Series]) {
+    let curves: Vec<(&Series, Vec<(f64, f64)>)> = series
+        .iter()
+        .map(|s| {
+            let mut c: Vec<(f64, f64)> = s.points.iter().map(|p| (p.1, p.2)).collect();
+            c.sort_by(|a, b| a.0.total_cmp(&b.0));
+            (s, c)
+        })
+        .filter(|(_, c)| c.len() >= 2)
+        .collect();
+    let longest = curves
+        .iter()
+        .filter_map(|(_, c)| c.last().map(|p| p.0))
+        .fold(0.0f64, f64::max);
+    if longest <= 0.0 {
+        return;
+    }
+    let times: Vec<f64> = (-6..=10)
+        .map(|k| 2f64.powi(k))
+        .filter(|&t| t <= longest)
+        .collect();
+    let _ = writeln!(
+        md,
+        "\n## At equal time\n\nEach curve's relMSE read off it (log-log between its measured points; – outside them), and the time it needs for the relMSE on the right.\n"
+    );
+    let mut header = "| engine | accel |".to_string();
+    let mut rule = "|---|---|".to_string();
+    for t in &times {
+        header += &format!(" {t} s |");
+        rule += "---|";
+    }
+    for e in TARGET_ERRORS {
+        header += &format!(" time to {e:.0e} (s) |");
+        rule += "---|";
+    }
+    let _ = writeln!(md, "{header}\n{rule}");
+    for (s, c) in &curves {
+        let mut row = format!("| {} | {} |", s.engine.name(), s.accel);
+        for &t in &times {
+            row += &log_log_at(c, t).map_or(" – |".to_string(), |e| format!(" {e:.2e} |"));
+        }
+        for e in TARGET_ERRORS {
+            row += &time_to(c, e).map_or(" – |".to_string(), |t| format!(" {t:.3} |"));
+        }
+        let _ = writeln!(md, "{row}");
+    }
+}
+
 /// Renders shorter than this are repeated (same seed, same image) until this much time has
 /// passed, and timed by their fastest repetition. A 24×24 path-traced image at 1 spp takes
 /// 0.6–2 ms here from one run to the next: single timings that short are mostly the machine's
@@ -482,6 +559,7 @@ pub fn summary(report: &Report, settings: &ReportSettings) -> String {
             last.3
         );
     }
+    equal_time(&mut md, &report.series);
     if !report.comparisons.is_empty() {
         let _ = writeln!(
             md,
@@ -506,4 +584,32 @@ pub fn summary(report: &Report, settings: &ReportSettings) -> String {
         }
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// On the curve relMSE = 1/t (a Monte Carlo estimator's), read between points a factor 4
+    /// apart: log-log interpolation is exact on it.
+    #[test]
+    fn equal_time_readings_are_exact_on_a_power_law() {
+        let curve = [(1.0, 1.0), (4.0, 0.25), (16.0, 0.0625)];
+        for t in [1.0, 2.0, 3.0, 8.0, 16.0] {
+            let e = log_log_at(&curve, t).expect("inside the curve");
+            assert!((e * t - 1.0).abs() < 1e-12, "{t}: {e}");
+        }
+        assert_eq!(log_log_at(&curve, 0.5), None);
+        assert_eq!(log_log_at(&curve, 17.0), None);
+        for e in [0.5, 0.1, 0.0625] {
+            let t = time_to(&curve, e).expect("reached");
+            assert!((e * t - 1.0).abs() < 1e-12, "{e}: {t}");
+        }
+        assert_eq!(time_to(&curve, 0.01), None);
+        // A curve that rises before it falls is read at its first crossing.
+        assert_eq!(
+            time_to(&[(1.0, 0.2), (2.0, 0.4), (4.0, 0.1)], 0.1),
+            Some(4.0)
+        );
+    }
 }
