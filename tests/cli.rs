@@ -1063,7 +1063,8 @@ fn progress_bar_shows_on_a_terminal_only() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `--time-limit`: the path tracer, SPPM, the ray tracer and radiosity render until about the
+/// `--time-limit`: the path tracer, SPPM, the ray tracer, radiosity and the photon engine with
+/// final gathering render until about the
 /// limit (a pass is started only if the last one's time still fits, so they end within a
 /// pass of it), write the image, and say what they reached; the path tracer's image is the
 /// converged one's, to the noise of what it reached. Refused where the samples must be known
@@ -1099,6 +1100,14 @@ fn time_limit_renders_until_the_time_is_spent() {
             "1",
             "--subdivide",
             "3",
+        ],
+        // Final gathering: the cache's first pass gives way to the pixels at half the time.
+        &[
+            "-num_photons_to_shoot",
+            "20000",
+            "-gather_indirect",
+            "-num_shadow_samples",
+            "4",
         ],
     ] {
         let args = [
