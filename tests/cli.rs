@@ -1064,11 +1064,10 @@ fn progress_bar_shows_on_a_terminal_only() {
 }
 
 /// `--time-limit`: the path tracer, SPPM, the ray tracer, radiosity and the photon engine with
-/// final gathering render until about the
-/// limit (a pass is started only if the last one's time still fits, so they end within a
-/// pass of it), write the image, and say what they reached; the path tracer's image is the
-/// converged one's, to the noise of what it reached. Refused where the samples must be known
-/// (the parts of a split render).
+/// final gathering render until about the limit (a pass is started only if the last one's
+/// time still fits, so they end within a pass of it), write the image, and say what they
+/// reached; the path tracer's image is the converged one's, to the noise of what it reached.
+/// Refused where the samples must be known (the parts of a split render).
 #[test]
 fn time_limit_renders_until_the_time_is_spent() {
     let dir = common::temp_dir("time-limit");
