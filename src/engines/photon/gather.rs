@@ -422,9 +422,6 @@ impl IrradianceCache {
                     let (sx, sy) = Camera::screen_point(i, j, dx, dy, w, h);
                     let ray = view.ray(sx, sy);
                     let s = crate::accel::closest_surface(accel, scene, &ray)?;
-                    // The pixel's width where the ray meets the surface.
-                    let beside = view.ray(sx + (w.max(h) as f32).recip(), sy);
-                    let footprint = (beside.at(s.t) - ray.at(s.t)).length();
                     if scene.albedo(&s).max_element() <= 0.0 {
                         return None;
                     }
@@ -442,6 +439,9 @@ impl IrradianceCache {
                         &mut rng,
                     );
                     cache.rays.fetch_add(p.final_gather_rays as u64, Relaxed);
+                    // The pixel's width where the ray meets the surface.
+                    let beside = view.ray(sx + (w.max(h) as f32).recip(), sy);
+                    let footprint = (beside.at(s.t) - ray.at(s.t)).length();
                     let min_radius = MIN_REACH_PIXELS * footprint / p.irradiance_cache_error;
                     let radius = record_radius(&gathered, extent).max(min_radius);
                     Some(Record {
@@ -454,8 +454,9 @@ impl IrradianceCache {
                 })
                 .collect();
             cache.records.extend(new);
-            cache.clamp_to_neighbours();
+            // Radii do not move records: one tree serves the clamping and the next level.
             cache.tree = tree_of(&cache.records);
+            cache.clamp_to_neighbours();
             bar.inc(1);
             last_level = start.elapsed().as_secs_f64();
         }
@@ -467,13 +468,12 @@ impl IrradianceCache {
     /// Neighbour clamping (Křivánek et al. 2006): no record reaches further than a neighbour's
     /// reach plus the distance to it, so a record made where the geometry is far does not
     /// spill over a neighbour that saw something close. Computed from a snapshot of the radii,
-    /// so the result does not depend on the order.
+    /// so the result does not depend on the order; `self.tree` must hold every record.
     fn clamp_to_neighbours(&mut self) {
         let Some(k) = NonZero::new(NEIGHBOURS.min(self.records.len())) else {
             return;
         };
-        let tree = tree_of(&self.records);
-        let records = &self.records;
+        let (tree, records) = (&self.tree, &self.records);
         let radii: Vec<f32> = records
             .par_iter()
             .map(|r| {
@@ -491,16 +491,20 @@ impl IrradianceCache {
 
     /// Whether some record covers `x`, `n` within the cache's error.
     fn covered(&self, x: Vec3, n: Vec3) -> bool {
-        let Some(k) = NonZero::new(NEIGHBOURS.min(self.records.len())) else {
-            return false;
-        };
-        self.tree
-            .nearest_n::<SquaredEuclidean>(&x.to_array(), k)
-            .iter()
-            .any(|f| {
-                self.records[f.item as usize]
-                    .error(x, n)
-                    .is_some_and(|e| e < self.error)
+        self.within(x, n, self.error).next().is_some()
+    }
+
+    /// The records among the `NEIGHBOURS` nearest to `x` that may be used at `x`, `n` with
+    /// Ward's error below `limit`, each with its error.
+    fn within(&self, x: Vec3, n: Vec3, limit: f32) -> impl Iterator<Item = (&Record, f32)> {
+        let k = NEIGHBOURS.min(self.records.len());
+        NonZero::new(k)
+            .map(|k| self.tree.nearest_n::<SquaredEuclidean>(&x.to_array(), k))
+            .unwrap_or_default()
+            .into_iter()
+            .filter_map(move |f| {
+                let r = &self.records[f.item as usize];
+                r.error(x, n).filter(|&e| e < limit).map(|e| (r, e))
             })
     }
 
@@ -508,13 +512,8 @@ impl IrradianceCache {
     /// error, each extrapolated by its gradients and weighted by 1/e − 1/limit (so a record's
     /// weight falls to zero at the edge of its reach); None where no record is within it.
     fn interpolate(&self, x: Vec3, n: Vec3, limit: f32) -> Option<Color> {
-        let k = NonZero::new(NEIGHBOURS.min(self.records.len()))?;
         let (mut sum, mut weights) = (Vec3::ZERO, 0.0f32);
-        for f in self.tree.nearest_n::<SquaredEuclidean>(&x.to_array(), k) {
-            let r = &self.records[f.item as usize];
-            let Some(e) = r.error(x, n).filter(|&e| e < limit) else {
-                continue;
-            };
+        for (r, e) in self.within(x, n, limit) {
             let w = e.max(1e-6).recip() - limit.recip();
             sum += r.value_at(x, n) * w;
             weights += w;
@@ -660,17 +659,21 @@ mod tests {
         vec3(0.0, 1.0, 1.0),
     ];
 
+    /// Points on the plane z = 0 beside the square's corners and edges, where the gradients
+    /// are large.
+    const POINTS: [Vec3; 3] = [
+        vec3(-0.3, 0.2, 0.0),
+        vec3(0.5, -0.4, 0.0),
+        vec3(1.2, 1.1, 0.0),
+    ];
+
     /// The gather's irradiance and its translational gradient against Lambert's formula and
     /// its central differences, at points beside the square's corner where the gradient is
     /// large.
     #[test]
     fn translational_gradient_matches_lambert() {
         let n = vec3(0.0, 0.0, 1.0);
-        for x in [
-            vec3(-0.3, 0.2, 0.0),
-            vec3(0.5, -0.4, 0.0),
-            vec3(1.2, 1.1, 0.0),
-        ] {
+        for x in POINTS {
             let exact = lambert(x, n, &SQUARE);
             let h = 1e-3;
             let fd = |e: Vec3| {
@@ -694,11 +697,7 @@ mod tests {
     #[test]
     fn rotational_gradient_matches_lambert() {
         let n = vec3(0.0, 0.0, 1.0);
-        for x in [
-            vec3(-0.3, 0.2, 0.0),
-            vec3(0.5, -0.4, 0.0),
-            vec3(1.2, 1.1, 0.0),
-        ] {
+        for x in POINTS {
             let (_, _, got) = gathered(x, n, 1024, 64);
             let h = 1e-3f32;
             // Tilting n by h about an axis a changes E/π by h·a·∇r.
