@@ -502,10 +502,16 @@ fn sphere_and_triangle_lights_give_the_closed_form_irradiance() {
 /// reflects about its mirror direction into cosⁿ (n = 2/a² − 2), whose share within α of
 /// its axis is 1 − cos^(n+1) α. Seen head-on, it reflects a far emitting sphere straight
 /// above, of angular radius α, with that share of the sphere's radiance; a = 0.2 (n = 48)
-/// and α chosen where the share is ½. Held within four standard errors of the samples'
-/// binomial spread (16 × 1,024 samples: σ = 0.8% of the value; measured −0.6σ). With
-/// n = 1/a² − 2 (a lobe
-/// twice as wide) the share would be 0.29; a perfect mirror (a = 0) reflects all of it.
+/// and α chosen where the share is ½. With n = 1/a² − 2 (a lobe twice as wide) the share
+/// would be 0.29; a perfect mirror (a = 0) reflects all of it.
+///
+/// Three estimators: the ray tracer's lobe alone (one shadow ray, the course's mode), the ray
+/// tracer with 16 shadow rays, which samples the sphere from the glossy point too and weighs
+/// both by multiple importance sampling, and the path tracer (one light sample and one lobe
+/// sample, weighed likewise). Held within four standard errors of the lobe alone's binomial
+/// spread (16 × 1,024 samples: σ = 0.8% of the value); the weighed estimators must be
+/// closer, within one σ (their spread is far smaller: a light sample of a sphere seen
+/// within the lobe's core weighs nearly the same every time).
 #[test]
 fn glossy_reflection_spreads_as_its_phong_lobe() {
     const LE_SPHERE: f64 = 2.0;
@@ -521,21 +527,56 @@ fn glossy_reflection_spreads_as_its_phong_lobe() {
              background_color 0 0 0\n\
              OrthographicCamera {{\ncamera_position 0 1 0\npoint_of_interest 0 0 0\nup 0 0 -1\nsize 0.0001\n}}\n"
         ));
-        let settings = RenderSettings {
-            num_antialias_samples: 1024,
-            num_bounces: 1,
-            ..quiet(4, 4)
-        };
         let truth = LE_SPHERE * share;
         let samples = 16.0 * 1024.0;
         let sigma = LE_SPHERE * (share * (1.0 - share) / samples).sqrt();
         for kind in backends() {
-            let m = mean(&render(&scene, &settings, kind));
-            println!("roughness {roughness}, {kind}: {m:.5} against {truth:.5} (σ {sigma:.5})");
-            assert!(
-                (m - truth).abs() <= 4.0 * sigma + 1e-5 * truth,
-                "roughness {roughness}, {kind}: {m} against {truth}"
-            );
+            let mut spreads = Vec::new();
+            for (estimator, shadow_rays, bound) in [
+                ("raytrace, lobe alone", 1, 4.0),
+                ("raytrace, lobe and lights", 16, 1.0),
+                ("path", 1, 1.0),
+            ] {
+                let settings = RenderSettings {
+                    num_antialias_samples: 1024,
+                    num_bounces: 1,
+                    num_shadow_samples: shadow_rays,
+                    ..quiet(4, 4)
+                };
+                let film = if estimator == "path" {
+                    let accel = accel::build(&scene, kind, &AccelOptions::default()).unwrap();
+                    trilux::engines::path::render(&scene, accel.as_ref(), &settings).0
+                } else {
+                    render(&scene, &settings, kind)
+                };
+                let m = mean(&film);
+                // The spread of the 16 pixels, each a mean of 1,024 samples of the same point.
+                let spread = (film
+                    .pixels
+                    .iter()
+                    .map(|c| (c.x as f64 - m).powi(2))
+                    .sum::<f64>()
+                    / 15.0)
+                    .sqrt();
+                println!(
+                    "roughness {roughness}, {kind}, {estimator}: {m:.5} against {truth:.5} \
+                     ({:+.2}σ), pixels spread {spread:.2e}",
+                    (m - truth) / sigma.max(1e-30)
+                );
+                spreads.push(spread);
+                assert!(
+                    (m - truth).abs() <= bound * sigma + 1e-5 * truth,
+                    "roughness {roughness}, {kind}, {estimator}: {m} against {truth}"
+                );
+            }
+            if roughness > 0.0 {
+                // Measured: the lobe alone's pixels spread 2.9e-2 (its binomial σ per pixel
+                // is 3.1e-2), the weighed estimators' 8.5e-3 (ray tracer) and 8.6e-3 (path).
+                assert!(
+                    spreads[1] < 0.5 * spreads[0] && spreads[2] < 0.5 * spreads[0],
+                    "{kind}: spreads {spreads:?}"
+                );
+            }
         }
     }
 }
@@ -631,15 +672,18 @@ fn clip_above(x: [f64; 3], n: [f64; 3], polygon: &[[f64; 3]]) -> Vec<[f64; 3]> {
     out
 }
 
-/// The solid-angle sampler (`render::solid_angle`) against Lambert's contour formula: the
-/// form factor from a point to a unit square estimated as Ω/π times the mean receiver
-/// cosine over jittered samples, for points 1e-3 to 1e3 from the square, above its centre,
-/// just past an edge and tilted towards it, and above its inside with the square crossing
-/// the receiver's horizon. A point in the square's plane sees nothing.
+/// The rectangle sampler (`render::solid_angle`) against Lambert's contour formula: the
+/// form factor from a point to a unit square estimated from the weights of multi-jittered
+/// samples (uniform in solid angle across, by the receiver's cosine along), for points 1e-3
+/// to 1e3 from the square, above its centre, just past an edge and tilted towards it, and
+/// above its inside with the square crossing the receiver's horizon. The densities it
+/// reports integrate to one over the square's solid angle. A point in the square's plane
+/// sees nothing.
 #[test]
 fn solid_angle_sampling_matches_lamberts_formula() {
-    use common::vec64::{dot, norm, of, scale, sub};
+    use common::vec64::{norm, of, scale};
     use trilux::render::solid_angle::SphericalRectangle;
+    use trilux::sampling::{Pattern, Rng, Strata};
     let corner = trilux::geometry::vec3(-0.5, -0.5, 0.0);
     let (eu, ev) = (
         trilux::geometry::vec3(1.0, 0.0, 0.0),
@@ -659,49 +703,54 @@ fn solid_angle_sampling_matches_lamberts_formula() {
         (0.501, 0.2, unit([-1.0, 0.0, -1.0])),
         (0.3, 0.4, unit([0.3, 0.2, -1.0])),
     ];
-    // The worst relative error: [64 samples, 4,096 samples] × [nearer than 1, from 1 on].
-    let mut worst = [[(0.0f64, 0.0f32, 0.0f32, 0.0f32); 2]; 2];
+    let vec = |v: [f64; 3]| trilux::geometry::vec3(v[0] as f32, v[1] as f32, v[2] as f32);
+    // The worst relative error at [64, 4,096] samples, and of the densities' integral.
+    let mut worst = [(0.0f64, 0.0f32, 0.0f32, 0.0f32); 2];
+    let mut worst_density = 0.0f64;
     for h in [1e-3f32, 1e-2, 0.1, 1.0, 10.0, 100.0, 1e3] {
-        for &(px, py, n) in &places {
+        for (p, &(px, py, n)) in places.iter().enumerate() {
             let x = trilux::geometry::vec3(px, py, h);
             let truth =
                 polygon_irradiance(of(x), n, &clip_above(of(x), n, &square)) / std::f64::consts::PI;
             let rect = SphericalRectangle::new(x, corner, eu, ev).expect("subtends something");
-            for (k, side) in [8u32, 64].into_iter().enumerate() {
-                let mut rng = trilux::sampling::Rng::new(3, k as u64, 0);
-                let mut sum = 0.0f64;
-                for i in 0..side {
-                    for j in 0..side {
-                        let u = (i as f32 + rng.next_f32()) / side as f32;
-                        let v = (j as f32 + rng.next_f32()) / side as f32;
-                        let w = sub(of(rect.sample(u, v)), of(x));
-                        sum += (dot(w, n) / norm(w)).max(0.0);
-                    }
+            for (k, count) in [64u32, 4096].into_iter().enumerate() {
+                let strata = Strata::new(Pattern::MultiJittered, count);
+                let mut rng = Rng::new(3, k as u64, p as u64);
+                let sum: f64 = strata
+                    .samples(&mut rng)
+                    .filter_map(|(u, v)| rect.sample_cosine(vec(n), u, v))
+                    .map(|s| s.weight)
+                    .sum();
+                let off = (sum / count as f64 / truth - 1.0).abs();
+                if off > worst[k].0 {
+                    worst[k] = (off, h, px, py);
                 }
-                let estimate =
-                    rect.solid_angle() * sum / (side * side) as f64 / std::f64::consts::PI;
-                let off = (estimate / truth - 1.0).abs();
-                let w = &mut worst[k][(h >= 1.0) as usize];
-                if off > w.0 {
-                    *w = (off, h, px, py);
-                }
+            }
+            // ∫ pdf dω over the part above the horizon, by uniform solid angle: Ω · mean pdf;
+            // for the place whose horizon cuts the square, the share of Ω above it is not
+            // known in closed form, so only the others are checked.
+            if p < 3 {
+                let strata = Strata::new(Pattern::MultiJittered, 4096);
+                let mut rng = Rng::new(5, p as u64, 0);
+                let mean: f64 = strata
+                    .samples(&mut rng)
+                    .map(|(u, v)| rect.pdf_cosine(vec(n), rect.sample(u, v)))
+                    .sum::<f64>()
+                    / 4096.0;
+                worst_density = worst_density.max((mean * rect.solid_angle() - 1.0).abs());
             }
         }
     }
     for (k, samples) in [64, 4096].into_iter().enumerate() {
-        for (far, place) in ["nearer than 1", "from 1 to 1e3"].into_iter().enumerate() {
-            let (off, h, px, py) = worst[k][far];
-            println!("{samples} samples, {place}: worst {off:.2e} (h {h}, at ({px}, {py}))");
-        }
+        let (off, h, px, py) = worst[k];
+        println!("{samples} samples: worst {off:.2e} (h {h}, at ({px}, {py}))");
     }
-    // 64 samples from 1 to 1e3: issue #21's 0.5%, measured 0.18%. Nearer than 1 the
-    // receiver's cosine varies over most of a hemisphere and 64 jittered samples of it are
-    // 1.4% off at worst (h = 1e-3 above the centre): the issue's 0.5% is not met there, and
-    // the bound, 2%, only guards that figure. 4,096 samples: 0.022% at worst, so the sampler
-    // itself is uniform in solid angle; the bound is 4.5 times that.
-    assert!(worst[0][1].0 < 5e-3, "{:?}", worst[0][1]);
-    assert!(worst[0][0].0 < 2e-2, "{:?}", worst[0][0]);
-    assert!(worst[1][0].0.max(worst[1][1].0) < 1e-3, "{worst:?}");
+    println!("densities integrate to 1 within {worst_density:.2e}");
+    // Issue #21 asks 0.5% at 64 samples from 1e-3 to 1e3. (Uniform in solid angle with 8 × 8
+    // jittered points was 1.4% off at h = 1e-3 above the centre.)
+    assert!(worst[0].0 < 5e-3, "{:?}", worst[0]);
+    assert!(worst[1].0 < 1e-3, "{:?}", worst[1]);
+    assert!(worst_density < 1e-2, "{worst_density}");
     let in_plane = SphericalRectangle::new(trilux::geometry::vec3(0.6, 0.0, 0.0), corner, eu, ev);
     assert!(in_plane.is_none(), "a point in the plane sees nothing");
 }

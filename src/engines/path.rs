@@ -3,8 +3,8 @@
 //! At each diffuse vertex: next-event estimation (one light chosen in proportion to its power,
 //! one point on it uniform in the solid angle it subtends for rectangles and spheres, by area
 //! for the rest) combined with cosine-weighted sampling of the Lambertian BRDF by multiple
-//! importance sampling (power heuristic). Mirrors, glossy lobes and glass are
-//! sampled as in the ray tracer, one branch at a time (glass chooses reflection with the
+//! importance sampling (power heuristic); glossy lobes likewise, against their Phong lobe.
+//! Mirrors, glossy lobes and glass are sampled as in the ray tracer, one branch at a time (glass chooses reflection with the
 //! Fresnel probability). Paths end by Russian roulette on their throughput from the fourth
 //! vertex on, which keeps the estimate unbiased. `-num_antialias_samples` is the number of
 //! paths per pixel; every random number comes from (seed, pixel, sample). The background
@@ -14,7 +14,7 @@
 use std::collections::HashMap;
 
 use super::engine::{Budget, Engine, EngineKind, RenderSettings, Rendered};
-use super::scattering::{diffuse_sample, glossy_reflection, Dielectric};
+use super::scattering::{diffuse_sample, power_heuristic, Dielectric, GlossyLobe};
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
@@ -51,6 +51,8 @@ pub struct PathTracer<'a> {
 #[derive(Clone, Copy)]
 struct Previous {
     point: Vec3,
+    /// The normal the direction was sampled about (light sampling's density depends on it).
+    normal: Vec3,
     bsdf_pdf: Option<f32>,
 }
 
@@ -86,14 +88,22 @@ impl PathTracer<'_> {
 
     /// Solid-angle density with which next-event estimation picks the direction from `from`
     /// to `hit` on light `k`.
-    fn light_pdf(&self, k: usize, from: Vec3, hit: &SurfaceHit) -> f32 {
+    fn light_pdf(&self, k: usize, from: &Previous, hit: &SurfaceHit) -> f32 {
         self.selection_probability(k)
-            * self.lights[k].pdf_towards(from, hit.point, hit.geometric_normal)
+            * self.lights[k].pdf_towards(from.point, from.normal, hit.point, hit.geometric_normal)
     }
 
-    /// Next-event estimation at a diffuse point: radiance reflected per unit albedo from one
-    /// light sample, weighted against BRDF sampling by the power heuristic.
-    fn sample_light(&self, s: &SurfaceHit, n: Vec3, rng: &mut Rng, counts: &mut Counts) -> Color {
+    /// Next-event estimation at a diffuse point (`lobe` None) or in a glossy lobe: radiance
+    /// reflected per unit albedo (or reflectance) from one light sample, weighted against
+    /// sampling the lobe by the power heuristic.
+    fn sample_light(
+        &self,
+        s: &SurfaceHit,
+        n: Vec3,
+        lobe: Option<&GlossyLobe>,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
         let total = self.cdf.last().copied().unwrap_or(0.0);
         if total <= 0.0 {
             return Vec3::ZERO;
@@ -115,15 +125,26 @@ impl PathTracer<'_> {
             return Vec3::ZERO;
         }
         let light_pdf = self.selection_probability(k) * d.pdf;
-        // The receiver's cosine over π: the BSDF sampling's density in that direction.
-        let bsdf_pdf = d.weight * d.pdf;
-        let mis = light_pdf * light_pdf / (light_pdf * light_pdf + bsdf_pdf * bsdf_pdf);
+        // The lobe's density in that direction, and what the sample brings unweighted:
+        // diffuse, the receiver's cosine over π and the sample's weight (which is that over
+        // the light's density, computed exactly); glossy, the lobe's density over the light's.
+        let (bsdf_pdf, value) = match lobe {
+            None => (d.weight * d.pdf, d.weight),
+            Some(lobe) => {
+                let pdf = lobe.pdf((d.point - s.point).normalize_or_zero());
+                (pdf, pdf / d.pdf)
+            }
+        };
+        if bsdf_pdf <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let mis = power_heuristic(light_pdf, bsdf_pdf);
         counts.shadow += 1;
         let origin = offset_ray_origin(s.point, n, s.error);
         if self.accel.occluded(&shadow_ray(origin, d.point)) {
             return Vec3::ZERO;
         }
-        light.emitted * (d.weight * mis / self.selection_probability(k))
+        light.emitted * (value * mis / self.selection_probability(k))
     }
 
     /// The radiance arriving along `ray`, from one path.
@@ -145,6 +166,7 @@ impl PathTracer<'_> {
         let mut hit = first;
         let mut previous = Previous {
             point: ray.origin,
+            normal: ray.direction,
             bsdf_pdf: None,
         };
         // The background is what a ray leaving the scene shows, seen directly or through
@@ -163,8 +185,8 @@ impl PathTracer<'_> {
             if self.scene.sees_emission(&s, ray.direction) {
                 let weight = match (previous.bsdf_pdf, self.light_of.get(&s.prim)) {
                     (Some(bsdf_pdf), Some(&k)) => {
-                        let light_pdf = self.light_pdf(k, previous.point, &s);
-                        bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + light_pdf * light_pdf)
+                        let light_pdf = self.light_pdf(k, &previous, &s);
+                        power_heuristic(bsdf_pdf, light_pdf)
                     }
                     _ => 1.0,
                 };
@@ -184,25 +206,36 @@ impl PathTracer<'_> {
             let dir;
             if choice < d {
                 let lobe = albedo * (total / d);
-                radiance += throughput * lobe * self.sample_light(&s, n, rng, counts);
+                radiance += throughput * lobe * self.sample_light(&s, n, None, rng, counts);
                 let (sampled, pdf) = diffuse_sample(n, rng.next_f32(), rng.next_f32());
                 dir = sampled;
                 throughput *= lobe;
                 diffuse_bounce = true;
                 previous = Previous {
                     point: s.point,
+                    normal: n,
                     bsdf_pdf: Some(pdf),
                 };
             } else if choice < d + r {
-                dir = glossy_reflection(
-                    ray.direction,
-                    n,
-                    m.roughness,
-                    rng.next_f32(),
-                    rng.next_f32(),
-                );
                 throughput *= m.reflective * (total / r);
-                previous.bsdf_pdf = None;
+                match GlossyLobe::new(ray.direction, n, m.roughness) {
+                    // A mirror: a delta no light sample finds.
+                    None => {
+                        dir = crate::engines::scattering::reflect(ray.direction, n);
+                        previous.bsdf_pdf = None;
+                    }
+                    Some(glossy) => {
+                        radiance +=
+                            throughput * self.sample_light(&s, n, Some(&glossy), rng, counts);
+                        let (sampled, pdf) = glossy.sample(rng.next_f32(), rng.next_f32());
+                        dir = sampled;
+                        previous = Previous {
+                            point: s.point,
+                            normal: n,
+                            bsdf_pdf: pdf,
+                        };
+                    }
+                }
             } else {
                 dir = Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng);
                 throughput *= m.transmitted * (total / t);

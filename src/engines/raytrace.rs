@@ -1,15 +1,18 @@
 //! Whitted and distribution ray tracing, physically based: `emitted` is radiance, `diffuse`
 //! is albedo, a Lambertian surface of albedo ρ under irradiance E has radiance ρE/π.
 //!
-//! Direct light comes from every emitter by the area estimator `Le·cosθ·cosθ'·A / (N·r²)`,
-//! with N shadow rays per light (`-num_shadow_samples`: 0 = the light's centre, unoccluded;
-//! 1 = one shadow ray to the centre; N > 1 = N points placed by `--light-sampling`). Mirrors,
+//! Direct light comes from every emitter, with N shadow rays per light
+//! (`-num_shadow_samples`: 0 = the light's centre, unoccluded; 1 = one shadow ray to the
+//! centre; N > 1 = N points placed by `--light-sampling`). By default (`solid-angle`)
+//! rectangles are sampled across by solid angle and along by the receiver's cosine, spheres
+//! by their cone, with multi-jittered points; the course's patterns (`random`, `stratified`,
+//! `jittered`) place points by area for the estimator `Le·cosθ·cosθ'·A / (N·r²)`. Mirrors,
 //! glossy reflection and glass recurse to `-num_bounces`; the diffuse indirect rest is the
 //! constant `-ambient_light`, or the radiosity solution's indirect light (`--indirect
 //! radiosity`).
 
 use super::engine::RenderSettings;
-use super::scattering::{glossy_reflection, reflect, Dielectric};
+use super::scattering::{power_heuristic, reflect, Dielectric, GlossyLobe};
 use crate::accel::Accel;
 use crate::film::ray_tree::{Segment, SegmentKind};
 use crate::film::Film;
@@ -17,7 +20,8 @@ use crate::geometry::{offset_ray_origin, shadow_ray, vec3, Ray, Vec3};
 use crate::render::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
 use crate::render::{render_pixels, Ambient, CameraSampler, Counts, IndirectLight, RenderStats};
 use crate::sampling::{LightSampling, Rng, Strata};
-use crate::scene::{Color, Scene, SurfaceHit};
+use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
+use std::collections::HashMap;
 
 /// Branches of the ray tree whose weight falls below this are not traced: their
 /// contribution cannot reach 1e-4 of the pixel.
@@ -30,21 +34,96 @@ struct Tracer<'a> {
     accel: &'a dyn Accel,
     settings: &'a RenderSettings,
     lights: Vec<Light>,
+    /// The index in `lights` of each emitting primitive.
+    light_of: HashMap<PrimRef, usize>,
     /// Where the N points on each light go (`--light-sampling`, `-num_shadow_samples`).
     light_strata: Strata,
     /// The rays traced, when recording a ray tree (`--ray-tree`); None while rendering.
     tree: Option<std::sync::Mutex<Vec<Segment>>>,
 }
 
+/// How a ray was chosen, for weighing the emitter it finds: from the camera or by a delta
+/// (mirror, glass: the emission counts in full), or by a glossy lobe whose reflection of the
+/// lights is also sampled from the lights, to be weighed against that by the power heuristic.
+#[derive(Clone, Copy)]
+enum Arrival {
+    Delta,
+    Glossy {
+        /// The point it left and the normal there (light sampling's density depends on it).
+        from: Vec3,
+        normal: Vec3,
+        /// The lobe's density in solid angle for its direction.
+        pdf: f32,
+    },
+}
+
+impl<'a> Tracer<'a> {
+    fn new(
+        scene: &'a Scene,
+        accel: &'a dyn Accel,
+        settings: &'a RenderSettings,
+        indirect: &'a dyn IndirectLight,
+        tree: Option<std::sync::Mutex<Vec<Segment>>>,
+    ) -> Tracer<'a> {
+        let lights = Light::collect(scene);
+        let light_of = lights
+            .iter()
+            .enumerate()
+            .map(|(k, l)| (l.prim, k))
+            .collect();
+        Tracer {
+            indirect,
+            scene,
+            accel,
+            settings,
+            lights,
+            light_of,
+            light_strata: Strata::new(
+                settings.light_sampling.pattern(),
+                settings.num_shadow_samples,
+            ),
+            tree,
+        }
+    }
+}
+
+/// Where a ray sits in the ray tree: how it was chosen, after how many specular bounces
+/// (`depth`), and the product of the specular weights above it (`weight`, to prune faint
+/// branches).
+#[derive(Clone, Copy)]
+struct Branch {
+    arrival: Arrival,
+    depth: u32,
+    weight: f32,
+}
+
+impl Branch {
+    /// The camera's ray.
+    const PRIMARY: Branch = Branch {
+        arrival: Arrival::Delta,
+        depth: 0,
+        weight: 1.0,
+    };
+
+    /// A ray one bounce below this one, chosen as `arrival` says, carrying `factor` of its
+    /// weight.
+    fn child(&self, arrival: Arrival, factor: f32) -> Branch {
+        Branch {
+            arrival,
+            depth: self.depth + 1,
+            weight: self.weight * factor,
+        }
+    }
+}
+
 impl Tracer<'_> {
-    /// Radiance arriving along `ray` whose closest hit is `hit`; `depth` specular bounces so
-    /// far, `weight` the product of the specular weights above (to prune faint branches).
+    /// Radiance arriving along `ray` (on `branch` of the ray tree) whose closest hit is
+    /// `hit`.
     fn shade(
         &self,
         ray: &Ray,
         hit: Option<SurfaceHit>,
-        depth: u32,
-        weight: f32,
+        branch: Branch,
         rng: &mut Rng,
         counts: &mut Counts,
     ) -> Color {
@@ -55,43 +134,59 @@ impl Tracer<'_> {
         let (front, n) = s.facing(ray.direction);
         let mut radiance = Vec3::ZERO;
         if self.scene.sees_emission(&s, ray.direction) {
-            radiance += m.emitted;
+            radiance += m.emitted * self.emission_weight(branch.arrival, &s);
         }
         let albedo = self.scene.albedo(&s);
         if albedo.max_element() > 0.0 {
             let irradiance_over_pi = self.direct(&s, n, rng, counts);
             let indirect = self
                 .indirect
-                .incident(self.scene, self.accel, &s, n, depth, rng);
+                .incident(self.scene, self.accel, &s, n, branch.depth, rng);
             radiance += albedo * (irradiance_over_pi + indirect);
         }
-        if depth >= self.settings.num_bounces {
+        if branch.depth >= self.settings.num_bounces {
             return radiance;
         }
-        if m.reflective.max_element() > 0.0 && weight * m.reflective.max_element() > MIN_WEIGHT {
-            let dir = glossy_reflection(
-                ray.direction,
-                n,
-                m.roughness,
-                rng.next_f32(),
-                rng.next_f32(),
-            );
-            let w = weight * m.reflective.max_element();
-            radiance += m.reflective * self.trace(&s.spawn_ray(dir), depth + 1, w, rng, counts);
+        let reflective = m.reflective.max_element();
+        if reflective > 0.0 && branch.weight * reflective > MIN_WEIGHT {
+            let reflected = match GlossyLobe::new(ray.direction, n, m.roughness) {
+                None => {
+                    let r = s.spawn_ray(reflect(ray.direction, n));
+                    self.trace(&r, branch.child(Arrival::Delta, reflective), rng, counts)
+                }
+                Some(lobe) => {
+                    let lit = self.glossy_direct(&s, n, &lobe, rng, counts);
+                    let (dir, pdf) = lobe.sample(rng.next_f32(), rng.next_f32());
+                    let arrival = match pdf {
+                        Some(pdf) if self.samples_glossy_lights() => Arrival::Glossy {
+                            from: s.point,
+                            normal: n,
+                            pdf,
+                        },
+                        _ => Arrival::Delta,
+                    };
+                    let r = s.spawn_ray(dir);
+                    lit + self.trace(&r, branch.child(arrival, reflective), rng, counts)
+                }
+            };
+            radiance += m.reflective * reflected;
         }
-        if m.transmitted.max_element() > 0.0 && weight * m.transmitted.max_element() > MIN_WEIGHT {
+        let transmitted = m.transmitted.max_element();
+        if transmitted > 0.0 && branch.weight * transmitted > MIN_WEIGHT {
             let glass = Dielectric::at(m, front, ray.direction, n);
             let f = glass.reflectance;
-            let w = weight * m.transmitted.max_element();
+            let w = branch.weight * transmitted;
             let mut through = Vec3::ZERO;
             if f > 0.0 && w * f > MIN_WEIGHT {
                 let r = s.spawn_ray(reflect(ray.direction, n));
-                through += self.trace(&r, depth + 1, w * f, rng, counts) * f;
+                let child = branch.child(Arrival::Delta, transmitted * f);
+                through += self.trace(&r, child, rng, counts) * f;
             }
             if f < 1.0 && w * (1.0 - f) > MIN_WEIGHT {
                 if let Some(t) = glass.refracted(ray.direction, n) {
                     let r = s.spawn_ray(t);
-                    through += self.trace(&r, depth + 1, w * (1.0 - f), rng, counts) * (1.0 - f);
+                    let child = branch.child(Arrival::Delta, transmitted * (1.0 - f));
+                    through += self.trace(&r, child, rng, counts) * (1.0 - f);
                 }
             }
             radiance += m.transmitted * through;
@@ -99,38 +194,84 @@ impl Tracer<'_> {
         radiance
     }
 
-    fn trace(
-        &self,
-        ray: &Ray,
-        depth: u32,
-        weight: f32,
-        rng: &mut Rng,
-        counts: &mut Counts,
-    ) -> Color {
+    fn trace(&self, ray: &Ray, branch: Branch, rng: &mut Rng, counts: &mut Counts) -> Color {
         counts.secondary += 1;
         let hit = crate::accel::closest_surface(self.accel, self.scene, ray);
         self.record(ray, hit.as_ref(), SegmentKind::Specular);
-        self.shade(ray, hit, depth, weight, rng, counts)
+        self.shade(ray, hit, branch, rng, counts)
+    }
+
+    /// Whether glossy lobes take light samples (weighed against the lobe's own samples by
+    /// multiple importance sampling): with area lights sampled (N > 1 shadow rays); the
+    /// course's one-ray modes leave glossy reflections of the lights to the lobe alone.
+    fn samples_glossy_lights(&self) -> bool {
+        self.settings.num_shadow_samples > 1
+    }
+
+    /// What share of an emitter's radiance a ray that arrived as `arrival` at its point `s`
+    /// brings: all of it, unless a glossy lobe chose it and the lights were sampled too;
+    /// then the power heuristic's share against the light sample's density.
+    fn emission_weight(&self, arrival: Arrival, s: &SurfaceHit) -> f32 {
+        let Arrival::Glossy { from, normal, pdf } = arrival else {
+            return 1.0;
+        };
+        let Some(&k) = self.light_of.get(&s.prim) else {
+            return 1.0;
+        };
+        let light_pdf = self.lights[k].pdf_towards(from, normal, s.point, s.geometric_normal);
+        power_heuristic(pdf, light_pdf)
+    }
+
+    /// The lights' direct reflection in a glossy lobe at `s` (normal `n` on the lit side):
+    /// one light sample per light, each weighed against the lobe's sampling by the power
+    /// heuristic; the lobe's own samples bring the rest (`emission_weight`).
+    fn glossy_direct(
+        &self,
+        s: &SurfaceHit,
+        n: Vec3,
+        lobe: &GlossyLobe,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
+        if !self.samples_glossy_lights() {
+            return Vec3::ZERO;
+        }
+        let origin = offset_ray_origin(s.point, n, s.error);
+        let mut total = Vec3::ZERO;
+        for light in &self.lights {
+            let (u, v) = (rng.next_f32(), rng.next_f32());
+            if light.prim == s.prim {
+                continue;
+            }
+            let Some(d) = light.sample_towards(s.point, n, u, v) else {
+                continue;
+            };
+            let dir = (d.point - s.point).normalize_or_zero();
+            let lobe_pdf = lobe.pdf(dir);
+            if !(lobe_pdf > 0.0 && d.pdf > 0.0 && d.pdf.is_finite()) {
+                continue;
+            }
+            let ray = shadow_ray(origin, d.point);
+            record_segment(self.tree.as_ref(), origin, d.point, SegmentKind::Shadow);
+            counts.shadow += 1;
+            if !self.accel.occluded(&ray) {
+                total += light.emitted * (lobe_pdf / d.pdf * power_heuristic(d.pdf, lobe_pdf));
+            }
+        }
+        total
     }
 
     /// Adds a ray to the ray tree, when one is being recorded.
     fn record(&self, ray: &Ray, hit: Option<&SurfaceHit>, kind: SegmentKind) {
-        if let Some(tree) = &self.tree {
-            let to = match hit {
-                Some(s) => s.point,
-                // A ray that leaves the scene is drawn out to twice the scene's size.
-                None => {
-                    ray.at(2.0 * self.scene.bounds().extent().length() / ray.direction.length())
-                }
-            };
-            if let Ok(mut t) = tree.lock() {
-                t.push(Segment {
-                    from: ray.origin,
-                    to,
-                    kind,
-                });
-            }
+        if self.tree.is_none() {
+            return;
         }
+        let to = match hit {
+            Some(s) => s.point,
+            // A ray that leaves the scene is drawn out to twice the scene's size.
+            None => ray.at(2.0 * self.scene.bounds().extent().length() / ray.direction.length()),
+        };
+        record_segment(self.tree.as_ref(), ray.origin, to, kind);
     }
 
     /// Direct irradiance at a surface point divided by π, so that albedo × this is the
@@ -176,14 +317,14 @@ impl Tracer<'_> {
                     None
                 };
                 match (light.shape, by_solid_angle) {
-                    // Uniform in solid angle (rectangles, spheres by their cone) every point
-                    // weighs Ω/(N·π) times the receiver's cosine: bounded, however near the
-                    // light the point is.
-                    (_, Some(rect)) => {
-                        batch.per_sample =
-                            (rect.solid_angle() / (count as f64 * std::f64::consts::PI)) as f32;
+                    // By solid angle (rectangles, spheres by their cone) each point carries
+                    // its own weight, bounded however near the light the point is.
+                    (_, Some(sampler)) => {
+                        batch.per_sample = 1.0 / count as f32;
                         for (u, v) in self.light_strata.samples(rng) {
-                            batch.push_in_solid_angle(rect.sample(u, v));
+                            if let Some(d) = sampler.sample_towards(n, u, v) {
+                                batch.add(d.point, d.weight);
+                            }
                         }
                     }
                     // Quad lights sampled by area take their own loop with the parallelogram
@@ -238,7 +379,8 @@ struct ShadowBatch<'a> {
     n: Vec3,
     /// Where every ray starts: `x` moved off the surface on the lit side.
     origin: Vec3,
-    /// Each ray's share of the light's contribution: area / (N·π).
+    /// Each ray's share of the light's contribution: area / (N·π) by area, 1/N by solid
+    /// angle.
     per_sample: f32,
     rays: &'a mut [Ray],
     /// The unoccluded contribution of each ray (geometric term × `per_sample`).
@@ -255,18 +397,6 @@ impl ShadowBatch<'_> {
     fn push(&mut self, p: LightPoint) {
         if let Some(g) = geometric_term(self.x, self.n, &p) {
             self.add(p.point, g);
-        }
-    }
-
-    /// Adds the ray to `point`, sampled uniformly in the solid angle of its light: its weight
-    /// is the receiver's cosine (times `per_sample`, Ω/(N·π)), nothing if it lies below the
-    /// surface.
-    #[inline(always)]
-    fn push_in_solid_angle(&mut self, point: Vec3) {
-        let w = point - self.x;
-        let along_surface = self.n.dot(w);
-        if along_surface > 0.0 {
-            self.add(point, along_surface / w.length());
         }
     }
 
@@ -297,18 +427,22 @@ impl ShadowBatch<'_> {
     #[inline(always)]
     fn add(&mut self, point: Vec3, g: f32) {
         let ray = shadow_ray(self.origin, point);
-        if let Some(tree) = self.tree {
-            if let Ok(mut t) = tree.lock() {
-                t.push(Segment {
-                    from: ray.origin,
-                    to: point,
-                    kind: SegmentKind::Shadow,
-                });
-            }
-        }
+        record_segment(self.tree, ray.origin, point, SegmentKind::Shadow);
         self.rays[self.len] = ray;
         self.weights[self.len] = g * self.per_sample;
         self.len += 1;
+    }
+}
+
+/// Adds the segment from `from` to `to` to the ray tree being recorded, if any.
+fn record_segment(
+    tree: Option<&std::sync::Mutex<Vec<Segment>>>,
+    from: Vec3,
+    to: Vec3,
+    kind: SegmentKind,
+) {
+    if let Some(Ok(mut t)) = tree.map(|t| t.lock()) {
+        t.push(Segment { from, to, kind });
     }
 }
 
@@ -345,24 +479,13 @@ pub fn render_with(
     settings: &RenderSettings,
     indirect: &dyn IndirectLight,
 ) -> (Film, RenderStats) {
-    let tracer = Tracer {
-        indirect,
-        scene,
-        accel,
-        settings,
-        lights: Light::collect(scene),
-        light_strata: Strata::new(
-            settings.light_sampling.pattern(),
-            settings.num_shadow_samples,
-        ),
-        tree: None,
-    };
+    let tracer = Tracer::new(scene, accel, settings, indirect, None);
     render_pixels(
         scene,
         accel,
         &settings.image(),
         "raytrace",
-        |ray, hit, rng, counts| tracer.shade(ray, hit, 0, 1.0, rng, counts),
+        |ray, hit, rng, counts| tracer.shade(ray, hit, Branch::PRIMARY, rng, counts),
     )
 }
 
@@ -376,18 +499,9 @@ pub fn ray_tree(
     x: u32,
     y: u32,
 ) -> Vec<Segment> {
-    let tracer = Tracer {
-        indirect: &Ambient(settings.ambient_light),
-        scene,
-        accel,
-        settings,
-        lights: Light::collect(scene),
-        light_strata: Strata::new(
-            settings.light_sampling.pattern(),
-            settings.num_shadow_samples,
-        ),
-        tree: Some(std::sync::Mutex::new(Vec::new())),
-    };
+    let ambient = Ambient(settings.ambient_light);
+    let tree = Some(std::sync::Mutex::new(Vec::new()));
+    let tracer = Tracer::new(scene, accel, settings, &ambient, tree);
     let camera = CameraSampler::new(scene, &settings.image());
     let spp = settings.num_antialias_samples.max(1);
     let mut counts = Counts::default();
@@ -395,7 +509,7 @@ pub fn ray_tree(
         let (ray, mut rng) = camera.sample((x, y), k);
         let hit = crate::accel::closest_surface(accel, scene, &ray);
         tracer.record(&ray, hit.as_ref(), SegmentKind::Eye);
-        tracer.shade(&ray, hit, 0, 1.0, &mut rng, &mut counts);
+        tracer.shade(&ray, hit, Branch::PRIMARY, &mut rng, &mut counts);
     }
     tracer
         .tree

@@ -99,20 +99,67 @@ pub fn fresnel_dielectric(cos_i: f32, eta_i: f32, eta_t: f32) -> f32 {
 }
 
 /// The direction a mirror of the given roughness reflects `d` into about the unit normal
-/// `n`: the mirror direction for roughness 0, else a sample of the Phong lobe of exponent
-/// 2/roughness² − 2 around it (the mirror direction again when the sample falls below the
-/// surface). (u, v) in [0,1)².
+/// `n`: the mirror direction for roughness 0, else a sample of its `GlossyLobe`. (u, v) in
+/// [0,1)².
 pub fn glossy_reflection(d: Vec3, n: Vec3, roughness: f32, u: f32, v: f32) -> Vec3 {
-    let mirror = reflect(d, n);
-    if roughness <= 0.0 {
-        return mirror;
+    match GlossyLobe::new(d, n, roughness) {
+        Some(lobe) => lobe.sample(u, v).0,
+        None => reflect(d, n),
     }
-    let exponent = (2.0 / (roughness * roughness) - 2.0).max(0.0);
-    let g = sample_lobe(mirror, exponent, u, v);
-    if g.dot(n) <= 0.0 {
-        mirror
+}
+
+/// The glossy lobe of a rough mirror: the Phong lobe of exponent 2/roughness² − 2 around the
+/// mirror direction, a sample that falls below the surface taking the mirror direction
+/// itself. Above the surface it is a density, which multiple importance sampling weighs
+/// light samples against; the mirror direction's share is a delta no light sample can find.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GlossyLobe {
+    mirror: Vec3,
+    n: Vec3,
+    exponent: f32,
+}
+
+impl GlossyLobe {
+    /// The lobe for direction `d` arriving at a surface of unit normal `n` (facing `d`);
+    /// None for roughness 0, a perfect mirror.
+    pub fn new(d: Vec3, n: Vec3, roughness: f32) -> Option<GlossyLobe> {
+        (roughness > 0.0).then(|| GlossyLobe {
+            mirror: reflect(d, n),
+            n,
+            exponent: (2.0 / (roughness * roughness) - 2.0).max(0.0),
+        })
+    }
+
+    /// A direction from (u, v) in [0,1)², with its density in solid angle; None with the
+    /// mirror direction when the lobe's sample fell below the surface.
+    pub fn sample(&self, u: f32, v: f32) -> (Vec3, Option<f32>) {
+        let g = sample_lobe(self.mirror, self.exponent, u, v);
+        if g.dot(self.n) <= 0.0 {
+            (self.mirror, None)
+        } else {
+            (g, Some(self.pdf(g)))
+        }
+    }
+
+    /// The density in solid angle of the unit direction `w`, (e + 1)/(2π)·cos^e of its angle
+    /// to the mirror direction; 0 below the surface.
+    pub fn pdf(&self, w: Vec3) -> f32 {
+        let cos = w.dot(self.mirror);
+        if w.dot(self.n) <= 0.0 || cos <= 0.0 {
+            return 0.0;
+        }
+        (self.exponent + 1.0) / std::f32::consts::TAU * cos.powf(self.exponent)
+    }
+}
+
+/// The power heuristic's weight (β = 2) for a sample drawn with density `a` when another
+/// strategy would have drawn it with density `b`.
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 {
+        a2 / (a2 + b2)
     } else {
-        g
+        0.0
     }
 }
 

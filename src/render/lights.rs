@@ -221,8 +221,8 @@ impl Light {
     }
 }
 
-/// A light seen from a shading point, sampled uniformly in the solid angle it subtends there:
-/// every point it gives weighs the same, Ω, however near the light the shading point is.
+/// A light seen from a shading point, sampled by the solid angle it subtends there: the
+/// weights stay bounded however near the light the shading point is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SolidAngleSampler {
     /// A rectangle: Ureña, Fajardo & King's spherical rectangle.
@@ -248,18 +248,28 @@ impl SolidAngleSampler {
         }
     }
 
-    /// The point of the light at (u, v) in [0,1)²: uniform in solid angle for uniform (u, v),
-    /// and stratified where (u, v) are.
-    pub fn sample(&self, u: f32, v: f32) -> Vec3 {
+    /// A point of the light for the shading point of unit normal `n` (on its lit side), from
+    /// (u, v) in [0,1)²; None where it lies below the receiver's horizon. Rectangles: uniform
+    /// in solid angle across the longer edge and in proportion to the receiver's cosine
+    /// along it, so that unoccluded the estimate varies only with u. Spheres: uniform in the
+    /// cone, each point weighing cosθ·Ω/π. Bounded weights however near the light `x` is.
+    pub fn sample_towards(&self, n: Vec3, u: f32, v: f32) -> Option<DirectSample> {
         match *self {
-            SolidAngleSampler::Rectangle(r) => r.sample(u, v),
+            SolidAngleSampler::Rectangle(r) => {
+                let s = r.sample_cosine(n, u, v)?;
+                Some(DirectSample {
+                    point: s.point,
+                    weight: s.weight as f32,
+                    pdf: s.pdf as f32,
+                })
+            }
             SolidAngleSampler::Cone {
                 origin,
                 centre,
                 radius,
                 axis,
                 cos_max,
-                ..
+                solid_angle,
             } => {
                 // The nearer crossing of the sphere along the direction, the discriminant held
                 // at zero where rounding puts a direction at the rim just outside.
@@ -268,8 +278,22 @@ impl SolidAngleSampler {
                 let b = dir.dot(to_centre);
                 let c = to_centre.length_squared() - radius * radius;
                 let t = b - (b * b - c).max(0.0).sqrt();
-                origin + dir * t
+                let cos = n.dot(dir);
+                (cos > 0.0).then(|| DirectSample {
+                    point: origin + dir * t,
+                    weight: (solid_angle / std::f64::consts::PI) as f32 * cos,
+                    pdf: (1.0 / solid_angle) as f32,
+                })
             }
+        }
+    }
+
+    /// The density in solid angle with which `sample_towards` (receiver normal `n`) gives
+    /// the direction towards `p`, a point of the light.
+    pub fn pdf_towards(&self, n: Vec3, p: Vec3) -> f32 {
+        match self {
+            SolidAngleSampler::Rectangle(r) => r.pdf_cosine(n, p) as f32,
+            SolidAngleSampler::Cone { solid_angle, .. } => (1.0 / solid_angle) as f32,
         }
     }
 }
@@ -319,21 +343,12 @@ impl Light {
     }
 
     /// One point of this light for the shading point `x` with unit normal `n` (on its lit
-    /// side), from (u, v) in [0,1)²: uniform in solid angle where `solid_angle_sampler` gives
-    /// one (each point weighs cosθ·Ω/π, bounded however near the light `x` is), else uniform
-    /// by area (cosθ·cosθ'·A/(π·r²)). None where the point sends `x` nothing (behind either
-    /// surface).
+    /// side), from (u, v) in [0,1)²: by `SolidAngleSampler::sample_towards` where
+    /// `solid_angle_sampler` gives one, else uniform by area (cosθ·cosθ'·A/(π·r²)). None
+    /// where the point sends `x` nothing (behind either surface).
     pub fn sample_towards(&self, x: Vec3, n: Vec3, u: f32, v: f32) -> Option<DirectSample> {
         if let Some(sampler) = self.solid_angle_sampler(x) {
-            let point = sampler.sample(u, v);
-            let w = point - x;
-            let cos = n.dot(w) / w.length();
-            let omega = sampler.solid_angle();
-            return (cos > 0.0).then(|| DirectSample {
-                point,
-                weight: (omega / std::f64::consts::PI) as f32 * cos,
-                pdf: (1.0 / omega) as f32,
-            });
+            return sampler.sample_towards(n, u, v);
         }
         let p = self.sample(u, v);
         let w = p.point - x;
@@ -353,12 +368,12 @@ impl Light {
         })
     }
 
-    /// The density in solid angle with which `sample_towards` from `x` gives the point `p`
-    /// of this light, of unit normal `normal` there: what multiple importance sampling weighs
-    /// a direction that found the light by other means with.
-    pub fn pdf_towards(&self, x: Vec3, p: Vec3, normal: Vec3) -> f32 {
+    /// The density in solid angle with which `sample_towards` from `x` (receiver normal
+    /// `n`) gives the point `p` of this light, of unit normal `normal` there: what multiple
+    /// importance sampling weighs a direction that found the light by other means with.
+    pub fn pdf_towards(&self, x: Vec3, n: Vec3, p: Vec3, normal: Vec3) -> f32 {
         if let Some(sampler) = self.solid_angle_sampler(x) {
-            return (1.0 / sampler.solid_angle()) as f32;
+            return sampler.pdf_towards(n, p);
         }
         let w = p - x;
         let r2 = w.length_squared();

@@ -61,14 +61,21 @@ pub enum Pattern {
     /// One uniform point in each stratum of the grid.
     #[default]
     Jittered,
+    /// Correlated multi-jittered points (Kensler, "Correlated Multi-Jittered Sampling",
+    /// 2013): one in each cell of an m × n grid (m = ⌊√N⌋, n = ⌈N/m⌉) and, projected on
+    /// either axis, one in each of the N intervals of width 1/N. The light samplers that
+    /// integrate one axis exactly (`render::solid_angle`) are left with a 1-D integral over
+    /// the other, which N strata resolve far better than √N.
+    MultiJittered,
 }
 
 /// How the ray tracer places its shadow rays on a light (`--light-sampling`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum LightSampling {
-    /// Uniform in the solid angle a rectangular light subtends, one jittered point per
-    /// stratum of that parametrisation (other lights, and rectangles too small or far to
-    /// matter, by area with jittered points).
+    /// Rectangular lights by solid angle across the longer edge and by the receiver's
+    /// cosine along it, multi-jittered in that parametrisation; spheres uniform in the cone
+    /// they subtend; other lights, and lights too small or far to matter, by area (the
+    /// points multi-jittered too).
     #[default]
     SolidAngle,
     /// Independent uniform points by area (the course's comparison).
@@ -83,7 +90,8 @@ impl LightSampling {
     /// The pattern of the (u, v) points, in whichever parametrisation.
     pub fn pattern(self) -> Pattern {
         match self {
-            LightSampling::SolidAngle | LightSampling::Jittered => Pattern::Jittered,
+            LightSampling::SolidAngle => Pattern::MultiJittered,
+            LightSampling::Jittered => Pattern::Jittered,
             LightSampling::Random => Pattern::Random,
             LightSampling::Stratified => Pattern::Stratified,
         }
@@ -92,10 +100,12 @@ impl LightSampling {
 
 /// `n` samples in [0,1)² placed by a pattern over a grid of strata: √n × √n when n is a
 /// square, else n × 1 (n strata along the first axis, which callers align with the longer
-/// edge).
+/// edge); multi-jittered points take an m × n grid (`Pattern::MultiJittered`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Strata {
     pattern: Pattern,
+    /// The number of samples.
+    count: u32,
     nx: u32,
     ny: u32,
     /// 1/nx and 1/ny: a stratum's size, multiplied rather than divided by (a divide per
@@ -108,9 +118,19 @@ impl Strata {
     pub fn new(pattern: Pattern, n: u32) -> Strata {
         let n = n.max(1);
         let r = (n as f64).sqrt().round() as u32;
-        let (nx, ny) = if r * r == n { (r, r) } else { (n, 1) };
+        let (nx, ny) = if pattern == Pattern::MultiJittered {
+            // m × n cells holding at least N points (the extra cells of the last row stay
+            // empty; `samples` stops after N).
+            let m = ((n as f64).sqrt().floor() as u32).max(1);
+            (m, n.div_ceil(m))
+        } else if r * r == n {
+            (r, r)
+        } else {
+            (n, 1)
+        };
         Strata {
             pattern,
+            count: n,
             nx,
             ny,
             dx: 1.0 / nx as f32,
@@ -118,9 +138,14 @@ impl Strata {
         }
     }
 
-    /// Sample `k` (of the n the grid was made for).
+    /// Sample `k` (of the n the grid was made for). The multi-jittered pattern draws the
+    /// key of a whole pattern from `rng` for it, so only there does this differ from the
+    /// k-th of `samples`.
     #[inline]
     pub fn sample(&self, k: u32, rng: &mut Rng) -> (f32, f32) {
+        if self.pattern == Pattern::MultiJittered {
+            return self.multi_jittered(k, rng.next_u64());
+        }
         self.in_cell(k % self.nx, k / self.nx, rng)
     }
 
@@ -128,7 +153,18 @@ impl Strata {
     /// sample k's stratum.
     pub fn samples<'a>(&'a self, rng: &'a mut Rng) -> impl Iterator<Item = (f32, f32)> + 'a {
         let mut cell = (0, 0);
+        // One key for the whole multi-jittered pattern (its permutations and jitter).
+        let key = if self.pattern == Pattern::MultiJittered {
+            rng.next_u64()
+        } else {
+            0
+        };
+        let mut k = 0;
         std::iter::from_fn(move || {
+            if self.pattern == Pattern::MultiJittered {
+                k += 1;
+                return (k <= self.count).then(|| self.multi_jittered(k - 1, key));
+            }
             let (ix, iy) = cell;
             if iy == self.ny {
                 return None;
@@ -147,10 +183,56 @@ impl Strata {
         match self.pattern {
             Pattern::Random => (rng.next_f32(), rng.next_f32()),
             Pattern::Stratified => ((ix as f32 + 0.5) * self.dx, (iy as f32 + 0.5) * self.dy),
-            Pattern::Jittered => (
+            Pattern::Jittered | Pattern::MultiJittered => (
                 (ix as f32 + rng.next_f32()) * self.dx,
                 (iy as f32 + rng.next_f32()) * self.dy,
             ),
+        }
+    }
+
+    /// Point `k` of the multi-jittered pattern of key `key` (Kensler 2013, section 3): the
+    /// points are shuffled over the cells, the cell's column picks the x sub-interval within
+    /// the row's stratum by one permutation, the row the y sub-interval by another.
+    fn multi_jittered(&self, k: u32, key: u64) -> (f32, f32) {
+        let (m, n) = (self.nx, self.ny);
+        let key32 = |salt: u64| (mix64(key ^ salt) >> 32) as u32;
+        let s = permute(k, m * n, key32(0x51633e2d));
+        let (column, row) = (s % m, s / m);
+        let sx = permute(column, m, key32(0x68bc21eb));
+        let sy = permute(row, n, key32(0x02e5be93));
+        let jitter = hash3(key, k as u64, 0x967a889b);
+        let jx = (jitter >> 40) as f32 * UNIT_24;
+        let jy = ((jitter >> 8) & 0xff_ffff) as f32 * UNIT_24;
+        let x = (column as f32 + (sy as f32 + jx) / n as f32) / m as f32;
+        let y = (row as f32 + (sx as f32 + jy) / m as f32) / n as f32;
+        // Rounding may carry a point to 1.0; the samplers expect [0, 1).
+        (x.min(ONE_BELOW), y.min(ONE_BELOW))
+    }
+}
+
+/// The largest f32 below 1.
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// `i` in [0, len) moved by a permutation of [0, len) chosen by `key`: a keyed bijection of
+/// the enclosing power-of-two range (xors, odd multiplications and right xorshifts, each
+/// invertible on k-bit words), applied again until the value falls inside ("cycle walking",
+/// which keeps it a bijection of [0, len)).
+fn permute(mut i: u32, len: u32, key: u32) -> u32 {
+    if len <= 1 {
+        return 0;
+    }
+    let mask = u32::MAX >> (len - 1).leading_zeros();
+    let bits = 32 - mask.leading_zeros();
+    let half = bits.div_ceil(2);
+    loop {
+        i ^= key & mask;
+        i = i.wrapping_mul(0x9e37_79b1 | 1) & mask;
+        i ^= i >> half;
+        i = i.wrapping_add(key >> 16) & mask;
+        i = i.wrapping_mul((key | 1).wrapping_mul(0x2c1b_3c6d) | 1) & mask;
+        i ^= i >> 1.max(half / 2);
+        if i < len {
+            return i;
         }
     }
 }
@@ -204,6 +286,51 @@ pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn permute_is_a_bijection() {
+        for len in 1..200u32 {
+            for key in [0u32, 1, 0xdead_beef, 0x8000_0001] {
+                let mut seen: Vec<u32> = (0..len).map(|i| permute(i, len, key)).collect();
+                seen.sort_unstable();
+                assert!(seen.iter().copied().eq(0..len), "len {len}, key {key:#x}");
+            }
+        }
+    }
+
+    /// Multi-jittered points: one in each cell of the m × n grid and one in each of the
+    /// m·n intervals of either axis, every coordinate in [0, 1).
+    #[test]
+    fn multi_jittered_points_are_stratified_in_two_and_one_dimensions() {
+        for count in [1u32, 2, 3, 4, 7, 9, 10, 16, 50, 64, 256] {
+            let strata = Strata::new(Pattern::MultiJittered, count);
+            let (m, n) = (strata.nx, strata.ny);
+            assert!(m * n >= count && m * (n - 1) < count, "{count}: {m} × {n}");
+            for seed in 0..4 {
+                let points: Vec<(f32, f32)> = strata
+                    .samples(&mut Rng::new(seed, count as u64, 0))
+                    .collect();
+                assert_eq!(points.len(), count as usize);
+                let distinct = |key: &dyn Fn(&(f32, f32)) -> u32| {
+                    let mut k: Vec<u32> = points.iter().map(key).collect();
+                    k.sort_unstable();
+                    k.dedup();
+                    k.len()
+                };
+                assert!(points
+                    .iter()
+                    .all(|&(x, y)| (0.0..1.0).contains(&x) && (0.0..1.0).contains(&y)));
+                let cells = distinct(&|&(x, y)| (x * m as f32) as u32 * n + (y * n as f32) as u32);
+                let columns = distinct(&|&(x, _)| (x * (m * n) as f32) as u32);
+                let rows = distinct(&|&(_, y)| (y * (m * n) as f32) as u32);
+                assert_eq!(
+                    [cells, columns, rows],
+                    [count as usize; 3],
+                    "{count} points"
+                );
+            }
+        }
+    }
 
     /// `samples` gives exactly what `sample(k)` gives for k = 0, 1, ..., with one point in
     /// each stratum for the jittered pattern.
