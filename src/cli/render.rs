@@ -17,6 +17,13 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     let input = args.common.input.as_ref().ok_or("missing -input")?;
     args.validate()?;
     let mut settings = args.settings();
+    let chosen = args.choose_for_time_limit(&mut settings);
+    if !chosen.is_empty() && !args.common.quiet {
+        eprintln!(
+            "--time-limit without quality flags: chose {}",
+            chosen.join(" ")
+        );
+    }
     let pool = crate::parallel::thread_pool(args.common.threads).map_err(|e| e.to_string())?;
     crate::parallel::worker_start();
 
