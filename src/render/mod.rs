@@ -190,9 +190,9 @@ type PixelSum = ([f64; 3], u32);
 /// samples that come out NaN or infinite left out and counted. `radiance` gives the radiance
 /// along a camera ray from its closest hit. Only the pixels of the settings' window and the
 /// samples of their range are taken; a part of a split render keeps its sums in the film.
-/// Under `--time-limit` the samples come in passes of `-num_antialias_samples` per pixel
-/// until the deadline (at least one pass; a pass is started only if the last one's time
-/// still fits).
+/// Under `--time-limit` the samples come in passes until the deadline: one sample a pixel,
+/// then `-num_antialias_samples` a pass, or as many as the time left fits at the last
+/// pass's rate (none: the render ends).
 pub fn render_pixels(
     scene: &Scene,
     accel: &dyn Accel,
@@ -229,13 +229,18 @@ pub fn render_pixels(
     let bar = crate::progress::bar(1000, label, settings.quiet);
     let mut total = vec![([0.0f64; 3], 0u32); window.pixels()];
     let mut taken = 0u32;
+    // The first pass takes one sample a pixel, so that an engine whose samples are dear (final
+    // gathering: 4 samples a pixel took half a second at 256×256) overruns a short limit by
+    // one sample's pass at most; later passes take `per_pass`, or as many as the time left
+    // fits at the last pass's rate.
+    let mut pass = 1;
     loop {
         let pass_start = Instant::now();
         let rows = take_samples(
             scene,
             accel,
             &camera,
-            (window, taken..taken + per_pass),
+            (window, taken..taken + pass),
             &mut film,
             &stats,
             &indicatif::ProgressBar::hidden(),
@@ -248,14 +253,18 @@ pub fn render_pixels(
             }
             t.1 += count;
         }
-        taken += per_pass;
+        taken += pass;
         let now = Instant::now();
         bar.set_position(
             (1000.0 * (now - start).as_secs_f64() / budget.max(1e-9)).min(1000.0) as u64,
         );
-        if crate::interrupt::requested() || now + (now - pass_start) > deadline {
+        let per_sample = (now - pass_start).as_secs_f64() / pass as f64;
+        let left = deadline.saturating_duration_since(now).as_secs_f64();
+        let fits = (left / per_sample.max(1e-12)).floor().min(per_pass as f64) as u32;
+        if crate::interrupt::requested() || fits == 0 {
             break;
         }
+        pass = fits;
     }
     bar.finish_and_clear();
     stats.samples_reached.store(taken as u64, Relaxed);
