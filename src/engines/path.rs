@@ -68,11 +68,7 @@ impl PathTracer<'_> {
         if total > 0.0 {
             cdf.iter_mut().for_each(|c| *c /= total);
         }
-        let light_of = lights
-            .iter()
-            .enumerate()
-            .map(|(k, l)| (l.prim, k))
-            .collect();
+        let light_of = Light::index_by_prim(&lights);
         PathTracer {
             scene,
             accel,

@@ -66,11 +66,7 @@ impl<'a> Tracer<'a> {
         tree: Option<std::sync::Mutex<Vec<Segment>>>,
     ) -> Tracer<'a> {
         let lights = Light::collect(scene);
-        let light_of = lights
-            .iter()
-            .enumerate()
-            .map(|(k, l)| (l.prim, k))
-            .collect();
+        let light_of = Light::index_by_prim(&lights);
         Tracer {
             indirect,
             scene,

@@ -171,6 +171,16 @@ impl Light {
         lights
     }
 
+    /// The index in `lights` of each emitting primitive: how a ray that finds an emitter
+    /// learns which light's sampling could have chosen it.
+    pub fn index_by_prim(lights: &[Light]) -> std::collections::HashMap<PrimRef, usize> {
+        lights
+            .iter()
+            .enumerate()
+            .map(|(k, l)| (l.prim, k))
+            .collect()
+    }
+
     /// The point used by the course's single shadow ray (and by the unshadowed mode): the
     /// centre of a planar light, the point of a sphere or ring nearest to `towards`.
     pub fn centre(&self, towards: Vec3) -> LightPoint {
