@@ -2,9 +2,12 @@
 figures, and a render of it:
 
     python3 scripts/mitsuba_caustic.py SPP OUT.exr [RES] [SEED]
+    python3 scripts/mitsuba_caustic.py reference BATCHES SPP OUT.exr [RES]
 
-Prints the wall time of the render (a first render at the same sample count is not timed, so
-that Dr.Jit's kernel compilation is not counted). Our conventions, as
+The first prints the wall time of the render (a first render at the same sample count is not
+timed, so that Dr.Jit's kernel compilation is not counted). The second writes the mean of
+BATCHES renders of SPP samples with different seeds: a converged reference (16 × 2,048 for
+the 32k-spp references of BENCHMARKS.md). Our conventions, as
 ../shared/peers/mitsuba_cornell.py sets them for the Cornell box:
   * geometry copied from the scene file; each quad 'f a b c d' becomes triangles (a,b,c),
     (a,c,d), whose winding gives the geometric normal n = (b-a)x(c-a);
@@ -77,8 +80,22 @@ def scene(res=256, max_depth=64, rr_depth=5):
     }
 
 
+def reference(batches, spp, out, res):
+    import numpy as np
+    loaded = mi.load_dict(scene(res=res))
+    total = None
+    for b in range(batches):
+        image = np.array(mi.render(loaded, spp=spp, seed=1000 + b))
+        total = image if total is None else total + image
+    mi.Bitmap(total / batches).write(out)
+
+
 if __name__ == "__main__":
     mi.set_variant(os.environ.get("MITSUBA_VARIANT", "llvm_ad_rgb"))
+    if sys.argv[1] == "reference":
+        reference(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4],
+                  int(sys.argv[5]) if len(sys.argv) > 5 else 256)
+        sys.exit(0)
     spp, out = int(sys.argv[1]), sys.argv[2]
     res = int(sys.argv[3]) if len(sys.argv) > 3 else 256
     seed = int(sys.argv[4]) if len(sys.argv) > 4 else 0

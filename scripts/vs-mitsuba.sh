@@ -14,6 +14,9 @@
 #
 # REFERENCE: a converged image of the same scene (e.g. Mitsuba at 32k spp, averaged). Our
 # scene is scenes/cornell_box_diffuse_sphere.obj with a black background, as Mitsuba's.
+# VS_SCENE=caustic measures scenes/glass_sphere_caustic.obj instead (Mitsuba's side:
+# scripts/mitsuba_caustic.py, which also makes its reference), with -num_bounces 6 for the
+# engines that trace glass by recursion.
 # Needs `pip install mitsuba numpy`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH (set here from
 # ldconfig when unset). Writes its images and a CSV into a temporary folder it names.
 set -euo pipefail
@@ -27,8 +30,13 @@ if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
 fi
 work=$(mktemp -d)
 echo "vs-mitsuba: images and CSV in $work"
-scene=$work/cornell_box_diffuse_sphere.obj
-cp "$here/../scenes/cornell_box_diffuse_sphere.obj" "$scene"
+if [ "${VS_SCENE:-cornell}" = caustic ]; then
+  name=glass_sphere_caustic.obj mitsuba=mitsuba_caustic.py bounces="-num_bounces 6"
+else
+  name=cornell_box_diffuse_sphere.obj mitsuba=mitsuba_time.py bounces=""
+fi
+scene=$work/$name
+cp "$here/../scenes/$name" "$scene"
 echo "background_color 0 0 0" >>"$scene"
 
 relmse() { "$render" compare "$1" "$reference" | awk '/^relmse/ { print $2 }'; }
@@ -45,7 +53,7 @@ csv=$work/vs-mitsuba.csv
 echo "renderer,setting,seconds,relmse" >"$csv"
 for r in $(seq "$repeats"); do
   for spp in 16 64 256; do
-    t=$(python3 "$here/mitsuba_time.py" "$spp" "$work/mi_$spp.exr" 256 "$r")
+    t=$(python3 "$here/$mitsuba" "$spp" "$work/mi_$spp.exr" 256 "$r")
     echo "mitsuba,$spp spp,$t,$(relmse "$work/mi_$spp.exr")" >>"$csv"
     t=$(seconds "$render" -input "$scene" --engine path -num_antialias_samples "$spp" \
       --seed "$r" --quiet -o "$work/path_$spp.exr")
@@ -87,8 +95,8 @@ echo "Mitsuba's time to relMSE 1e-2: $t1 s; to 2e-3: $t2 s"
 engines=(
   "path|--engine path -num_antialias_samples 4"
   "sppm|--engine sppm"
-  "raytrace + radiosity|--indirect radiosity --subdivide 3 -interpolate -num_shadow_samples 16 -num_antialias_samples 4"
-  "photon + final gathering|--engine photon -num_photons_to_shoot 50000 -gather_indirect -num_shadow_samples 16 -num_antialias_samples 4"
+  "raytrace + radiosity|--indirect radiosity --subdivide 3 -interpolate -num_shadow_samples 16 -num_antialias_samples 4 $bounces"
+  "photon + final gathering|--engine photon -num_photons_to_shoot 50000 -gather_indirect -num_shadow_samples 16 -num_antialias_samples 4 $bounces"
 )
 echo
 echo "| engine (our flags) | --time-limit (s) | wall time (s) | relMSE |"
