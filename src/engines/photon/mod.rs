@@ -329,15 +329,19 @@ impl IndirectLight for PhotonIndirect<'_> {
         accel: &dyn Accel,
         s: &SurfaceHit,
         n: Vec3,
-        depth: u32,
+        _depth: u32,
         rng: &mut Rng,
     ) -> Color {
         let global = match self.cache {
-            // Final gathering where the camera looks; behind mirrors, the map itself.
-            Some(c) if depth == 0 => {
-                c.irradiance_over_pi(scene, accel, self.maps, (s.point, n, s.error), rng)
-            }
-            _ => self.maps.global_at(s.point, n),
+            // Final gathering wherever the camera's rays reach a diffuse surface, behind
+            // mirrors and glass too. With final gathering the global map holds every photon
+            // (the gather rays need the full light where they land), so its own estimate
+            // there would count direct light and caustics twice: it did, and on the
+            // glass-sphere scene what the camera saw through the glass came out up to 2× too
+            // bright (relMSE 2.1e-2 against Mitsuba's reference, against 4.7e-4 without
+            // final gathering).
+            Some(c) => c.irradiance_over_pi(scene, accel, self.maps, (s.point, n, s.error), rng),
+            None => self.maps.global_at(s.point, n),
         };
         global + self.maps.caustic_at(s.point, n)
     }
