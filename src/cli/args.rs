@@ -102,8 +102,9 @@ pub struct CommonArgs {
     /// that can refine add pixel samples (passes of -num_antialias_samples), SPPM passes or
     /// radiosity shots until the time is spent, then write the image and say what they
     /// reached. Without the quality flags, the ray tracer and the engines built on it choose
-    /// their own (16 shadow rays, passes of 4 camera samples; the photon engine final
-    /// gathering with 50,000 photons a second; radiosity interpolated) and say so.
+    /// their own (16 shadow rays, passes of 4 camera samples; the photon engine, given none
+    /// of its flags, final gathering with 50,000 photons a second; radiosity interpolated)
+    /// and say so.
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub time_limit: Option<f64>,
     /// Make quads opaque from both sides.
@@ -599,8 +600,9 @@ impl RenderArgs {
     /// - the ray tracer and the engines built on it (photon, ray tracer + radiosity): 16
     ///   shadow rays a light (soft shadows by solid angle; relMSE of direct light 1.2e-4 at
     ///   256×256 in 0.4 s) and passes of 4 camera samples;
-    /// - the photon engine: final gathering, with 50,000 photons per second of the limit
-    ///   (at least 20,000, at most 2,000,000; 50,000 in 1.09 s gave relMSE 9.2e-4);
+    /// - the photon engine, when none of its own flags is given: final gathering, with 50,000
+    ///   photons per second of the limit (at least 20,000, at most 2,000,000; 50,000 in
+    ///   1.09 s gave relMSE 9.2e-4);
     /// - radiosity: interpolated display.
     ///
     /// The path tracer and SPPM choose nothing: they add passes until the time is spent.
@@ -626,18 +628,19 @@ impl RenderArgs {
                 "-num_antialias_samples {TIME_LIMITED_PASS_SAMPLES}"
             ));
         }
-        if engine == EngineKind::Photon && settings.photon.display == Default::default() {
-            if !given("gather_indirect") {
-                settings.photon.gather_indirect = true;
-                chosen.push("-gather_indirect".to_string());
-            }
-            if !given("num_photons_to_shoot") {
-                let photons = (TIME_LIMITED_PHOTONS_PER_SECOND * seconds)
-                    .clamp(TIME_LIMITED_PHOTONS.0, TIME_LIMITED_PHOTONS.1)
-                    as u64;
-                settings.photon.num_photons_to_shoot = photons;
-                chosen.push(format!("-num_photons_to_shoot {photons}"));
-            }
+        // Only when no photon flag was given: a user who sets the photon count has chosen
+        // between final gathering and the map's own estimate (`-gather_indirect` has no
+        // "off" to give).
+        if engine == EngineKind::Photon
+            && settings.photon.display == Default::default()
+            && !self.group_given("PhotonArgs")
+        {
+            let photons = (TIME_LIMITED_PHOTONS_PER_SECOND * seconds)
+                .clamp(TIME_LIMITED_PHOTONS.0, TIME_LIMITED_PHOTONS.1)
+                as u64;
+            settings.photon.gather_indirect = true;
+            settings.photon.num_photons_to_shoot = photons;
+            chosen.push(format!("-gather_indirect -num_photons_to_shoot {photons}"));
         }
         let radiosity =
             engine == EngineKind::Radiosity || settings.indirect == IndirectKind::Radiosity;
