@@ -123,22 +123,13 @@ impl SphericalRectangle {
     /// cosine, over π), and the density of its direction in solid angle. None where the
     /// whole line lies below the receiver's horizon.
     pub fn sample_cosine(&self, n: Vec3, u: f32, v: f32) -> Option<CosineSample> {
-        let xu = self.x_at(u as f64);
-        let line = self.line(xu);
-        let cosine = line.cosine(self.local(n));
-        let (lo, hi) = cosine.above_horizon(line.h0, line.h1)?;
-        let (lo, hi) = (Sine::new(lo), Sine::new(hi));
-        let a_lo = cosine.antiderivative(lo);
-        let integral = cosine.antiderivative(hi) - a_lo;
-        if integral.is_nan() || integral <= 0.0 {
-            return None;
-        }
-        let (h, g) = cosine.invert(v as f64, lo, hi, a_lo, integral);
-        let span = line.h1 - line.h0;
+        let c = self.cosine_line(self.x_at(u as f64), n)?;
+        let (h, g) = c.cosine.invert(v as f64, c.lo, c.hi, c.a_lo, c.integral);
+        let span = c.line.h1 - c.line.h0;
         Some(CosineSample {
-            point: self.point(xu, line.y_at(h, self)),
-            weight: self.solid_angle * integral / (span * std::f64::consts::PI),
-            pdf: g.max(0.0) * span / (integral * self.solid_angle),
+            point: self.point(c.line.xu, c.line.y_at(h, self)),
+            weight: self.solid_angle * c.integral / (span * std::f64::consts::PI),
+            pdf: g.max(0.0) * span / (c.integral * self.solid_angle),
         })
     }
 
@@ -150,17 +141,33 @@ impl SphericalRectangle {
             rel.dot(self.x).clamp(self.x0, self.x1),
             rel.dot(self.y).clamp(self.y0, self.y1),
         );
-        let line = self.line(xu);
-        let cosine = line.cosine(self.local(n));
-        let Some((lo, hi)) = cosine.above_horizon(line.h0, line.h1) else {
+        let Some(c) = self.cosine_line(xu, n) else {
             return 0.0;
         };
-        let integral = cosine.antiderivative(Sine::new(hi)) - cosine.antiderivative(Sine::new(lo));
-        let g = cosine.at(Sine::new(y / length(line.d, y)));
-        if integral.is_nan() || integral <= 0.0 || g <= 0.0 {
+        let g = c.cosine.at(Sine::new(y / length(c.line.d, y)));
+        if g <= 0.0 {
             return 0.0;
         }
-        g * (line.h1 - line.h0) / (integral * self.solid_angle)
+        g * (c.line.h1 - c.line.h0) / (c.integral * self.solid_angle)
+    }
+
+    /// The line at x = `xu` with the receiver's cosine along it (normal `n`): the part above
+    /// the receiver's horizon and the cosine's integral over it; None where that is empty.
+    fn cosine_line(&self, xu: f64, n: Vec3) -> Option<CosineLine> {
+        let line = self.line(xu);
+        let cosine = line.cosine(self.local(n));
+        let (lo, hi) = cosine.above_horizon(line.h0, line.h1)?;
+        let (lo, hi) = (Sine::new(lo), Sine::new(hi));
+        let a_lo = cosine.antiderivative(lo);
+        let integral = cosine.antiderivative(hi) - a_lo;
+        (integral > 0.0).then_some(CosineLine {
+            line,
+            cosine,
+            lo,
+            hi,
+            a_lo,
+            integral,
+        })
     }
 
     /// The x coordinate (along the first edge) whose slab [x0, x] encloses a share u of the
@@ -203,6 +210,17 @@ pub struct CosineSample {
     pub weight: f64,
     /// The density of its direction in solid angle.
     pub pdf: f64,
+}
+
+/// A line of the rectangle with the receiver's cosine along it, from `cosine_line`: the part
+/// above the horizon, [lo, hi], the antiderivative at lo and the integral over [lo, hi].
+struct CosineLine {
+    line: Line,
+    cosine: LineCosine,
+    lo: Sine,
+    hi: Sine,
+    a_lo: f64,
+    integral: f64,
 }
 
 /// The rectangle's line at x = `xu`: its directions are w(h) = √(1−h²)·e + h·y, with
