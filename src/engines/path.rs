@@ -1,20 +1,21 @@
 //! The unbiased reference path tracer, the yardstick every error figure is measured against.
 //!
 //! At each diffuse vertex: next-event estimation (one light chosen in proportion to its power,
-//! one point on it uniform in the solid angle it subtends for rectangles and spheres, by area
-//! for the rest) combined with cosine-weighted sampling of the Lambertian BRDF by multiple
-//! importance sampling (power heuristic); glossy lobes likewise, against their Phong lobe.
-//! Mirrors, glossy lobes and glass are sampled as in the ray tracer, one branch at a time (glass chooses reflection with the
-//! Fresnel probability). Paths end by Russian roulette on their throughput from the fourth
-//! vertex on, which keeps the estimate unbiased. `-num_antialias_samples` is the number of
-//! paths per pixel; every random number comes from (seed, pixel, sample). The background
-//! colour is seen, not a light: a path that leaves the scene after a diffuse bounce brings
-//! nothing back.
+//! one point on it by the solid angle it subtends — rectangles uniform across and by the
+//! receiver's cosine along, spheres uniform in their cone — or by area for the rest)
+//! combined with cosine-weighted sampling of the Lambertian BRDF by multiple importance
+//! sampling (power heuristic); glossy lobes likewise, against their Phong lobe. Mirrors,
+//! glossy lobes and glass are sampled as in the ray tracer, one branch at a time (glass
+//! chooses reflection with the Fresnel probability). Paths end by Russian roulette on their
+//! throughput from the fourth vertex on, which keeps the estimate unbiased.
+//! `-num_antialias_samples` is the number of paths per pixel; every random number comes from
+//! (seed, pixel, sample). The background colour is seen, not a light: a path that leaves the
+//! scene after a diffuse bounce brings nothing back.
 
 use std::collections::HashMap;
 
 use super::engine::{Budget, Engine, EngineKind, RenderSettings, Rendered};
-use super::scattering::{diffuse_sample, power_heuristic, Dielectric, GlossyLobe};
+use super::scattering::{diffuse_sample, power_heuristic, reflect, Dielectric, GlossyLobe};
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
@@ -217,7 +218,7 @@ impl PathTracer<'_> {
                 match GlossyLobe::new(ray.direction, n, m.roughness) {
                     // A mirror: a delta no light sample finds.
                     None => {
-                        dir = crate::engines::scattering::reflect(ray.direction, n);
+                        dir = reflect(ray.direction, n);
                         previous.bsdf_pdf = None;
                     }
                     Some(glossy) => {
