@@ -1178,6 +1178,11 @@ fn time_limit_renders_until_the_time_is_spent() {
             "chose -num_shadow_samples 16 -num_antialias_samples 4 -gather_indirect \
              -num_photons_to_shoot 75000",
         ),
+        (
+            &["--engine", "radiosity"],
+            "chose -num_shadow_samples 16 -num_antialias_samples 4 -interpolate \
+             --subdivide as far as the time allows",
+        ),
         (&["--engine", "path"], ""),
     ] {
         let args = [

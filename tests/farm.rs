@@ -275,6 +275,37 @@ fn a_saved_radiosity_solution_renders_the_same_image() {
         );
         assert!(e.contains("another scene or other settings"), "{e}");
     }
+    // A level chosen from `--time-limit` is the file's: loading rebuilds that mesh (the
+    // images differ by the samples each run had time for).
+    let base = format!(
+        "-input {} -size 32 32 --engine radiosity --time-limit 1",
+        scene("cornell_box_diffuse_sphere.obj")
+    );
+    let patches = |stderr: &str| -> String {
+        let line = stderr
+            .lines()
+            .find(|l| l.starts_with("radiosity: "))
+            .unwrap_or_else(|| panic!("no summary: {stderr}"));
+        line.split(" patches").next().unwrap().to_string()
+    };
+    let out = render(
+        &dir,
+        &words(&format!("{base} --save-radiosity timed.bin -o timed.pfm")),
+    );
+    let saved = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{saved}");
+    assert!(saved.contains("as far as the time allowed"), "{saved}");
+    let out = render(
+        &dir,
+        &words(&format!("{base} --load-radiosity timed.bin -o timed.pfm")),
+    );
+    let loaded = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{loaded}");
+    assert!(loaded.contains("loaded from"), "{loaded}");
+    assert_eq!(patches(&saved), patches(&loaded));
+    // 54 patches unsubdivided: the level-0 solve takes milliseconds, so 1 s goes finer.
+    assert_ne!(patches(&saved), "radiosity: 54", "{saved}");
+
     let bytes = std::fs::read(dir.join("solution0.bin")).expect("file");
     std::fs::write(dir.join("cut.bin"), &bytes[..bytes.len() / 2]).expect("write");
     let base = format!(

@@ -504,6 +504,8 @@ impl RadiosityArgs {
             sphere_rasterization: (self.sphere_rasterization[0], self.sphere_rasterization[1]),
             cylinder_ring_rasterization: self.cylinder_ring_rasterization,
             subdivide: self.subdivide,
+            // Set by `choose_for_time_limit`.
+            subdivide_to_fit: None,
             interpolate: self.interpolate,
             tolerance: self.radiosity_tolerance,
             solver: self.radiosity_solver,
@@ -648,6 +650,15 @@ impl RenderArgs {
             settings.radiosity.interpolate = true;
             chosen.push("-interpolate".to_string());
         }
+        // The mesh level needs the scene: the solve chooses it (`subdivide_to_fit`).
+        if radiosity && !given("subdivide") && !given("adaptive_subdivide") {
+            settings.radiosity.subdivide_to_fit = Some(if engine == EngineKind::Radiosity {
+                TIME_LIMITED_SOLVE_SHARE
+            } else {
+                TIME_LIMITED_SOLVE_SHARE_UNDER_RAYS
+            });
+            chosen.push("--subdivide as far as the time allows".to_string());
+        }
         chosen
     }
 
@@ -712,6 +723,13 @@ const TIME_LIMITED_SHADOW_SAMPLES: u32 = 16;
 const TIME_LIMITED_PASS_SAMPLES: u32 = 4;
 const TIME_LIMITED_PHOTONS_PER_SECOND: f64 = 50_000.0;
 const TIME_LIMITED_PHOTONS: (f64, f64) = (20_000.0, 2_000_000.0);
+/// The share of the time left that the radiosity mesh's solve may take (`subdivide_to_fit`):
+/// most of it for the radiosity engine, whose pixels only look the solution up; half with
+/// `--indirect radiosity`, whose ray-traced direct light needs the rest. Measured on the
+/// Cornell box (BENCHMARKS.md, session 16): these choose the level of lower error at 1 s and
+/// at 2 s for both.
+const TIME_LIMITED_SOLVE_SHARE: f64 = 0.8;
+const TIME_LIMITED_SOLVE_SHARE_UNDER_RAYS: f64 = 0.5;
 
 /// The most worker threads `--threads` accepts: far above any machine's cores, far below
 /// what would exhaust the process's threads.

@@ -1,7 +1,8 @@
 //! Geometry shared by every part of trilux: vectors, rays, boxes and the exact intersection
-//! routines of polygons, and the analytic shapes.
+//! routines of polygons, the point-to-polygon form factor, and the analytic shapes.
 
 mod bounds;
+pub mod form_factor;
 mod polygon;
 mod ray;
 mod shape;

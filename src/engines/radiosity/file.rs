@@ -3,12 +3,12 @@
 //! solution, so that a render farm solves once and every task renders from the same light, and
 //! a file made for another scene or other settings is refused with a clear error.
 //!
-//! The mesh is not stored: it is rebuilt from the scene and the settings (`--subdivide`, the
-//! shapes' tessellation) and the faces each round of `--adaptive-subdivide` split, which the
-//! file keeps. Layout: magic `TRILUXRS`, version (u32), fingerprint (u64), solver (u8: 1
+//! The mesh is not stored: it is rebuilt from the scene and the settings (the shapes'
+//! tessellation), the level the faces were subdivided to and the faces each round of
+//! `--adaptive-subdivide` split, which the file keeps. Layout: magic `TRILUXRS`, version (u32), fingerprint (u64), solver (u8: 1
 //! progressive, 2 hierarchical), stop (u8), visibility rays (u64), steps (u64), residual (f32),
 //! ambient (3 × f32), patches (u64), elements (u64), adaptive rounds (u32) each as a count
-//! (u32) and its faces (u32 each), the solver's report (u32 length, UTF-8), then per patch its
+//! (u32) and its faces (u32 each), the subdivision level (u32), the solver's report (u32 length, UTF-8), then per patch its
 //! radiance, undistributed, incident and direct incident radiance (4 × 3 × f32), then per
 //! element its patch (u32), corners (4 × 3 × f32), first child (u32), radiance and incident
 //! radiance (2 × 3 × f32).
@@ -23,7 +23,8 @@ use crate::output::{write_atomically, OutputError};
 use crate::scene::Scene;
 
 const MAGIC: &[u8; 8] = b"TRILUXRS";
-const VERSION: u32 = 1;
+/// 2: the level the mesh was subdivided to is stored (`subdivide_to_fit` chooses it).
+const VERSION: u32 = 2;
 
 /// A hash of the loaded scene (`Scene::content_hash`) and of every setting that shapes the
 /// solution: the radiosity settings but those of the display and the output, whether form
@@ -146,6 +147,7 @@ impl Solution {
             b.u32(round.len() as u32);
             round.iter().for_each(|&f| b.u32(f));
         }
+        b.u32(self.subdivide);
         b.u32(self.solver_report.len() as u32);
         b.0.extend_from_slice(self.solver_report.as_bytes());
         let s = &self.state;
@@ -225,6 +227,7 @@ impl Solution {
                 }
                 splits.push((0..n).map(|_| r.u32()).collect::<Result<Vec<_>, _>>()?);
             }
+            let subdivide = r.u32()?;
             let report_len = r.u32()? as usize;
             let report = r
                 .data
@@ -233,7 +236,17 @@ impl Solution {
             let report = String::from_utf8_lossy(report).into_owned();
             r.at += report_len;
 
-            let (mut mesh, _) = Solution::initial_mesh(scene, &settings.radiosity);
+            // Each face becomes 4^subdivide patches: more than the file holds is damage, and
+            // is not built.
+            if 4u64
+                .checked_pow(subdivide)
+                .is_none_or(|p| p > n_patches as u64)
+            {
+                return Err(format!(
+                    "the mesh subdivided {subdivide} times, for {n_patches} patches (damaged?)"
+                ));
+            }
+            let (mut mesh, _) = Solution::initial_mesh(scene, &settings.radiosity, subdivide);
             for round in &splits {
                 if round.iter().any(|&f| f as usize >= mesh.faces.len()) {
                     return Err("a split face is not in the mesh".into());
@@ -303,6 +316,7 @@ impl Solution {
                 solver_counters: Vec::new(),
                 solver_warning: None,
                 adaptive_rounds: rounds,
+                subdivide,
                 splits,
                 solver,
                 twins,

@@ -42,12 +42,12 @@ use std::time::Instant;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::form_factor::point_to_polygon;
 use super::patch::{on_primitive, Patch};
 use super::solver::{
     Element, FormFactorSampler, PatchLight, RadiositySolver, ShotRecord, SolveLimits, Solved, Step,
     Stop,
 };
+use crate::geometry::form_factor::point_to_polygon;
 use crate::geometry::{quad_normal, shadow_ray, Bounds3, Ray, Vec3};
 use crate::sampling::Rng;
 use crate::scene::Color;

@@ -4,7 +4,6 @@
 //! solved mesh seen from the camera in several visualization modes.
 
 pub mod file;
-pub mod form_factor;
 pub mod hierarchical;
 pub mod mesh;
 pub mod patch;
@@ -59,11 +58,17 @@ pub struct Solution {
     /// The faces split in each round of adaptive subdivision, in order: with the scene and
     /// the settings, what rebuilds the mesh of a saved solution.
     pub splits: Vec<Vec<u32>>,
+    /// How many times the scene's faces were split in four (`--subdivide`, or the level
+    /// `subdivide_to_fit` reached).
+    pub subdivide: u32,
     /// The solver that ran (`--radiosity-solver auto` resolved).
     pub solver: SolverKind,
     /// Patches that coincide with an earlier one (`patch::twins`), solved as one.
     pub twins: usize,
 }
+
+/// `subdivide_to_fit` stops here whatever the time: 4⁸ patches from each face.
+const MAX_SUBDIVIDE_TO_FIT: u32 = 8;
 
 /// Values over the patches of a solution, or over the leaf elements of a hierarchical one,
 /// looked up at hits by `Solution::sample`.
@@ -123,7 +128,8 @@ fn solver(r: &RadiositySettings, kind: SolverKind) -> Box<dyn RadiositySolver> {
 }
 
 impl Solution {
-    /// Builds the mesh, solves, and (with `--adaptive-subdivide`) refines and solves again.
+    /// Builds the mesh, solves, and (with `--adaptive-subdivide`) refines and solves again;
+    /// or, with `subdivide_to_fit`, solves at finer levels while the time allows.
     pub fn solve(
         scene: &Scene,
         accel: &dyn Accel,
@@ -131,69 +137,46 @@ impl Solution {
         on_progress: impl Fn(f32),
     ) -> Solution {
         let r = &settings.radiosity;
-        let (mut mesh, kind) = Solution::initial_mesh(scene, r);
-        let (visibility, visibility_reason) = Solution::visibility(scene, settings);
+        let (mesh, kind) = Solution::initial_mesh(scene, r, r.subdivide);
+        match (settings.deadline, r.subdivide_to_fit) {
+            (Some(deadline), Some(share)) if kind == SolverKind::Progressive => {
+                Solution::solve_finest_in_time(
+                    scene,
+                    accel,
+                    settings,
+                    (mesh, share),
+                    deadline,
+                    on_progress,
+                )
+            }
+            _ => Solution::solve_adaptively(scene, accel, settings, mesh, kind, on_progress),
+        }
+    }
+
+    /// Solves on `mesh`, then, with `--adaptive-subdivide`, splits the patches whose
+    /// radiance differs from a neighbour's and solves again, `--adaptive-rounds` times.
+    fn solve_adaptively(
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+        mut mesh: QuadMesh,
+        kind: SolverKind,
+        on_progress: impl Fn(f32),
+    ) -> Solution {
+        let r = &settings.radiosity;
         let mut rays = 0;
-        let mut round = 0;
         let mut splits = Vec::new();
         loop {
-            let patches = patch::patches(scene, &mesh);
-            // Coincident twins take no part: the solvers see them with no area.
-            let twin_of = patch::twins(&patches);
-            let twins = twin_of.iter().filter(|&&t| t != NONE).count();
-            let mut solved_patches = patches.clone();
-            for (p, &t) in solved_patches.iter_mut().zip(&twin_of) {
-                if t != NONE {
-                    p.area = 0.0;
-                }
-            }
-            let sampler = FormFactorSampler::new(
-                scene,
-                accel,
-                &solved_patches,
-                r.num_form_factor_samples.max(1),
-                visibility,
-                settings.seed,
-            );
-            let limits = SolveLimits {
-                tolerance: r.tolerance,
-                iterations: r.iterations,
-                cap: r.max_shots_per_patch.saturating_mul(patches.len() as u64),
-                log: r.log_convergence,
-                // The solve takes four fifths of what is left of `--time-limit`; the pixels
-                // the rest.
-                deadline: settings.deadline.map(|d| {
-                    let now = std::time::Instant::now();
-                    now + d.saturating_duration_since(now).mul_f64(0.8)
-                }),
-            };
-            let solved = solver(r, kind).solve(&sampler, &limits, &on_progress);
-            let (mut state, stop) = (solved.light, solved.stop);
-            state.copy_twins(&twin_of);
-            rays += sampler.rays.load(Relaxed);
-            let ambient = solver::ambient(&solved_patches, &state.undistributed);
-            let solution = Solution {
-                patch_of_face: patch_of_face(&mesh, &patches),
-                mesh,
-                patches,
-                state,
-                stop,
-                ambient,
-                visibility,
-                visibility_reason,
-                rays,
-                solver_report: solved.report,
-                solver_counters: solved.counters,
-                solver_warning: solved.warning,
-                adaptive_rounds: round,
-                splits: splits.clone(),
-                solver: kind,
-                twins,
-            };
+            let mut solution =
+                Solution::solve_mesh(scene, accel, settings, mesh, kind, &on_progress);
+            rays += solution.rays;
+            solution.rays = rays;
+            solution.splits = splits.clone();
+            solution.adaptive_rounds = splits.len() as u32;
             let Some(threshold) = r.adaptive_threshold else {
                 return solution;
             };
-            let split = if round < r.adaptive_rounds {
+            let split = if splits.len() < r.adaptive_rounds as usize {
                 solution.patches_to_split(threshold)
             } else {
                 Vec::new()
@@ -204,16 +187,130 @@ impl Solution {
             mesh = solution.mesh;
             mesh.split_many(&split);
             splits.push(split);
-            round += 1;
         }
     }
 
-    /// The mesh a solve starts from: the scene's faces, subdivided `--subdivide` times; and
+    /// `subdivide_to_fit`: solves on `mesh`, then subdivided once more while the solve
+    /// converged and the next one is predicted to fit in `share` of the time left before
+    /// `deadline`. The prediction is 16× the last solve's time: a progressive solve
+    /// shoots a number of times that grows with the patches, and each shot reaches every
+    /// patch (measured on the Cornell box with visibility: 8.4× from 864 to 3,456 patches,
+    /// so 16× errs on the side of the time left for the pixels). The coarser solves cost
+    /// about a fifteenth of the one kept.
+    fn solve_finest_in_time(
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+        (mut mesh, share): (QuadMesh, f64),
+        deadline: std::time::Instant,
+        on_progress: impl Fn(f32),
+    ) -> Solution {
+        let mut level = settings.radiosity.subdivide;
+        let mut rays = 0;
+        loop {
+            let started = std::time::Instant::now();
+            let next = mesh.clone();
+            let mut solution = Solution::solve_mesh(
+                scene,
+                accel,
+                settings,
+                mesh,
+                SolverKind::Progressive,
+                &on_progress,
+            );
+            rays += solution.rays;
+            solution.rays = rays;
+            solution.subdivide = level;
+            let predicted = started.elapsed().mul_f64(16.0);
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            if solution.stop != Stop::Converged
+                || level >= MAX_SUBDIVIDE_TO_FIT
+                || predicted > left.mul_f64(share)
+            {
+                return solution;
+            }
+            mesh = next;
+            mesh.subdivide(1);
+            level += 1;
+        }
+    }
+
+    /// One solve of `kind` on `mesh`.
+    fn solve_mesh(
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+        mesh: QuadMesh,
+        kind: SolverKind,
+        on_progress: &impl Fn(f32),
+    ) -> Solution {
+        let r = &settings.radiosity;
+        let (visibility, visibility_reason) = Solution::visibility(scene, settings);
+        let patches = patch::patches(scene, &mesh);
+        // Coincident twins take no part: the solvers see them with no area.
+        let twin_of = patch::twins(&patches);
+        let twins = twin_of.iter().filter(|&&t| t != NONE).count();
+        let mut solved_patches = patches.clone();
+        for (p, &t) in solved_patches.iter_mut().zip(&twin_of) {
+            if t != NONE {
+                p.area = 0.0;
+            }
+        }
+        let sampler = FormFactorSampler::new(
+            scene,
+            accel,
+            &solved_patches,
+            r.num_form_factor_samples.max(1),
+            visibility,
+            settings.seed,
+        );
+        let limits = SolveLimits {
+            tolerance: r.tolerance,
+            iterations: r.iterations,
+            cap: r.max_shots_per_patch.saturating_mul(patches.len() as u64),
+            log: r.log_convergence,
+            // The solve takes four fifths of what is left of `--time-limit`; the pixels
+            // the rest.
+            deadline: settings.deadline.map(|d| {
+                let now = std::time::Instant::now();
+                now + d.saturating_duration_since(now).mul_f64(0.8)
+            }),
+        };
+        let solved = solver(r, kind).solve(&sampler, &limits, on_progress);
+        let (mut state, stop) = (solved.light, solved.stop);
+        state.copy_twins(&twin_of);
+        let ambient = solver::ambient(&solved_patches, &state.undistributed);
+        Solution {
+            patch_of_face: patch_of_face(&mesh, &patches),
+            mesh,
+            patches,
+            state,
+            stop,
+            ambient,
+            visibility,
+            visibility_reason,
+            rays: sampler.rays.load(Relaxed),
+            solver_report: solved.report,
+            solver_counters: solved.counters,
+            solver_warning: solved.warning,
+            adaptive_rounds: 0,
+            splits: Vec::new(),
+            subdivide: r.subdivide,
+            solver: kind,
+            twins,
+        }
+    }
+
+    /// The mesh a solve starts from: the scene's faces, subdivided `subdivide` times; and
     /// the solver `auto` chooses for it, by the scene's own faces (before subdividing).
-    fn initial_mesh(scene: &Scene, r: &RadiositySettings) -> (QuadMesh, SolverKind) {
+    fn initial_mesh(
+        scene: &Scene,
+        r: &RadiositySettings,
+        subdivide: u32,
+    ) -> (QuadMesh, SolverKind) {
         let mut mesh = QuadMesh::from_scene(scene, r.tessellation());
         let kind = r.solver.resolve(mesh.leaves.len());
-        mesh.subdivide(r.subdivide);
+        mesh.subdivide(subdivide);
         (mesh, kind)
     }
 
@@ -730,6 +827,12 @@ impl Solution {
         } else {
             String::new()
         };
+        if r.subdivide_to_fit.is_some() {
+            mesh_notes += &format!(
+                " (faces split in four {} times: as far as the time allowed)",
+                self.subdivide
+            );
+        }
         if self.twins > 0 {
             mesh_notes += &format!(" ({} coincident twins solved as one)", self.twins);
         }

@@ -13,6 +13,12 @@ pub struct RadiositySettings {
     pub cylinder_ring_rasterization: u32,
     /// Split every quad into four this many times (`--subdivide`, default 0).
     pub subdivide: u32,
+    /// Subdivide further, as far as the time left allows: the progressive solver solves
+    /// at `subdivide`, then once more subdivided while the next solve (predicted as 16× the
+    /// last: four times the patches, each reaching four times as many) fits in this share
+    /// of the time left (set by `--time-limit` when `--subdivide` is not given; default
+    /// None: solve at `subdivide`).
+    pub subdivide_to_fit: Option<f64>,
     /// Smooth display: values interpolated from the patches around each vertex
     /// (`-interpolate`, default off: flat patches).
     pub interpolate: bool,
@@ -128,6 +134,7 @@ impl Default for RadiositySettings {
             sphere_rasterization: (8, 6),
             cylinder_ring_rasterization: 20,
             subdivide: 0,
+            subdivide_to_fit: None,
             interpolate: false,
             tolerance: 1e-3,
             iterations: None,

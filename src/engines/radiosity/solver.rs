@@ -11,11 +11,11 @@ use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 use rayon::prelude::*;
 
-use super::form_factor::point_to_polygon;
 use super::mesh::NONE;
 use super::patch::{on_primitive, Patch};
 pub use super::settings::Relaxation;
 use crate::accel::Accel;
+use crate::geometry::form_factor::point_to_polygon;
 use crate::geometry::{shadow_ray, Ray, Vec3};
 use crate::sampling::{Pattern, Rng, Strata};
 use crate::scene::{Color, Scene};

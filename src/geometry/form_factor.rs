@@ -1,7 +1,7 @@
-//! Form factors. The point-to-polygon form factor is exact (Lambert's contour integral over
-//! the polygon clipped to the hemisphere above the point); the patch-to-patch form factor
-//! averages it over points of the receiving patch and tests each point's visibility with one
-//! ray to a point of the shooting patch.
+//! The point-to-polygon form factor, exact: Lambert's contour integral over the polygon
+//! clipped to the hemisphere above the point. Radiosity averages it over points of a
+//! receiving patch (each tested for visibility with one ray); the ray tracer's adaptive
+//! light sampling weighs the cells of a light with it.
 
 use crate::geometry::Vec3;
 
