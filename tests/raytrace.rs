@@ -119,6 +119,70 @@ fn square_light_matches_the_closed_form() {
     );
 }
 
+/// `--light-sampling adaptive` through the ray tracer and each Accel: an unoccluded square
+/// light takes four shadow rays and gives Lambert's value to f32 rounding; with a wall
+/// hiding the light's part x > 0.13 from the lit point, the estimate is within half the form
+/// factor of the column of finest cells the shadow's edge crosses (each such cell is counted
+/// half seen), at a number of rays that grows with the edge, not the grid.
+#[test]
+fn adaptive_light_sampling_is_exact_where_the_corners_agree() {
+    let strip = |from: f64, to: f64| {
+        polygon_irradiance(
+            [0.0; 3],
+            [0.0, 1.0, 0.0],
+            &[
+                [from, 1.0, -0.5],
+                [to, 1.0, -0.5],
+                [to, 1.0, 0.5],
+                [from, 1.0, 0.5],
+            ],
+        ) / PI
+    };
+    let scale = (RHO * LE) as f64;
+    // A wall at height 0.5 facing down: it hides the light from the origin beyond x = 0.13,
+    // and the camera above sees through its back (quads are one-sided).
+    let wall = "material\ndiffuse 0 0 0\nm 2\n\
+                v 0.065 0.5 10\nv 0.065 0.5 -10\nv 10 0.5 -10\nv 10 0.5 10\nf 9 10 11 12\n";
+    let open = square_light(LE, RHO);
+    let walled = common::square_light_and(LE, RHO, wall);
+    for kind in backends() {
+        let run = |scene: &Scene, depth: u32| {
+            let settings = RenderSettings {
+                num_shadow_samples: 4,
+                light_sampling: LightSampling::Adaptive,
+                adaptive_depth: depth,
+                ..quiet(2, 2)
+            };
+            let accel = accel::build(scene, kind, &AccelOptions::default()).expect("builds");
+            let (film, stats) = raytrace::render(scene, accel.as_ref(), &settings);
+            let rays = stats.shadow_rays.load(std::sync::atomic::Ordering::Relaxed) / 4;
+            (mean(&film), rays)
+        };
+        let (m, rays) = run(&open, 3);
+        let truth = scale * strip(-0.5, 0.5);
+        println!("{kind}: unoccluded {m:.7} against {truth:.7}, {rays} rays");
+        assert_eq!(rays, 4, "{kind}");
+        // f32 rounding of the contour sum and the shading: measured 1e-7 relative.
+        assert!(
+            (m / truth - 1.0).abs() < 1e-6,
+            "{kind}: {m} against {truth}"
+        );
+        for depth in 1..=4 {
+            let (m, rays) = run(&walled, depth);
+            let truth = scale * strip(-0.5, 0.13);
+            let width = 1.0 / (1u32 << depth) as f64;
+            let column = ((0.13 + 0.5) / width).floor() * width - 0.5;
+            let bound = 0.5 * scale * strip(column, column + width);
+            println!(
+                "{kind}: depth {depth}: {m:.5} against {truth:.5} (bound {bound:.1e}), {rays} rays"
+            );
+            assert!((m - truth).abs() <= bound * 1.001, "{kind}: depth {depth}");
+            let side = (1u64 << depth) + 1;
+            assert!(rays <= 4 * side + 2 * depth as u64, "{kind}: {rays} rays");
+        }
+    }
+}
+
 #[test]
 fn jittered_and_stratified_beat_random_sampling() {
     let square = [

@@ -361,6 +361,11 @@ pub struct RayTraceArgs {
     /// course).
     #[arg(long, value_enum, default_value_t = rs().light_sampling)]
     pub light_sampling: LightSampling,
+    /// With --light-sampling adaptive: how many times a light may be split in four where
+    /// its corners disagree (2: up to 5×5 points).
+    #[arg(long, value_name = "N", default_value_t = rs().adaptive_depth,
+          value_parser = clap::value_parser!(u32).range(0..=crate::render::adaptive::MAX_DEPTH as i64))]
+    pub adaptive_depth: u32,
     /// Diffuse indirect light: the constant -ambient_light, or the radiosity solution.
     #[arg(long, value_enum, default_value_t = rs().indirect)]
     pub indirect: IndirectKind,
@@ -583,6 +588,7 @@ impl RenderArgs {
                 ..self.photon.settings(visualize)
             },
             light_sampling: self.ray_trace.light_sampling,
+            adaptive_depth: self.ray_trace.adaptive_depth,
             aperture: self.camera.aperture,
             focus_distance: self.camera.focus_distance,
             seed: self.common.seed,

@@ -229,6 +229,9 @@ pub struct RenderSettings {
     pub photon: photon::PhotonSettings,
     /// Placement of points on lights (`--light-sampling`, default solid-angle).
     pub light_sampling: crate::sampling::LightSampling,
+    /// Levels of splitting with `--light-sampling adaptive` (`--adaptive-depth`, default 2:
+    /// up to 5×5 points on a light).
+    pub adaptive_depth: u32,
     /// Thin-lens radius (`--aperture`, default 0: a pinhole camera).
     pub aperture: f32,
     /// Distance of the plane in focus (`--focus-distance`, default: the camera's distance
@@ -260,6 +263,7 @@ impl Default for RenderSettings {
             indirect: IndirectKind::Ambient,
             photon: Default::default(),
             light_sampling: crate::sampling::LightSampling::SolidAngle,
+            adaptive_depth: 2,
             aperture: 0.0,
             focus_distance: None,
             seed: 0,

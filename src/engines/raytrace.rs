@@ -17,6 +17,7 @@ use crate::accel::Accel;
 use crate::film::ray_tree::{Segment, SegmentKind};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, vec3, Ray, Vec3};
+use crate::render::adaptive::visible_form_factor;
 use crate::render::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
 use crate::render::{render_pixels, Ambient, CameraSampler, Counts, IndirectLight, RenderStats};
 use crate::sampling::{LightSampling, Rng, Strata};
@@ -306,6 +307,25 @@ impl Tracer<'_> {
             };
             if samples == 1 {
                 batch.push(light.centre(s.point));
+            } else if let (LightSampling::Adaptive, LightShape::Parallelogram(quad)) =
+                (self.settings.light_sampling, &light.shape)
+            {
+                let mut rays = 0;
+                let visible = visible_form_factor(
+                    s.point,
+                    n,
+                    quad,
+                    self.settings.adaptive_depth,
+                    &mut counts.corners,
+                    |p| {
+                        rays += 1;
+                        record_segment(self.tree.as_ref(), origin, p, SegmentKind::Shadow);
+                        !self.accel.occluded(&shadow_ray(origin, p))
+                    },
+                );
+                counts.shadow += rays;
+                total += light.emitted * visible;
+                continue;
             } else {
                 let by_solid_angle = if self.settings.light_sampling == LightSampling::SolidAngle {
                     light.solid_angle_sampler(s.point)

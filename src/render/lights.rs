@@ -32,6 +32,18 @@ pub struct Parallelogram {
 }
 
 impl Parallelogram {
+    /// The parallelogram `origin + u·edge_u + v·edge_v` emitting towards its unit `normal`.
+    pub fn new(origin: Vec3, edge_u: Vec3, edge_v: Vec3, normal: Vec3) -> Parallelogram {
+        Parallelogram {
+            origin,
+            edge_u,
+            edge_v,
+            normal,
+            swap_axes: edge_v.length() > edge_u.length(),
+            rectangle: edge_u.dot(edge_v).abs() <= 1e-5 * edge_u.length() * edge_v.length(),
+        }
+    }
+
     /// The point at (u, v) in [0,1)² of the sampling axes: uniform by area for uniform (u, v).
     #[inline(always)]
     pub fn sample(&self, u: f32, v: f32) -> LightPoint {
@@ -124,15 +136,12 @@ impl Light {
             if e.max_element() > 0.0 {
                 let [v0, v1, _, v3] = q.vertices;
                 lights.push(Light {
-                    shape: LightShape::Parallelogram(Parallelogram {
-                        origin: v0,
-                        edge_u: v1 - v0,
-                        edge_v: v3 - v0,
-                        normal: q.normal,
-                        swap_axes: (v3 - v0).length() > (v1 - v0).length(),
-                        rectangle: (v1 - v0).dot(v3 - v0).abs()
-                            <= 1e-5 * (v1 - v0).length() * (v3 - v0).length(),
-                    }),
+                    shape: LightShape::Parallelogram(Parallelogram::new(
+                        v0,
+                        v1 - v0,
+                        v3 - v0,
+                        q.normal,
+                    )),
                     emitted: e,
                     area: q.area(),
                     prim: prim(PrimKind::Quad, i),
@@ -360,31 +369,46 @@ impl Light {
         if let Some(sampler) = self.solid_angle_sampler(x) {
             return sampler.sample_towards(n, u, v);
         }
-        let p = self.sample(u, v);
-        let w = p.point - x;
-        let r2 = w.length_squared();
-        let r = r2.sqrt();
-        let cos = n.dot(w) / r;
-        let cos_light = -p.normal.dot(w) / r;
-        let cos_light = if p.one_sided {
-            cos_light
-        } else {
-            cos_light.abs()
-        };
-        (r2 > 0.0 && cos > 0.0 && cos_light > 0.0).then(|| DirectSample {
-            point: p.point,
+        let (point, w, r2, cos_light) = self.area_point(x, u, v)?;
+        let cos = n.dot(w) / r2.sqrt();
+        (cos > 0.0).then(|| DirectSample {
+            point,
             weight: cos * cos_light * self.area / (std::f32::consts::PI * r2),
             pdf: r2 / (cos_light * self.area),
         })
     }
 
-    /// The density in solid angle with which `sample_towards` from `x` (receiver normal
-    /// `n`) gives the point `p` of this light, of unit normal `normal` there: what multiple
-    /// importance sampling weighs a direction that found the light by other means with.
-    pub fn pdf_towards(&self, x: Vec3, n: Vec3, p: Vec3, normal: Vec3) -> f32 {
-        if let Some(sampler) = self.solid_angle_sampler(x) {
-            return sampler.pdf_towards(n, p);
-        }
+    /// One point of this light uniform by area, for a point `x` in a medium (no surface, no
+    /// cosine of its own): `weight` is cosθ'·A/r² (the solid angle per unit of `u, v`), `pdf`
+    /// its inverse. None where the point faces away from `x`.
+    pub fn sample_by_area(&self, x: Vec3, u: f32, v: f32) -> Option<DirectSample> {
+        let (point, _, r2, cos_light) = self.area_point(x, u, v)?;
+        let pdf = r2 / (cos_light * self.area);
+        (pdf.is_finite() && pdf > 0.0).then(|| DirectSample {
+            point,
+            weight: pdf.recip(),
+            pdf,
+        })
+    }
+
+    /// The point at (u, v) uniform by area, the vector to it from `x`, its squared length and
+    /// the light's cosine towards `x`; None where that cosine is not positive.
+    fn area_point(&self, x: Vec3, u: f32, v: f32) -> Option<(Vec3, Vec3, f32, f32)> {
+        let p = self.sample(u, v);
+        let w = p.point - x;
+        let r2 = w.length_squared();
+        let cos_light = -p.normal.dot(w) / r2.sqrt();
+        let cos_light = if p.one_sided {
+            cos_light
+        } else {
+            cos_light.abs()
+        };
+        (r2 > 0.0 && cos_light > 0.0).then_some((p.point, w, r2, cos_light))
+    }
+
+    /// The density in solid angle with which `sample_by_area` from `x` gives the point `p`
+    /// of this light, of unit normal `normal` there.
+    pub fn pdf_by_area(&self, x: Vec3, p: Vec3, normal: Vec3) -> f32 {
         let w = p - x;
         let r2 = w.length_squared();
         let cos_light = (normal.dot(w) / r2.sqrt()).abs();
@@ -392,6 +416,16 @@ impl Light {
             return 0.0;
         }
         r2 / (cos_light * self.area)
+    }
+
+    /// The density in solid angle with which `sample_towards` from `x` (receiver normal
+    /// `n`) gives the point `p` of this light, of unit normal `normal` there: what multiple
+    /// importance sampling weighs a direction that found the light by other means with.
+    pub fn pdf_towards(&self, x: Vec3, n: Vec3, p: Vec3, normal: Vec3) -> f32 {
+        match self.solid_angle_sampler(x) {
+            Some(sampler) => sampler.pdf_towards(n, p),
+            None => self.pdf_by_area(x, p, normal),
+        }
     }
 }
 

@@ -3,6 +3,7 @@
 //! interface through which the ray tracer asks for diffuse indirect light. Nothing here knows
 //! any engine.
 
+pub mod adaptive;
 pub mod indirect;
 pub mod lights;
 pub mod solid_angle;
@@ -110,6 +111,8 @@ pub struct Counts {
     pub shadow_rays: Vec<Ray>,
     pub shadow_weights: Vec<f32>,
     pub blocked: Vec<bool>,
+    /// Which corners see the shading point (`--light-sampling adaptive`).
+    pub corners: Vec<u8>,
 }
 
 /// The camera samples of an image: the view, the pixel strata and the lens, worked out once.

@@ -84,13 +84,17 @@ pub enum LightSampling {
     Stratified,
     /// One uniform point by area in each stratum of the grid.
     Jittered,
+    /// Rectangular lights: shadow rays to the corners, the light split in four where they
+    /// disagree, `--adaptive-depth` levels deep, each part's light exact (Photonix's
+    /// adaptive area lights; `render::adaptive`). Other lights as `solid-angle`.
+    Adaptive,
 }
 
 impl LightSampling {
     /// The pattern of the (u, v) points, in whichever parametrisation.
     pub fn pattern(self) -> Pattern {
         match self {
-            LightSampling::SolidAngle => Pattern::MultiJittered,
+            LightSampling::SolidAngle | LightSampling::Adaptive => Pattern::MultiJittered,
             LightSampling::Jittered => Pattern::Jittered,
             LightSampling::Random => Pattern::Random,
             LightSampling::Stratified => Pattern::Stratified,

@@ -206,12 +206,17 @@ pub fn disagreements(
 /// A closed cube of six inward-facing quads, all of albedo ρ and emitting Le = 1, seen from
 /// a camera inside it (every pixel sees a wall; the black background cannot be seen).
 pub fn furnace(rho: f32) -> Scene {
+    furnace_and(rho, "")
+}
+
+/// `furnace` with more of the scene after it, in the course dialect (e.g. a medium).
+pub fn furnace_and(rho: f32, more: &str) -> Scene {
     let text = format!(
         "material\ndiffuse {rho} {rho} {rho}\nemitted 1 1 1\n\
          v -1 -1 -1\nv 1 -1 -1\nv -1 1 -1\nv 1 1 -1\nv -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\n\
          m 0\nf 5 7 8 6\nf 1 2 4 3\nf 3 4 8 7\nf 1 5 6 2\nf 1 3 7 5\nf 2 6 8 4\n\
          background_color 0 0 0\n\
-         PerspectiveCamera {{\ncamera_position 0.1 0.2 0.5\npoint_of_interest 0 0 -1\nup 0 1 0\nangle 1.2\n}}\n"
+         PerspectiveCamera {{\ncamera_position 0.1 0.2 0.5\npoint_of_interest 0 0 -1\nup 0 1 0\nangle 1.2\n}}\n{more}"
     );
     Scene::parse_dialect(Path::new("furnace.obj"), &text).expect("furnace parses")
 }
@@ -221,13 +226,19 @@ pub fn furnace(rho: f32) -> Scene {
 /// orthographic camera at the point right under the light's centre. The floor's radiance
 /// there is ρ·Le·F, F = 0.239456 (point-to-square form factor).
 pub fn square_light(le: f32, rho: f32) -> Scene {
+    square_light_and(le, rho, "")
+}
+
+/// `square_light` with more of the scene: `more`, in the course dialect, after it (its
+/// materials numbered from 2, its vertices from 9).
+pub fn square_light_and(le: f32, rho: f32, more: &str) -> Scene {
     let text = format!(
         "material\ndiffuse 0 0 0\nemitted {le} {le} {le}\n\
          material\ndiffuse {rho} {rho} {rho}\n\
          m 0\nv -0.5 1 0.5\nv -0.5 1 -0.5\nv 0.5 1 -0.5\nv 0.5 1 0.5\nf 1 2 3 4\n\
          m 1\nv -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\nf 5 6 7 8\n\
          background_color 0 0 0\n\
-         OrthographicCamera {{\ncamera_position 0 5 0\npoint_of_interest 0 0 0\nup 0 0 -1\nsize 0.0001\n}}\n"
+         OrthographicCamera {{\ncamera_position 0 5 0\npoint_of_interest 0 0 0\nup 0 0 -1\nsize 0.0001\n}}\n{more}"
     );
     Scene::parse_dialect(Path::new("square.obj"), &text).expect("square light parses")
 }
