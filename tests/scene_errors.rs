@@ -39,6 +39,17 @@ fn unknown_token() {
 }
 
 #[test]
+fn bad_media() {
+    fails_at("medium\nsigma_a 0.1 -0.2 0\n", 2, &["sigma_a must be ≥ 0"]);
+    fails_at("medium\nsigma_s 1 1 1\ng 1\n", 3, &["must lie in (−1, 1)"]);
+    fails_at(
+        "medium\nsigma_s 1 1 1\nfog 1\n",
+        3,
+        &["fog 1: no such medium", "1 medium block)"],
+    );
+}
+
+#[test]
 fn missing_argument() {
     fails_at(
         "material\ndiffuse 0.5 0.5\n",

@@ -52,6 +52,17 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         .accel
         .unwrap_or_else(AccelKind::default_available);
     let engine = args.engine();
+    if scene.fog.is_some()
+        && !matches!(
+            engine,
+            engines::EngineKind::Path | engines::EngineKind::Raycast
+        )
+    {
+        return Err(format!(
+            "{}: the scene has fog, which only the path tracer renders so far (--engine path); the {engine} engine would leave it out",
+            input.display()
+        ));
+    }
     let plan = Plan::new(&scene, engine, kind, &settings);
     let unused = args.unused_flags();
     let max_memory = args

@@ -22,6 +22,7 @@ use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
 use crate::render::lights::Light;
 use crate::render::{render_pixels, Counts, RenderStats};
 use crate::sampling::Rng;
+use crate::scene::medium::{Flight, Medium};
 use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
 
 /// Vertices after which Russian roulette may end a path.
@@ -55,6 +56,8 @@ struct Previous {
     /// The normal the direction was sampled about (light sampling's density depends on it).
     normal: Vec3,
     bsdf_pdf: Option<f32>,
+    /// The vertex scattered in a medium: lights were sampled from it by area.
+    in_medium: bool,
 }
 
 impl PathTracer<'_> {
@@ -86,8 +89,59 @@ impl PathTracer<'_> {
     /// Solid-angle density with which next-event estimation picks the direction from `from`
     /// to `hit` on light `k`.
     fn light_pdf(&self, k: usize, from: &Previous, hit: &SurfaceHit) -> f32 {
+        let light = &self.lights[k];
         self.selection_probability(k)
-            * self.lights[k].pdf_towards(from.point, from.normal, hit.point, hit.geometric_normal)
+            * if from.in_medium {
+                light.pdf_by_area(from.point, hit.point, hit.geometric_normal)
+            } else {
+                light.pdf_towards(from.point, from.normal, hit.point, hit.geometric_normal)
+            }
+    }
+
+    /// One light, chosen in proportion to its power, and its index.
+    fn choose_light(&self, rng: &mut Rng) -> Option<usize> {
+        let total = self.cdf.last().copied().unwrap_or(0.0);
+        if total <= 0.0 {
+            return None;
+        }
+        let x = rng.next_f32();
+        Some(
+            self.cdf
+                .partition_point(|&c| c <= x)
+                .min(self.lights.len() - 1),
+        )
+    }
+
+    /// Next-event estimation at a point `x` of `medium` reached travelling along the unit
+    /// `travel`: in-scattered radiance per unit σs-weighted throughput from one light point
+    /// chosen by area, with the transmittance to it, weighted against sampling the phase
+    /// function by the power heuristic.
+    fn sample_light_in_medium(
+        &self,
+        x: Vec3,
+        travel: Vec3,
+        medium: &Medium,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
+        let Some(k) = self.choose_light(rng) else {
+            return Vec3::ZERO;
+        };
+        let light = &self.lights[k];
+        let Some(d) = light.sample_by_area(x, rng.next_f32(), rng.next_f32()) else {
+            return Vec3::ZERO;
+        };
+        let to_light = d.point - x;
+        let distance = to_light.length();
+        let phase = medium.phase(travel, to_light / distance);
+        let light_pdf = self.selection_probability(k) * d.pdf;
+        counts.shadow += 1;
+        if self.accel.occluded(&shadow_ray(x, d.point)) {
+            return Vec3::ZERO;
+        }
+        light.emitted
+            * medium.transmittance(distance)
+            * (phase / light_pdf * power_heuristic(light_pdf, phase))
     }
 
     /// Next-event estimation at a diffuse point (`lobe` None) or in a glossy lobe: radiance
@@ -98,18 +152,13 @@ impl PathTracer<'_> {
         s: &SurfaceHit,
         n: Vec3,
         lobe: Option<&GlossyLobe>,
+        medium: Option<&Medium>,
         rng: &mut Rng,
         counts: &mut Counts,
     ) -> Color {
-        let total = self.cdf.last().copied().unwrap_or(0.0);
-        if total <= 0.0 {
+        let Some(k) = self.choose_light(rng) else {
             return Vec3::ZERO;
-        }
-        let x = rng.next_f32();
-        let k = self
-            .cdf
-            .partition_point(|&c| c <= x)
-            .min(self.lights.len() - 1);
+        };
         let light = &self.lights[k];
         if light.prim == s.prim {
             return Vec3::ZERO;
@@ -141,7 +190,9 @@ impl PathTracer<'_> {
         if self.accel.occluded(&shadow_ray(origin, d.point)) {
             return Vec3::ZERO;
         }
-        light.emitted * (value * mis / self.selection_probability(k))
+        let transmittance =
+            medium.map_or(Vec3::ONE, |m| m.transmittance(s.point.distance(d.point)));
+        light.emitted * transmittance * (value * mis / self.selection_probability(k))
     }
 
     /// The radiance arriving along `ray`, from one path.
@@ -165,12 +216,49 @@ impl PathTracer<'_> {
             point: ray.origin,
             normal: ray.direction,
             bsdf_pdf: None,
+            in_medium: false,
         };
+        // The medium the path is in: the fog (where the camera is) until it passes into a
+        // closed object through a glass boundary, none inside.
+        let fog = self.scene.fog.map(|k| &self.scene.media[k]);
+        let mut medium = fog;
         // The background is what a ray leaving the scene shows, seen directly or through
         // mirrors and glass; it does not light diffuse surfaces (as in the course program and
         // the other engines, which take light from the emitters only).
         let mut diffuse_bounce = false;
         for vertex in 0..MAX_VERTICES {
+            if let Some(m) = medium {
+                let travel = ray.direction.normalize();
+                let t_surface = hit
+                    .as_ref()
+                    .map_or(f32::INFINITY, |s| s.point.distance(ray.origin));
+                match m.sample_flight(t_surface, throughput, rng.next_f32(), rng.next_f32()) {
+                    Flight::Scattered { t, weight } => {
+                        throughput *= weight;
+                        let x = ray.origin + travel * t;
+                        radiance +=
+                            throughput * self.sample_light_in_medium(x, travel, m, rng, counts);
+                        let (dir, pdf) = m.sample_phase(travel, rng.next_f32(), rng.next_f32());
+                        // The phase function's value equals its density: the throughput
+                        // keeps what the flight gave it.
+                        previous = Previous {
+                            point: x,
+                            normal: dir,
+                            bsdf_pdf: Some(pdf),
+                            in_medium: true,
+                        };
+                        diffuse_bounce = true;
+                        if !survives_roulette(vertex, &mut throughput, rng) {
+                            break;
+                        }
+                        ray = Ray::new(x, dir);
+                        counts.secondary += 1;
+                        hit = closest_surface(self.accel, self.scene, &ray);
+                        continue;
+                    }
+                    Flight::Passed { weight } => throughput *= weight,
+                }
+            }
             let Some(s) = hit else {
                 if !diffuse_bounce {
                     radiance += throughput * self.scene.background;
@@ -203,7 +291,7 @@ impl PathTracer<'_> {
             let dir;
             if choice < d {
                 let lobe = albedo * (total / d);
-                radiance += throughput * lobe * self.sample_light(&s, n, None, rng, counts);
+                radiance += throughput * lobe * self.sample_light(&s, n, None, medium, rng, counts);
                 let (sampled, pdf) = diffuse_sample(n, rng.next_f32(), rng.next_f32());
                 dir = sampled;
                 throughput *= lobe;
@@ -212,6 +300,7 @@ impl PathTracer<'_> {
                     point: s.point,
                     normal: n,
                     bsdf_pdf: Some(pdf),
+                    in_medium: false,
                 };
             } else if choice < d + r {
                 throughput *= m.reflective * (total / r);
@@ -222,14 +311,15 @@ impl PathTracer<'_> {
                         previous.bsdf_pdf = None;
                     }
                     Some(glossy) => {
-                        radiance +=
-                            throughput * self.sample_light(&s, n, Some(&glossy), rng, counts);
+                        radiance += throughput
+                            * self.sample_light(&s, n, Some(&glossy), medium, rng, counts);
                         let (sampled, pdf) = glossy.sample(rng.next_f32(), rng.next_f32());
                         dir = sampled;
                         previous = Previous {
                             point: s.point,
                             normal: n,
                             bsdf_pdf: pdf,
+                            in_medium: false,
                         };
                     }
                 }
@@ -237,13 +327,14 @@ impl PathTracer<'_> {
                 dir = Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng);
                 throughput *= m.transmitted * (total / t);
                 previous.bsdf_pdf = None;
-            }
-            if vertex >= ROULETTE_FROM {
-                let survive = throughput.max_element().min(MAX_SURVIVAL);
-                if rng.next_f32() >= survive {
-                    break;
+                // Through the boundary (n faces the side the ray came from): into a closed
+                // object from its front, out of it from its back.
+                if dir.dot(n) < 0.0 {
+                    medium = if front { None } else { fog };
                 }
-                throughput *= survive.recip();
+            }
+            if !survives_roulette(vertex, &mut throughput, rng) {
+                break;
             }
             ray = s.spawn_ray(dir);
             counts.secondary += 1;
@@ -251,6 +342,20 @@ impl PathTracer<'_> {
         }
         radiance
     }
+}
+
+/// Russian roulette from the `ROULETTE_FROM`th vertex on: whether the path goes on, its
+/// throughput divided by the probability that it did.
+fn survives_roulette(vertex: u32, throughput: &mut Color, rng: &mut Rng) -> bool {
+    if vertex < ROULETTE_FROM {
+        return true;
+    }
+    let survive = throughput.max_element().min(MAX_SURVIVAL);
+    if rng.next_f32() >= survive {
+        return false;
+    }
+    *throughput *= survive.recip();
+    true
 }
 
 /// Renders the scene by path tracing; returns the film and the counters of the render.

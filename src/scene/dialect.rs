@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use super::camera::{Camera, Projection};
 use super::error::SceneError;
+use super::medium::Medium;
 use super::{Material, Quad, Scene, ShapePrim};
 use crate::color::srgb_to_linear;
 use crate::geometry::{quad_normal, vec2, vec3, RingShape, SphereShape, Vec2, Vec3};
@@ -103,6 +104,8 @@ struct Parser<'a> {
     /// Where the last token ended, for errors at the end of the file.
     last: (u32, u32),
 }
+
+const MEDIUM_KEYS: [&str; 3] = ["sigma_a", "sigma_s", "g"];
 
 const MATERIAL_KEYS: [&str; 7] = [
     "diffuse",
@@ -207,6 +210,8 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
     // so that a file may define materials after selecting them).
     let mut current: Option<(u32, Token)> = None;
     let mut selections: Vec<(u32, Token)> = Vec::new();
+    // `fog K` and where it was given (checked at the end, as material selections are).
+    let mut fog: Option<(i64, Token)> = None;
 
     while let Some(tok) = p.next() {
         match tok.text {
@@ -339,6 +344,39 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                     material,
                 });
             }
+            "medium" => {
+                let mut m = Medium {
+                    line: tok.line,
+                    ..Medium::default()
+                };
+                while let Some(key) = p.peek().filter(|k| MEDIUM_KEYS.contains(&k.text)) {
+                    p.next();
+                    match key.text {
+                        "sigma_a" | "sigma_s" => {
+                            let what = format!("a real number ({} r g b)", key.text);
+                            let c = p.vec3(&what)?;
+                            if c.min_element() < 0.0 {
+                                return Err(p.invalid(key, format!("{} must be ≥ 0", key.text)));
+                            }
+                            *(if key.text == "sigma_a" { &mut m.sigma_a } else { &mut m.sigma_s }) = c;
+                        }
+                        _ => {
+                            m.g = p.real("a real number (g asymmetry)")?;
+                            if m.g.abs() >= 1.0 {
+                                return Err(p.invalid(
+                                    key,
+                                    "the Henyey–Greenstein asymmetry g must lie in (−1, 1)".into(),
+                                ));
+                            }
+                        }
+                    }
+                }
+                scene.media.push(m);
+            }
+            "fog" => {
+                let (k, at) = p.index("a medium index (fog K)")?;
+                fog = Some((k, at));
+            }
             "background_color" => {
                 let c = p.vec3("a real number (background_color r g b)")?;
                 scene.background = vec3(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z));
@@ -349,12 +387,25 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
             _ => {
                 return Err(p.syntax(
                     Some(tok),
-                    "a scene token (material, m, v, vt, f, s, r, background_color, PerspectiveCamera, OrthographicCamera)",
+                    "a scene token (material, m, v, vt, f, s, r, medium, fog, background_color, PerspectiveCamera, OrthographicCamera)",
                 ))
             }
         }
     }
 
+    if let Some((k, at)) = fog {
+        if k < 0 || k as usize >= scene.media.len() {
+            return Err(p.invalid(
+                at,
+                format!(
+                    "fog {k}: no such medium (the file defines {} medium block{})",
+                    scene.media.len(),
+                    if scene.media.len() == 1 { "" } else { "s" }
+                ),
+            ));
+        }
+        scene.fog = Some(k as usize);
+    }
     for (k, at) in selections {
         if k as usize >= scene.materials.len() {
             return Err(p.invalid(

@@ -4,6 +4,7 @@
 mod camera;
 mod dialect;
 mod error;
+pub mod medium;
 mod mgf;
 mod obj;
 mod surface;
@@ -163,6 +164,10 @@ pub struct Scene {
     pub camera: Option<Camera>,
     /// Linear radiance of rays that leave the scene.
     pub background: Color,
+    /// The media of `medium` blocks, in order.
+    pub media: Vec<medium::Medium>,
+    /// The medium that fills the space outside closed objects, where the camera is (`fog K`).
+    pub fog: Option<usize>,
     /// Quads are opaque from both sides (`--two-sided`); by default they are one-sided for
     /// every query, as in the course program.
     pub two_sided_quads: bool,

@@ -1,0 +1,267 @@
+//! Homogeneous participating media (`medium` blocks, `fog K`; docs/scene-format.md): the
+//! coefficients, the transmittance along a segment, free-flight distances sampled by a hero
+//! channel, and the Henyey–Greenstein phase function.
+
+use crate::color::Color;
+use crate::geometry::Vec3;
+use crate::sampling::orthonormal_basis;
+
+/// A homogeneous medium. Coefficients are per scene unit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Medium {
+    /// Absorption coefficient σa (`sigma_a`, default 0).
+    pub sigma_a: Color,
+    /// Scattering coefficient σs (`sigma_s`, default 0).
+    pub sigma_s: Color,
+    /// Henyey–Greenstein asymmetry in (−1, 1) (`g`, default 0: isotropic).
+    pub g: f32,
+    /// Line of the file where the block starts.
+    pub line: u32,
+}
+
+impl Default for Medium {
+    fn default() -> Self {
+        Medium {
+            sigma_a: Color::ZERO,
+            sigma_s: Color::ZERO,
+            g: 0.0,
+            line: 0,
+        }
+    }
+}
+
+/// Where a free flight ended: scattered in the medium at distance `t`, or at the surface the
+/// ray was going to meet (or out of the scene); `weight` is what the path's throughput is
+/// multiplied by (transmittance, and σs there, over the density of the event).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Flight {
+    Scattered { t: f32, weight: Color },
+    Passed { weight: Color },
+}
+
+impl Medium {
+    /// The extinction coefficient σt = σa + σs.
+    pub fn sigma_t(&self) -> Color {
+        self.sigma_a + self.sigma_s
+    }
+
+    /// The fraction of light that crosses `distance` of the medium: exp(−σt·d) per channel.
+    pub fn transmittance(&self, distance: f32) -> Color {
+        let t = self.sigma_t() * distance;
+        // exp of −∞·0 is NaN: a channel with σt = 0 transmits everything, however far.
+        Color::new(
+            transmit(t.x, self.sigma_t().x),
+            transmit(t.y, self.sigma_t().y),
+            transmit(t.z, self.sigma_t().z),
+        )
+    }
+
+    /// Samples where a ray that would meet a surface at `t_surface` (∞: none) first
+    /// interacts, from two uniform numbers: a channel chosen in proportion to the path's
+    /// `throughput` (the hero), a distance exponential in its σt; the density is the mix of
+    /// the three channels' by those proportions (single-sample MIS, balance heuristic), so
+    /// the estimate is unbiased for coloured media. Choosing by throughput keeps the sum of
+    /// the channels' throughputs from growing where the medium only scatters (uniform choice
+    /// let one channel's grow by up to 3× a vertex: a heavy tail that left a coloured fog's
+    /// furnace 3% low at 262k paths).
+    pub fn sample_flight(
+        &self,
+        t_surface: f32,
+        throughput: Color,
+        u_channel: f32,
+        u_distance: f32,
+    ) -> Flight {
+        let total = throughput.x + throughput.y + throughput.z;
+        let share = if total > 0.0 && total.is_finite() {
+            throughput / total
+        } else {
+            Color::splat(1.0 / 3.0)
+        };
+        let hero = if u_channel < share.x {
+            0
+        } else if u_channel < share.x + share.y || share.z <= 0.0 {
+            1
+        } else {
+            2
+        };
+        let sigma_t = self.sigma_t();
+        let t = if sigma_t[hero] > 0.0 {
+            -(1.0 - u_distance).ln() / sigma_t[hero]
+        } else {
+            f32::INFINITY
+        };
+        if t < t_surface {
+            let tr = self.transmittance(t);
+            let density = share.dot(sigma_t * tr);
+            Flight::Scattered {
+                t,
+                weight: if density > 0.0 {
+                    tr * self.sigma_s / density
+                } else {
+                    Color::ZERO
+                },
+            }
+        } else {
+            let tr = self.transmittance(t_surface);
+            let probability = share.dot(tr);
+            Flight::Passed {
+                weight: if probability > 0.0 {
+                    tr / probability
+                } else {
+                    Color::ZERO
+                },
+            }
+        }
+    }
+
+    /// The Henyey–Greenstein phase function for a ray travelling along `from` and leaving
+    /// along `to` (unit vectors): its value, which is also its density in solid angle.
+    pub fn phase(&self, from: Vec3, to: Vec3) -> f32 {
+        henyey_greenstein(self.g, from.dot(to))
+    }
+
+    /// A direction sampled from the phase function for a ray travelling along `from`, and
+    /// its density (= the phase function's value).
+    pub fn sample_phase(&self, from: Vec3, u: f32, v: f32) -> (Vec3, f32) {
+        let g = self.g;
+        let cos = if g.abs() < 1e-3 {
+            1.0 - 2.0 * u
+        } else {
+            let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
+            ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
+        };
+        let sin = (1.0 - cos * cos).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * v;
+        let (tx, ty) = orthonormal_basis(from);
+        let to = (tx * (sin * phi.cos()) + ty * (sin * phi.sin()) + from * cos).normalize();
+        (to, henyey_greenstein(g, cos))
+    }
+}
+
+fn transmit(optical_depth: f32, sigma_t: f32) -> f32 {
+    if sigma_t == 0.0 {
+        1.0
+    } else {
+        (-optical_depth).exp()
+    }
+}
+
+/// (1 − g²) / (4π (1 + g² − 2g cos θ)^{3/2}), θ between the travel directions before and after.
+fn henyey_greenstein(g: f32, cos: f32) -> f32 {
+    let denom = 1.0 + g * g - 2.0 * g * cos;
+    (1.0 - g * g) / (4.0 * std::f32::consts::PI * denom * denom.max(0.0).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::vec3;
+    use crate::sampling::Rng;
+
+    fn fog(sigma_a: Color, sigma_s: Color, g: f32) -> Medium {
+        Medium {
+            sigma_a,
+            sigma_s,
+            g,
+            line: 1,
+        }
+    }
+
+    /// The phase function integrates to 1 over the sphere, and its samples are distributed
+    /// as it: the mean cosine of the samples is g.
+    #[test]
+    fn henyey_greenstein_is_normalised_and_sampled_as_itself() {
+        for g in [-0.7f32, 0.0, 0.3, 0.9] {
+            let m = fog(Color::ZERO, Color::ONE, g);
+            // ∫ p dω = 2π ∫ p(cos) dcos, midpoint rule over 200,000 intervals.
+            let n = 200_000;
+            let integral: f64 = (0..n)
+                .map(|i| {
+                    let cos = -1.0 + (i as f64 + 0.5) * 2.0 / n as f64;
+                    henyey_greenstein(g, cos as f32) as f64
+                })
+                .sum::<f64>()
+                * std::f64::consts::TAU
+                * 2.0
+                / n as f64;
+            assert!((integral - 1.0).abs() < 1e-3, "g {g}: ∫p = {integral}");
+            let from = vec3(0.3, -0.5, 0.8).normalize();
+            let mut rng = Rng::new(7, 0, 0);
+            let samples = 100_000;
+            let mut mean_cos = 0.0f64;
+            for _ in 0..samples {
+                let (to, pdf) = m.sample_phase(from, rng.next_f32(), rng.next_f32());
+                assert!((to.length() - 1.0).abs() < 1e-4);
+                assert!((pdf - m.phase(from, to)).abs() <= 1e-3 * pdf);
+                mean_cos += from.dot(to) as f64;
+            }
+            mean_cos /= samples as f64;
+            // The mean cosine of HG is g; the standard error of 1e5 samples is below 2e-3.
+            assert!(
+                (mean_cos - g as f64).abs() < 1e-2,
+                "g {g}: mean cos {mean_cos}"
+            );
+        }
+    }
+
+    /// The free-flight weights are unbiased: the mean weight of the flights that pass a
+    /// surface at distance d is the transmittance exp(−σt·d), per channel, and the flights
+    /// that scatter carry σs·∫₀^d exp(−σt·t) dt = σs/σt·(1 − exp(−σt·d)), for a coloured
+    /// medium (one channel with no extinction at all).
+    #[test]
+    fn free_flights_weigh_to_the_closed_form() {
+        let m = fog(vec3(0.2, 0.0, 0.0), vec3(0.5, 1.5, 0.0), 0.0);
+        let d = 1.3;
+        for throughput in [Color::ONE, vec3(0.2, 1.5, 0.3), vec3(0.0, 0.0, 2.0)] {
+            let mut rng = Rng::new(3, 0, 0);
+            let n = 400_000;
+            let (mut passed, mut scattered) = (Color::ZERO, Color::ZERO);
+            for _ in 0..n {
+                match m.sample_flight(d, throughput, rng.next_f32(), rng.next_f32()) {
+                    Flight::Passed { weight } => passed += weight,
+                    Flight::Scattered { t, weight } => {
+                        assert!(t < d);
+                        scattered += weight;
+                    }
+                }
+            }
+            let (passed, scattered) = (passed / n as f32, scattered / n as f32);
+            let sigma_t = m.sigma_t();
+            for c in 0..3 {
+                let tr = if sigma_t[c] > 0.0 {
+                    (-sigma_t[c] * d).exp()
+                } else {
+                    1.0
+                };
+                let s = if sigma_t[c] > 0.0 {
+                    m.sigma_s[c] / sigma_t[c] * (1.0 - tr)
+                } else {
+                    0.0
+                };
+                // Weights are bounded by 1/share (10 here at most): the standard error at 4e5
+                // flights is below 5e-3.
+                // A channel the path carries nothing in may be weighed anyhow (it is multiplied
+                // by zero).
+                if throughput[c] == 0.0 {
+                    continue;
+                }
+                assert!(
+                    (passed[c] - tr).abs() < 1e-2,
+                    "{throughput}: channel {c}: passed {} against {tr}",
+                    passed[c]
+                );
+                assert!(
+                    (scattered[c] - s).abs() < 1e-2,
+                    "{throughput}: channel {c}: scattered {} against {s}",
+                    scattered[c]
+                );
+            }
+        }
+        // Nothing scatters out of a vacuum, and everything passes.
+        let vacuum = fog(Color::ZERO, Color::ZERO, 0.0);
+        assert_eq!(
+            vacuum.sample_flight(f32::INFINITY, Color::ONE, 0.5, 0.5),
+            Flight::Passed { weight: Color::ONE }
+        );
+    }
+}
