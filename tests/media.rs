@@ -1,6 +1,8 @@
-//! Participating media (`medium`, `fog`) in the path tracer against closed forms: the furnace
-//! filled with a scattering fog (radiance Le/(1−ρ) everywhere, whatever the medium scatters),
-//! and the transmittance exp(−σa·d) of an absorbing fog in front of an emitter.
+//! Participating media (`medium`, `fog`) and the sky (`sky_color`, `sky_gradient`) in the path
+//! tracer against closed forms: the furnace filled with a scattering fog (radiance Le/(1−ρ)
+//! everywhere, whatever the medium scatters), the transmittance exp(−σa·d) of an absorbing
+//! fog in front of an emitter, and an open floor under a sky (ρ times the sky's cosine-
+//! weighted mean over the upper hemisphere).
 
 mod common;
 
@@ -83,50 +85,91 @@ fn an_absorbing_fog_transmits_exp_minus_sigma_a_d() {
     }
 }
 
-/// The engines that do not render media yet refuse a scene with fog, naming the file, before
-/// any work; the path tracer and the MATERIALS view take it.
+/// The engines that do not render media or skies yet refuse a scene with fog or a sky,
+/// naming the file, before any work; the path tracer and the MATERIALS view take it.
 #[test]
-fn engines_without_media_refuse_fog() {
+fn engines_without_media_refuse_fog_and_skies() {
     let dir = common::temp_dir("media-cli");
-    let scene = dir.join("fog.obj");
-    std::fs::write(
-        &scene,
-        "material\ndiffuse 0.5 0.5 0.5\nemitted 1 1 1\n\
-         v -1 -1 -2\nv 1 -1 -2\nv 1 1 -2\nv -1 1 -2\nm 0\nf 1 2 3 4\n\
-         medium\nsigma_s 0.1 0.1 0.1\nfog 0\n",
-    )
-    .expect("write");
-    let run = |engine: &str| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_render"))
-            .args([
-                "-input",
-                scene.to_str().unwrap(),
-                "-size",
-                "8",
-                "8",
-                "--quiet",
-            ])
-            .args(["--engine", engine, "-o"])
-            .arg(dir.join(format!("{engine}.png")))
-            .output()
-            .expect("runs")
-    };
-    for engine in ["raytrace", "photon", "radiosity", "sppm"] {
-        let out = run(engine);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{engine}: {stderr}");
-        assert!(
-            stderr.contains("fog.obj: the scene has fog, which only the path tracer renders"),
-            "{engine}: {stderr}"
-        );
-        assert!(!dir.join(format!("{engine}.png")).exists());
+    let quad = "material\ndiffuse 0.5 0.5 0.5\nemitted 1 1 1\n\
+                v -1 -1 -2\nv 1 -1 -2\nv 1 1 -2\nv -1 1 -2\nm 0\nf 1 2 3 4\n";
+    for (name, extra, what) in [
+        ("fog", "medium\nsigma_s 0.1 0.1 0.1\nfog 0\n", "fog"),
+        ("sky", "sky_color 1 1 1\n", "a sky"),
+    ] {
+        let scene = dir.join(format!("{name}.obj"));
+        std::fs::write(&scene, format!("{quad}{extra}")).expect("write");
+        let run = |engine: &str| {
+            std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+                .args([
+                    "-input",
+                    scene.to_str().unwrap(),
+                    "-size",
+                    "8",
+                    "8",
+                    "--quiet",
+                ])
+                .args(["--engine", engine, "-o"])
+                .arg(dir.join(format!("{name}-{engine}.png")))
+                .output()
+                .expect("runs")
+        };
+        for engine in ["raytrace", "photon", "radiosity", "sppm"] {
+            let out = run(engine);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert!(!out.status.success(), "{engine}: {stderr}");
+            let expected =
+                format!("{name}.obj: the scene has {what}, which only the path tracer renders");
+            assert!(stderr.contains(&expected), "{engine}: {stderr}");
+            assert!(!dir.join(format!("{name}-{engine}.png")).exists());
+        }
+        for engine in ["path", "raycast"] {
+            let out = run(engine);
+            assert!(
+                out.status.success(),
+                "{engine}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
     }
-    for engine in ["path", "raycast"] {
-        let out = run(engine);
-        assert!(
-            out.status.success(),
-            "{engine}: {}",
-            String::from_utf8_lossy(&out.stderr)
+}
+
+/// A floor of albedo ρ open to the sky, seen from above: its radiance is ρ times the sky's
+/// cosine-weighted mean over the upper hemisphere — ρL under a uniform sky (exact in every
+/// path: the sky's own sample and the diffuse bounce split it by the power heuristic), and
+/// ρ(H + 2(Z − H)/3) under a gradient rising linearly from H at the horizon to Z at the
+/// zenith (∫ y·cos dω / π = 2/3).
+#[test]
+fn a_floor_under_the_sky_reflects_its_cosine_weighted_mean() {
+    let floor = |sky: &str| {
+        let text = format!(
+            "material\ndiffuse 0.6 0.6 0.6\nm 0\n\
+             v -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\nf 1 2 3 4\n{sky}\n\
+             OrthographicCamera {{\ncamera_position 0 5 0\npoint_of_interest 0 0 0\nup 0 0 -1\nsize 0.0001\n}}\n"
         );
+        Scene::parse_dialect(Path::new("sky.obj"), &text).expect("parses")
+    };
+    let uniform = floor("sky_color 0.5 1 2\nsky_scale 2");
+    let gradient = floor("sky_gradient 3 2 1  1 1 1  0 0 0");
+    for kind in backends() {
+        let mean = render(&uniform, kind, 16);
+        println!("uniform sky ({kind}): {mean:?}");
+        for (c, truth) in [0.6f64, 1.2, 2.4].into_iter().enumerate() {
+            // f32 rounding only: measured below 1e-6 relative.
+            assert!(
+                (mean[c] / truth - 1.0).abs() < 1e-5,
+                "{kind}: channel {c}: {}",
+                mean[c]
+            );
+        }
+        let mean = render(&gradient, kind, 1024);
+        println!("gradient sky ({kind}): {mean:?}");
+        for (c, zenith) in [3.0f64, 2.0, 1.0].into_iter().enumerate() {
+            let truth = 0.6 * (1.0 + 2.0 * (zenith - 1.0) / 3.0);
+            assert!(
+                (mean[c] / truth - 1.0).abs() < 5e-3,
+                "{kind}: channel {c}: {} against {truth}",
+                mean[c]
+            );
+        }
     }
 }

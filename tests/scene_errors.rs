@@ -50,6 +50,26 @@ fn bad_media() {
 }
 
 #[test]
+fn bad_skies() {
+    fails_at(
+        "sky_color 1 1 1\nsky_gradient 1 1 1 1 1 1 1 1 1\n",
+        2,
+        &["a second sky (the first at line 1)"],
+    );
+    fails_at(
+        "sky_color 1 -1 1\n",
+        1,
+        &["sky_color: radiance must be ≥ 0"],
+    );
+    fails_at("sky_texture sky.exr\n", 1, &["sky_texture is not read yet"]);
+    fails_at(
+        "sky_color 1 1 1\nsky_scale -2\n",
+        2,
+        &["sky_scale must be ≥ 0"],
+    );
+}
+
+#[test]
 fn missing_argument() {
     fails_at(
         "material\ndiffuse 0.5 0.5\n",

@@ -52,16 +52,18 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         .accel
         .unwrap_or_else(AccelKind::default_available);
     let engine = args.engine();
-    if scene.fog.is_some()
-        && !matches!(
+    // Media and skies are the path tracer's alone so far (issue #18): refused, not left out.
+    let path_only = [(scene.fog.is_some(), "fog"), (scene.sky.is_some(), "a sky")];
+    if let Some((_, what)) = path_only.iter().find(|(has, _)| *has) {
+        if !matches!(
             engine,
             engines::EngineKind::Path | engines::EngineKind::Raycast
-        )
-    {
-        return Err(format!(
-            "{}: the scene has fog, which only the path tracer renders so far (--engine path); the {engine} engine would leave it out",
-            input.display()
-        ));
+        ) {
+            return Err(format!(
+                "{}: the scene has {what}, which only the path tracer renders so far (--engine path); the {engine} engine would leave it out",
+                input.display()
+            ));
+        }
     }
     let plan = Plan::new(&scene, engine, kind, &settings);
     let unused = args.unused_flags();

@@ -195,6 +195,42 @@ impl PathTracer<'_> {
         light.emitted * transmittance * (value * mis / self.selection_probability(k))
     }
 
+    /// Next-event estimation of the sky at a diffuse point (`lobe` None) or in a glossy lobe:
+    /// one direction by the cosine about `n` (exact for a uniform sky over a diffuse
+    /// surface), weighed against sampling the lobe by the power heuristic; a medium around
+    /// the point lets through only its channels without extinction.
+    fn sample_sky(
+        &self,
+        s: &SurfaceHit,
+        n: Vec3,
+        lobe: Option<&GlossyLobe>,
+        medium: Option<&Medium>,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
+        let Some(sky) = self.scene.sky else {
+            return Vec3::ZERO;
+        };
+        let (dir, pdf) = diffuse_sample(n, rng.next_f32(), rng.next_f32());
+        // Diffuse: (cos/π)/pdf = 1 per unit albedo; glossy: the lobe's density over this one.
+        let (lobe_pdf, value) = match lobe {
+            None => (pdf, 1.0),
+            Some(lobe) => {
+                let p = lobe.pdf(dir);
+                (p, p / pdf)
+            }
+        };
+        if pdf <= 0.0 || lobe_pdf <= 0.0 {
+            return Vec3::ZERO;
+        }
+        counts.shadow += 1;
+        if self.accel.occluded(&s.spawn_ray(dir)) {
+            return Vec3::ZERO;
+        }
+        let transmittance = medium.map_or(Vec3::ONE, |m| m.transmittance(f32::INFINITY));
+        sky.radiance(dir) * transmittance * (value * power_heuristic(pdf, lobe_pdf))
+    }
+
     /// The radiance arriving along `ray`, from one path.
     pub fn along(&self, ray: &Ray, rng: &mut Rng) -> Color {
         let first = closest_surface(self.accel, self.scene, ray);
@@ -260,8 +296,19 @@ impl PathTracer<'_> {
                 }
             }
             let Some(s) = hit else {
-                if !diffuse_bounce {
-                    radiance += throughput * self.scene.background;
+                match self.scene.sky {
+                    Some(sky) => {
+                        let towards = ray.direction.normalize();
+                        let weight = match previous.bsdf_pdf {
+                            Some(pdf) if !previous.in_medium => {
+                                power_heuristic(pdf, sky_pdf(previous.normal, towards))
+                            }
+                            _ => 1.0,
+                        };
+                        radiance += throughput * sky.radiance(towards) * weight;
+                    }
+                    None if !diffuse_bounce => radiance += throughput * self.scene.background,
+                    None => {}
                 }
                 break;
             };
@@ -291,7 +338,10 @@ impl PathTracer<'_> {
             let dir;
             if choice < d {
                 let lobe = albedo * (total / d);
-                radiance += throughput * lobe * self.sample_light(&s, n, None, medium, rng, counts);
+                radiance += throughput
+                    * lobe
+                    * (self.sample_light(&s, n, None, medium, rng, counts)
+                        + self.sample_sky(&s, n, None, medium, rng, counts));
                 let (sampled, pdf) = diffuse_sample(n, rng.next_f32(), rng.next_f32());
                 dir = sampled;
                 throughput *= lobe;
@@ -312,7 +362,8 @@ impl PathTracer<'_> {
                     }
                     Some(glossy) => {
                         radiance += throughput
-                            * self.sample_light(&s, n, Some(&glossy), medium, rng, counts);
+                            * (self.sample_light(&s, n, Some(&glossy), medium, rng, counts)
+                                + self.sample_sky(&s, n, Some(&glossy), medium, rng, counts));
                         let (sampled, pdf) = glossy.sample(rng.next_f32(), rng.next_f32());
                         dir = sampled;
                         previous = Previous {
@@ -342,6 +393,12 @@ impl PathTracer<'_> {
         }
         radiance
     }
+}
+
+/// The density with which `sample_sky` at a point of normal `n` picks the unit direction
+/// `towards`: the cosine about `n` over π.
+fn sky_pdf(n: Vec3, towards: Vec3) -> f32 {
+    n.dot(towards).max(0.0) / std::f32::consts::PI
 }
 
 /// Russian roulette from the `ROULETTE_FROM`th vertex on: whether the path goes on, its

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use super::camera::{Camera, Projection};
 use super::error::SceneError;
 use super::medium::Medium;
+use super::sky::Sky;
 use super::{Material, Quad, Scene, ShapePrim};
 use crate::color::srgb_to_linear;
 use crate::geometry::{quad_normal, vec2, vec3, RingShape, SphereShape, Vec2, Vec3};
@@ -187,6 +188,14 @@ impl<'a> Parser<'a> {
     }
 }
 
+/// `c` if no channel is negative, else an error at `at`: radiance is never negative.
+fn non_negative(p: &Parser, at: Token, c: Vec3) -> Result<Vec3, SceneError> {
+    if c.min_element() < 0.0 {
+        return Err(p.invalid(at, format!("{}: radiance must be ≥ 0", at.text)));
+    }
+    Ok(c)
+}
+
 /// Per-vertex data as the dialect gives it: `vt` belongs to the most recent `v`.
 struct Vertex {
     position: Vec3,
@@ -212,6 +221,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
     let mut selections: Vec<(u32, Token)> = Vec::new();
     // `fog K` and where it was given (checked at the end, as material selections are).
     let mut fog: Option<(i64, Token)> = None;
+    // The line of the sky given, and `sky_scale` (applied at the end, wherever it stands).
+    let mut sky_at: Option<u32> = None;
+    let mut sky_scale = 1.0;
 
     while let Some(tok) = p.next() {
         match tok.text {
@@ -373,6 +385,45 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 }
                 scene.media.push(m);
             }
+            "sky_color" | "sky_gradient" | "sky_texture" => {
+                if let Some(first) = sky_at {
+                    return Err(p.invalid(
+                        tok,
+                        format!(
+                            "a second sky (the first at line {first}): give at most one of sky_color, sky_gradient, sky_texture"
+                        ),
+                    ));
+                }
+                sky_at = Some(tok.line);
+                scene.sky = Some(match tok.text {
+                    "sky_color" => {
+                        let c = p.vec3("a real number (sky_color r g b)")?;
+                        Sky::Uniform(non_negative(&p, tok, c)?)
+                    }
+                    "sky_gradient" => {
+                        let what = "a real number (sky_gradient zenith horizon nadir, 3 × r g b)";
+                        let (zenith, horizon, nadir) = (p.vec3(what)?, p.vec3(what)?, p.vec3(what)?);
+                        Sky::Gradient {
+                            zenith: non_negative(&p, tok, zenith)?,
+                            horizon: non_negative(&p, tok, horizon)?,
+                            nadir: non_negative(&p, tok, nadir)?,
+                        }
+                    }
+                    _ => {
+                        return Err(p.invalid(
+                            tok,
+                            "sky_texture is not read yet (issue #18): use sky_color or sky_gradient".into(),
+                        ))
+                    }
+                });
+            }
+            "sky_scale" => {
+                let scale = p.real("a real number (sky_scale s)")?;
+                if scale < 0.0 {
+                    return Err(p.invalid(tok, "sky_scale must be ≥ 0".into()));
+                }
+                sky_scale = scale;
+            }
             "fog" => {
                 let (k, at) = p.index("a medium index (fog K)")?;
                 fog = Some((k, at));
@@ -387,12 +438,13 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
             _ => {
                 return Err(p.syntax(
                     Some(tok),
-                    "a scene token (material, m, v, vt, f, s, r, medium, fog, background_color, PerspectiveCamera, OrthographicCamera)",
+                    "a scene token (material, m, v, vt, f, s, r, medium, fog, sky_color, sky_gradient, sky_scale, background_color, PerspectiveCamera, OrthographicCamera)",
                 ))
             }
         }
     }
 
+    scene.sky = scene.sky.map(|sky| sky.scaled(sky_scale));
     if let Some((k, at)) = fog {
         if k < 0 || k as usize >= scene.media.len() {
             return Err(p.invalid(

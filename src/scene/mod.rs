@@ -7,6 +7,7 @@ mod error;
 pub mod medium;
 mod mgf;
 mod obj;
+pub mod sky;
 mod surface;
 pub mod texture;
 
@@ -168,6 +169,9 @@ pub struct Scene {
     pub media: Vec<medium::Medium>,
     /// The medium that fills the space outside closed objects, where the camera is (`fog K`).
     pub fog: Option<usize>,
+    /// The sky that lights the scene (`sky_color`, `sky_gradient`; None: the background,
+    /// which lights nothing).
+    pub sky: Option<sky::Sky>,
     /// Quads are opaque from both sides (`--two-sided`); by default they are one-sided for
     /// every query, as in the course program.
     pub two_sided_quads: bool,
