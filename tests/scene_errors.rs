@@ -47,6 +47,11 @@ fn bad_media() {
         3,
         &["fog 1: no such medium", "1 medium block)"],
     );
+    fails_at(
+        "medium\nsigma_s 1 1 1\nmaterial\ndiffuse 1 1 1\ninterior_medium 0\n",
+        5,
+        &["interior_medium is not read yet"],
+    );
 }
 
 #[test]

@@ -435,6 +435,12 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
             "PerspectiveCamera" | "OrthographicCamera" => {
                 scene.camera = Some(parse_camera(&mut p, tok)?);
             }
+            "interior_medium" => {
+                return Err(p.invalid(
+                    tok,
+                    "interior_medium is not read yet (issue #18): only `fog K` fills space with a medium".into(),
+                ))
+            }
             _ => {
                 return Err(p.syntax(
                     Some(tok),
