@@ -176,10 +176,7 @@ impl PathTracer<'_> {
         // the light's density, computed exactly); glossy, the lobe's density over the light's.
         let (bsdf_pdf, value) = match lobe {
             None => (d.weight * d.pdf, d.weight),
-            Some(lobe) => {
-                let pdf = lobe.pdf((d.point - s.point).normalize_or_zero());
-                (pdf, pdf / d.pdf)
-            }
+            Some(lobe) => lobe_against(lobe, (d.point - s.point).normalize_or_zero(), d.pdf),
         };
         if bsdf_pdf <= 0.0 {
             return Vec3::ZERO;
@@ -215,10 +212,7 @@ impl PathTracer<'_> {
         // Diffuse: (cos/π)/pdf = 1 per unit albedo; glossy: the lobe's density over this one.
         let (lobe_pdf, value) = match lobe {
             None => (pdf, 1.0),
-            Some(lobe) => {
-                let p = lobe.pdf(dir);
-                (p, p / pdf)
-            }
+            Some(lobe) => lobe_against(lobe, dir, pdf),
         };
         if pdf <= 0.0 || lobe_pdf <= 0.0 {
             return Vec3::ZERO;
@@ -393,6 +387,13 @@ impl PathTracer<'_> {
         }
         radiance
     }
+}
+
+/// A glossy lobe's density for the direction `dir` that another strategy picked with density
+/// `pdf`, and what that sample brings per unit reflectance (the lobe's density over `pdf`).
+fn lobe_against(lobe: &GlossyLobe, dir: Vec3, pdf: f32) -> (f32, f32) {
+    let lobe_pdf = lobe.pdf(dir);
+    (lobe_pdf, lobe_pdf / pdf)
 }
 
 /// The density with which `sample_sky` at a point of normal `n` picks the unit direction

@@ -62,11 +62,14 @@ pub fn visible_form_factor(
         *state == SEES
     };
     // Cells still to test: corner (i, j) and size in grid steps. Depth-first, so at most
-    // three siblings wait per level.
-    let mut pending = Vec::with_capacity(3 * MAX_DEPTH as usize + 1);
-    pending.push((0usize, 0usize, cells));
+    // three siblings wait per level: a fixed stack, no allocation per shading point.
+    let mut pending = [(0usize, 0usize, 0usize); 3 * MAX_DEPTH as usize + 1];
+    pending[0] = (0, 0, cells);
+    let mut waiting = 1;
     let mut total = 0.0;
-    while let Some((i, j, size)) = pending.pop() {
+    while waiting > 0 {
+        waiting -= 1;
+        let (i, j, size) = pending[waiting];
         let seen = [(i, j), (i + size, j), (i + size, j + size), (i, j + size)]
             .into_iter()
             .filter(|&(a, b)| corner_sees(a, b))
@@ -85,7 +88,8 @@ pub fn visible_form_factor(
         } else {
             let half = size / 2;
             for (a, b) in [(0, 0), (half, 0), (half, half), (0, half)] {
-                pending.push((i + a, j + b, half));
+                pending[waiting] = (i + a, j + b, half);
+                waiting += 1;
             }
         }
     }

@@ -47,12 +47,13 @@ impl Medium {
 
     /// The fraction of light that crosses `distance` of the medium: exp(−σt·d) per channel.
     pub fn transmittance(&self, distance: f32) -> Color {
-        let t = self.sigma_t() * distance;
+        let sigma_t = self.sigma_t();
+        let t = sigma_t * distance;
         // exp of −∞·0 is NaN: a channel with σt = 0 transmits everything, however far.
         Color::new(
-            transmit(t.x, self.sigma_t().x),
-            transmit(t.y, self.sigma_t().y),
-            transmit(t.z, self.sigma_t().z),
+            transmit(t.x, sigma_t.x),
+            transmit(t.y, sigma_t.y),
+            transmit(t.z, sigma_t.z),
         )
     }
 

@@ -209,7 +209,6 @@ impl Solution {
         let mut rays = 0;
         loop {
             let started = std::time::Instant::now();
-            let next = mesh.clone();
             let mut solution = Solution::solve_mesh(
                 scene,
                 accel,
@@ -229,7 +228,8 @@ impl Solution {
             {
                 return solution;
             }
-            mesh = next;
+            // The solve keeps its mesh as it was given: split that once more.
+            mesh = solution.mesh;
             mesh.subdivide(1);
             level += 1;
         }
