@@ -4,10 +4,17 @@
 //! solve or a photon pass was stopped is the image of that partial solution or those photons
 //! (the pixel loop started after the first SIGINT runs to the end); a report has the runs
 //! that finished (the one in flight is left out, and a reference cut short is not cached).
+//!
+//! The viewer stops work the same way: each render it asks for is a numbered job, and a job
+//! is superseded — every long loop stops as on Ctrl-C, and the pixel loop too — as soon as a
+//! newer one is submitted (a camera move, a new key).
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 static REQUESTED: AtomicBool = AtomicBool::new(false);
+/// The newest job submitted, and the job being run (both 0 outside the viewer).
+static NEWEST_JOB: AtomicU64 = AtomicU64::new(0);
+static RUNNING_JOB: AtomicU64 = AtomicU64::new(0);
 
 /// Installs the handler (once per process; later calls do nothing).
 pub fn install() {
@@ -19,7 +26,22 @@ pub fn install() {
     });
 }
 
-/// Whether Ctrl-C has been pressed.
+/// Whether Ctrl-C has been pressed or the running job is superseded.
 pub fn requested() -> bool {
-    REQUESTED.load(Ordering::Relaxed)
+    REQUESTED.load(Ordering::Relaxed) || superseded()
+}
+
+/// Whether a newer job than the running one has been submitted.
+pub fn superseded() -> bool {
+    RUNNING_JOB.load(Ordering::Relaxed) != NEWEST_JOB.load(Ordering::Relaxed)
+}
+
+/// Numbers a new job, superseding the running one; returns its number.
+pub fn submit_job() -> u64 {
+    NEWEST_JOB.fetch_add(1, Ordering::SeqCst) + 1
+}
+
+/// Marks job `number` as the one running (superseded at once if a newer one was submitted).
+pub fn start_job(number: u64) {
+    RUNNING_JOB.store(number, Ordering::SeqCst);
 }

@@ -26,3 +26,4 @@ pub mod render;
 pub mod report;
 pub mod sampling;
 pub mod scene;
+pub mod viewer;

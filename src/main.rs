@@ -18,6 +18,7 @@ fn main() -> ExitCode {
             heatmap,
         }) => cli::tools::compare(image, reference, heatmap.as_deref()),
         Some(Command::Farm(args)) => cli::farm::run(args),
+        Some(Command::View { words }) => trilux::viewer::run(words),
         Some(Command::Merge { parts, output }) => cli::tools::merge(parts, output),
         Some(Command::GenTerrain { triangles, output }) => {
             generate::write_obj(&generate::terrain(*triangles), output).map_err(|e| e.to_string())

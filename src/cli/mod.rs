@@ -38,7 +38,7 @@ const COURSE_FLAGS: [&str; 15] = [
 ];
 
 /// Rewrites `-num_bounces` and `--num_bounces` to `--num-bounces`; everything else as it is.
-fn normalize_args(args: impl Iterator<Item = String>) -> Vec<String> {
+pub(crate) fn normalize_args(args: impl Iterator<Item = String>) -> Vec<String> {
     args.map(|a| {
         let name = a.strip_prefix("--").or_else(|| a.strip_prefix('-'));
         match name {
@@ -93,6 +93,20 @@ pub enum Command {
     /// Usage: render farm SCENE [render flags] --tiles N | --sample-batches N [--partition P]
     /// [--time MIN] [--cpus-per-task N] [--dir DIR] [--submit [--wait]].
     Farm(farm::FarmArgs),
+    /// The course's interactive viewer: the scene in a window, ray traced progressively on
+    /// 'r', the camera moved with the mouse, 'o' writing the image and the offline command
+    /// line that renders it, 'h' listing the keys.
+    /// Usage: render view SCENE [render flags].
+    View {
+        /// The scene file, then render flags as for `render -input SCENE`.
+        #[arg(
+            required = true,
+            trailing_var_arg = true,
+            allow_hyphen_values = true,
+            value_name = "SCENE [RENDER FLAGS]"
+        )]
+        words: Vec<String>,
+    },
     /// Merges the parts of a split render (EXR files written with --crop-window or
     /// --pixel-samples) into the whole image: tiles placed, sample batches added as sums and
     /// divided once. Refuses parts of different renders, interrupted parts, and sets that

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use super::{emit, RenderArgs};
 use crate::accel::{self, Accel, AccelKind};
-use crate::engines::{self, raytrace, RenderSettings, Rendered};
+use crate::engines::{self, raytrace, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::plan::Plan;
 use crate::scene::Scene;
@@ -32,39 +32,13 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         .common
         .time_limit
         .map(|t| load_start + std::time::Duration::from_secs_f64(t));
-    let mut scene = Scene::load(input).map_err(|e| e.to_string())?;
-    scene.two_sided_quads = args.common.two_sided;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    if args.camera.overrides() {
-        scene.camera = Some(args.camera(scene.camera())?);
-    }
-    if scene.primitive_count() == 0 {
-        return Err(format!(
-            "{}: the scene has no geometry (no quads, triangles, spheres or rings): nothing to render",
-            input.display()
-        ));
-    }
+    let engine = args.engine();
+    let scene = load_scene(args, input, engine)?;
     let load_s = load_start.elapsed().as_secs_f64();
     let kind = args
         .common
         .accel
         .unwrap_or_else(AccelKind::default_available);
-    let engine = args.engine();
-    // Media and skies are the path tracer's alone so far (issue #18): refused, not left out.
-    let path_only = [(scene.fog.is_some(), "fog"), (scene.sky.is_some(), "a sky")];
-    if let Some((_, what)) = path_only.iter().find(|(has, _)| *has) {
-        if !matches!(
-            engine,
-            engines::EngineKind::Path | engines::EngineKind::Raycast
-        ) {
-            return Err(format!(
-                "{}: the scene has {what}, which only the path tracer renders so far (--engine path); the {engine} engine would leave it out",
-                input.display()
-            ));
-        }
-    }
     let plan = Plan::new(&scene, engine, kind, &settings);
     let unused = args.unused_flags();
     let max_memory = args
@@ -101,7 +75,7 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         return Err(format!(
             "--pixel-samples: the {engine} engine's image{} is not a mean of pixel samples, so its samples cannot be split; split it into tiles with --crop-window instead",
             match engine {
-                engines::EngineKind::Raycast => "",
+                EngineKind::Raycast => "",
                 _ => " with these display flags",
             }
         ));
@@ -111,7 +85,7 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             None => {
                 return Err(format!(
                     "--pre-pass-only: the {engine} engine has no pre-pass{}",
-                    if engine == engines::EngineKind::Raytrace {
+                    if engine == EngineKind::Raytrace {
                         " (only with --indirect radiosity)"
                     } else {
                         ""
@@ -212,6 +186,37 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         eprintln!("wrote {}", output.display());
     }
     Ok(())
+}
+
+/// The scene as `render` reads it: loaded (its warnings printed), `--two-sided` and the
+/// camera flags applied; refused if it has nothing to render or holds what `engine` would
+/// leave out. The viewer loads its scene here too.
+pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result<Scene, String> {
+    let mut scene = Scene::load(input).map_err(|e| e.to_string())?;
+    scene.two_sided_quads = args.common.two_sided;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    if args.camera.overrides() {
+        scene.camera = Some(args.camera(scene.camera())?);
+    }
+    if scene.primitive_count() == 0 {
+        return Err(format!(
+            "{}: the scene has no geometry (no quads, triangles, spheres or rings): nothing to render",
+            input.display()
+        ));
+    }
+    // Media and skies are the path tracer's alone so far (issue #18): refused, not left out.
+    let path_only = [(scene.fog.is_some(), "fog"), (scene.sky.is_some(), "a sky")];
+    if let Some((_, what)) = path_only.iter().find(|(has, _)| *has) {
+        if !matches!(engine, EngineKind::Path | EngineKind::Raycast) {
+            return Err(format!(
+                "{}: the scene has {what}, which only the path tracer renders so far (--engine path); the {engine} engine would leave it out",
+                input.display()
+            ));
+        }
+    }
+    Ok(scene)
 }
 
 /// Writes the image. A part of a split render (`--crop-window`, `--pixel-samples`) written as

@@ -321,8 +321,9 @@ fn take_samples(
     let (w, h) = (film.width, film.height);
     let spp = samples.len();
     // Ctrl-C during what came before (a radiosity solve, photon tracing) stopped that, and
-    // the pixels show what it made; Ctrl-C during the pixels stops them.
-    let interrupted_before = crate::interrupt::requested();
+    // the pixels show what it made; Ctrl-C during the pixels stops them. A superseded
+    // viewer job stops wherever it is: nobody will see its image.
+    let interrupted_before = crate::interrupt::requested() && !crate::interrupt::superseded();
     film.pixels
         .par_chunks_mut(w as usize)
         .enumerate()
@@ -338,7 +339,9 @@ fn take_samples(
             let chunk = (CHUNK_SAMPLES / spp.max(1)).max(1);
             let out = &mut out[window.x0 as usize..window.x1 as usize];
             for (c, pixels) in out.chunks_mut(chunk).enumerate() {
-                if !interrupted_before && crate::interrupt::requested() {
+                if crate::interrupt::superseded()
+                    || (!interrupted_before && crate::interrupt::requested())
+                {
                     break;
                 }
                 let first = window.x0 + (c * chunk) as u32;

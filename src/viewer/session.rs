@@ -1,0 +1,211 @@
+//! What `render view SCENE [render flags]` starts from: the flags read as `render` reads them,
+//! the scene loaded and checked (every error before a window opens), and the offline command
+//! line that reproduces what the viewer shows.
+
+use std::path::{Path, PathBuf};
+
+use crate::cli::{normalize_args, Cli, RenderArgs};
+use crate::engines::{EngineKind, RenderSettings};
+use crate::scene::{Camera, Projection, Scene};
+
+/// Render flags that have no meaning in the viewer, and why.
+const NOT_IN_VIEWER: [(&str, &str); 7] = [
+    (
+        "--output",
+        "'o' writes the image on screen to <scene stem>.view.png",
+    ),
+    ("--crop-window", "the viewer renders the whole image"),
+    (
+        "--pixel-samples",
+        "the viewer takes every sample of a pixel",
+    ),
+    ("--pre-pass-only", "use `render --pre-pass-only`"),
+    ("--plan", "use `render --plan`"),
+    (
+        "--ray-tree",
+        "'t' draws the ray tree of the pixel under the pointer",
+    ),
+    ("--farm", "use `render farm`"),
+];
+
+/// The camera flags and `--engine`, with the number of values each takes: the viewer writes
+/// its own into the offline command line in place of those given.
+const REPLACED: [(&str, usize); 5] = [
+    ("--camera-position", 3),
+    ("--look-at", 3),
+    ("--up", 3),
+    ("--fov", 1),
+    ("--engine", 1),
+];
+
+/// A viewer's starting point.
+pub struct Session {
+    /// The scene file as given.
+    pub input: PathBuf,
+    /// The render flags as given (course spellings normalized), without the scene.
+    pub flags: Vec<String>,
+    pub args: RenderArgs,
+    pub settings: RenderSettings,
+    /// The engine 'r' renders with (`--engine`, or the one the flags imply).
+    pub engine: EngineKind,
+    /// The camera as the viewer keeps it: the scene's (with the flags applied), its field of
+    /// view held in degrees as `--fov` gives it, so that the printed command line makes the
+    /// very same camera.
+    pub camera: Camera,
+    pub fov_degrees: Option<f32>,
+}
+
+impl Session {
+    /// Reads `SCENE [render flags]`: the flags checked as `render` checks them, then the
+    /// scene loaded and checked. Returns the session and the scene.
+    pub fn start(words: &[String]) -> Result<(Session, Scene), String> {
+        let mut words = normalize_args(words.iter().cloned());
+        if words.is_empty() {
+            return Err("render view: expected a scene file, then render flags".into());
+        }
+        let input = words.remove(0);
+        if input.starts_with('-') {
+            return Err(format!(
+                "render view {input}: expected the scene file first, then render flags"
+            ));
+        }
+        for word in &words {
+            let name = word.split('=').next().unwrap_or(word);
+            let name = if name == "-o" { "--output" } else { name };
+            if let Some((flag, why)) = NOT_IN_VIEWER.iter().find(|(f, _)| *f == name) {
+                return Err(format!("{flag}: not with render view: {why}"));
+            }
+        }
+        let cli = Cli::parse_from_iter(
+            ["render".to_string(), "--input".into(), input.clone()]
+                .into_iter()
+                .chain(words.iter().cloned()),
+        );
+        let args = cli.render;
+        args.validate()?;
+        let mut settings = args.settings();
+        let chosen = args.choose_for_time_limit(&mut settings);
+        if !chosen.is_empty() && !args.common.quiet {
+            eprintln!(
+                "--time-limit without quality flags: chose {}",
+                chosen.join(" ")
+            );
+        }
+        // The window shows the progress; no bars on the terminal.
+        settings.quiet = true;
+        let engine = args.engine();
+        let input = PathBuf::from(input);
+        let scene = crate::cli::render::load_scene(&args, &input, engine)?;
+        let mut camera = scene.camera();
+        let fov_degrees = match camera.projection {
+            Projection::Perspective { angle } => {
+                let degrees = angle.to_degrees();
+                camera.projection = Projection::Perspective {
+                    angle: degrees.to_radians(),
+                };
+                Some(degrees)
+            }
+            Projection::Orthographic { .. } => None,
+        };
+        let session = Session {
+            input,
+            flags: words,
+            args,
+            settings,
+            engine,
+            camera,
+            fov_degrees,
+        };
+        Ok((session, scene))
+    }
+
+    /// `<scene stem>.<suffix>` in the current folder.
+    pub fn beside_stem(&self, suffix: &str) -> PathBuf {
+        let stem = self
+            .input
+            .file_stem()
+            .map_or("render".into(), |s| s.to_string_lossy().into_owned());
+        PathBuf::from(format!("{stem}.{suffix}"))
+    }
+
+    /// The `render` command line that renders, offline, what `engine` makes with the
+    /// viewer's flags and `camera`, written to `output`.
+    pub fn offline_command(&self, engine: EngineKind, camera: &Camera, output: &Path) -> String {
+        let mut words = vec![
+            "render".to_string(),
+            "-input".into(),
+            shell_word(&self.input.to_string_lossy()),
+        ];
+        words.extend(without_replaced(&self.flags).iter().map(|w| shell_word(w)));
+        words.push(format!("--engine {engine}"));
+        let v = |v: crate::geometry::Vec3| format!("{} {} {}", v.x, v.y, v.z);
+        words.push(format!("--camera-position {}", v(camera.position)));
+        words.push(format!("--look-at {}", v(camera.point_of_interest)));
+        words.push(format!("--up {}", v(camera.up)));
+        if let Some(fov) = self.fov_degrees {
+            words.push(format!("--fov {fov}"));
+        }
+        words.push(format!("-o {}", shell_word(&output.to_string_lossy())));
+        words.join(" ")
+    }
+}
+
+/// The flags without the camera flags and `--engine` (the viewer prints its own).
+fn without_replaced(flags: &[String]) -> Vec<String> {
+    let mut kept = Vec::new();
+    let mut skip = 0;
+    for word in flags {
+        if skip > 0 {
+            skip -= 1;
+            continue;
+        }
+        if let Some((_, values)) = REPLACED.iter().find(|(f, _)| *f == word) {
+            skip = *values;
+        } else if !REPLACED
+            .iter()
+            .any(|(f, _)| word.starts_with(&format!("{f}=")))
+        {
+            kept.push(word.clone());
+        }
+    }
+    kept
+}
+
+/// A word as bash reads it: as it is when it holds no character bash treats specially,
+/// single-quoted otherwise.
+fn shell_word(word: &str) -> String {
+    let plain = !word.is_empty()
+        && word
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_./:,+=@%".contains(c));
+    if plain {
+        word.to_string()
+    } else {
+        format!("'{}'", word.replace('\'', r"'\''"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn words(s: &str) -> Vec<String> {
+        s.split_whitespace().map(String::from).collect()
+    }
+
+    #[test]
+    fn the_viewer_replaces_the_camera_flags_and_the_engine() {
+        let kept = without_replaced(&words(
+            "--num-bounces 2 --fov 30 --camera-position 1 2 3 --engine path --look-at=0,0,0 --seed 4",
+        ));
+        assert_eq!(kept, words("--num-bounces 2 --seed 4"));
+    }
+
+    #[test]
+    fn words_bash_would_split_are_quoted() {
+        assert_eq!(shell_word("scenes/a.obj"), "scenes/a.obj");
+        assert_eq!(shell_word("my scene.obj"), "'my scene.obj'");
+        assert_eq!(shell_word("it's"), r"'it'\''s'");
+        assert_eq!(shell_word("-0.5"), "-0.5");
+    }
+}

@@ -1,0 +1,415 @@
+//! The viewer (`render view`) driven as a user drives it: in a virtual X display (Xvfb), keys
+//! and drags sent with xdotool, the window photographed with ImageMagick's `import`. What it
+//! shows is checked against what the offline command it prints renders, pixel for pixel.
+//!
+//! `TRILUX_VIEWER_SCREENSHOT=FILE` keeps the screenshot of the finished trace (the README's).
+//!
+//! Needs `Xvfb`, `xdotool` and `import` (Debian: xvfb, xdotool, imagemagick). Where one is
+//! missing the trials are reported as ignored, saying which; CI installs them and sets
+//! `TRILUX_REQUIRE_X=1`, which turns a missing tool into a failure.
+
+mod common;
+
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{channel, Receiver};
+use std::time::{Duration, Instant};
+
+use libtest_mimic::{Arguments, Failed, Trial};
+
+const TOOLS: [&str; 3] = ["Xvfb", "xdotool", "import"];
+
+fn main() {
+    let args = Arguments::from_args();
+    let missing: Vec<&str> = TOOLS.iter().copied().filter(|t| !on_path(t)).collect();
+    let required = std::env::var_os("TRILUX_REQUIRE_X").is_some();
+    if !missing.is_empty() && !required {
+        eprintln!(
+            "viewer trials: skipped: {} not found (Debian: xvfb xdotool imagemagick)",
+            missing.join(", ")
+        );
+    }
+    let trial = |name: &'static str, body: fn() -> Result<(), Failed>| {
+        let absent = missing.join(", ");
+        Trial::test(name, move || {
+            if !absent.is_empty() {
+                return Err(format!("{absent} not found").into());
+            }
+            body()
+        })
+        .with_ignored_flag(!missing.is_empty() && !required)
+    };
+    let trials = vec![
+        trial(
+            "the_viewer_shows_what_its_offline_command_renders",
+            shows_what_its_offline_command_renders,
+        ),
+        trial(
+            "a_scene_with_an_error_opens_no_window",
+            a_scene_with_an_error_opens_no_window,
+        ),
+    ];
+    libtest_mimic::run(&args, trials).exit();
+}
+
+fn on_path(tool: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|p| std::env::split_paths(&p).any(|d| d.join(tool).is_file()))
+}
+
+/// A virtual X display of our own, ended when dropped.
+struct Display {
+    server: Child,
+    name: String,
+}
+
+impl Display {
+    fn start() -> Display {
+        // -displayfd: Xvfb picks a free display number and writes it when it is ready.
+        let mut server = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "640x480x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("Xvfb starts");
+        let mut number = String::new();
+        BufReader::new(server.stdout.take().expect("piped"))
+            .read_line(&mut number)
+            .expect("Xvfb writes its display number");
+        Display {
+            server,
+            name: format!(":{}", number.trim()),
+        }
+    }
+
+    /// Runs xdotool (or another X client) on this display; its standard output.
+    fn run(&self, program: &str, args: &[&str]) -> Result<String, Failed> {
+        let out = Command::new(program)
+            .args(args)
+            .env("DISPLAY", &self.name)
+            .output()
+            .map_err(|e| format!("{program}: {e}"))?;
+        if !out.status.success() {
+            return Err(format!(
+                "{program} {args:?}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            )
+            .into());
+        }
+        Ok(String::from_utf8_lossy(&out.stdout).trim().to_string())
+    }
+
+    /// The viewer's window, waited for up to `timeout`; None if none appeared.
+    fn find_window(&self, timeout: Duration) -> Option<String> {
+        let start = Instant::now();
+        while start.elapsed() < timeout {
+            if let Ok(id) = self.run("xdotool", &["search", "--name", "^trilux: "]) {
+                if let Some(id) = id.lines().next() {
+                    return Some(id.to_string());
+                }
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        None
+    }
+
+    /// Waits until the window's title says `what` (up to `timeout`); the title.
+    fn wait_for_title(&self, id: &str, what: &str, timeout: Duration) -> Result<String, Failed> {
+        let start = Instant::now();
+        loop {
+            let title = self.run("xdotool", &["getwindowname", id])?;
+            if title.contains(what) {
+                return Ok(title);
+            }
+            if start.elapsed() > timeout {
+                return Err(
+                    format!("after {timeout:?} the title is {title:?}, not {what:?}").into(),
+                );
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// The window's pixels, as `import -window` photographs them.
+    fn screenshot(&self, id: &str, path: &Path) -> Result<image::RgbImage, Failed> {
+        self.run(
+            "import",
+            &["-window", id, &format!("png:{}", path.display())],
+        )?;
+        Ok(image::open(path)?.to_rgb8())
+    }
+}
+
+impl Drop for Display {
+    fn drop(&mut self) {
+        let _ = self.server.kill();
+        let _ = self.server.wait();
+    }
+}
+
+/// The viewer running on a display, its standard output line by line.
+struct Viewer {
+    child: Child,
+    lines: Receiver<String>,
+}
+
+impl Viewer {
+    fn start(display: &Display, dir: &Path, args: &[&str]) -> Viewer {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_render"))
+            .arg("view")
+            .args(args)
+            .current_dir(dir)
+            .env("DISPLAY", &display.name)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("render view starts");
+        let (send, lines) = channel();
+        let stdout = child.stdout.take().expect("piped");
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                let _ = send.send(line);
+            }
+        });
+        Viewer { child, lines }
+    }
+
+    /// The next `render` command line the viewer prints.
+    fn command_line(&self) -> Result<String, Failed> {
+        loop {
+            let line = self
+                .lines
+                .recv_timeout(Duration::from_secs(10))
+                .map_err(|_| "'o' printed no command line within 10 s")?;
+            if line.starts_with("render ") {
+                return Ok(line);
+            }
+        }
+    }
+
+    /// Waits up to `timeout` for the viewer to end; its exit code.
+    fn wait(&mut self, timeout: Duration) -> Result<i32, Failed> {
+        let start = Instant::now();
+        while start.elapsed() < timeout {
+            if let Some(status) = self.child.try_wait()? {
+                return Ok(status.code().unwrap_or(-1));
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        Err(format!("the viewer still runs {timeout:?} later").into())
+    }
+}
+
+impl Drop for Viewer {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Runs a printed command line offline in `dir` (the program is this build's `render`); the
+/// image it writes.
+fn render_offline(line: &str, dir: &Path) -> Result<image::RgbImage, Failed> {
+    let rest = line.strip_prefix("render ").expect("a render command line");
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg(format!("'{}' {rest} --quiet", env!("CARGO_BIN_EXE_render")))
+        .current_dir(dir)
+        .output()?;
+    if !out.status.success() {
+        return Err(format!("{line}: {}", String::from_utf8_lossy(&out.stderr)).into());
+    }
+    let output = rest
+        .rsplit_once(" -o ")
+        .map(|(_, o)| o.trim())
+        .ok_or("the command line names no -o output")?;
+    Ok(image::open(dir.join(output))?.to_rgb8())
+}
+
+/// How many pixels two images of the same size differ in.
+fn differing_pixels(a: &image::RgbImage, b: &image::RgbImage) -> Result<usize, Failed> {
+    if a.dimensions() != b.dimensions() {
+        return Err(format!(
+            "sizes differ: {:?} and {:?}",
+            a.dimensions(),
+            b.dimensions()
+        )
+        .into());
+    }
+    Ok(a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count())
+}
+
+fn scene(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+}
+
+/// Opening, 'r', 'o', a drag during a trace, 'q': on the Cornell box.
+fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
+    let dir = common::temp_dir("viewer");
+    let display = Display::start();
+    let cornell = scene("cornell_box.obj");
+    let start = Instant::now();
+    let mut viewer = Viewer::start(
+        &display,
+        &dir,
+        &[
+            cornell.to_str().unwrap(),
+            "-size",
+            "128",
+            "128",
+            "-num_antialias_samples",
+            "64",
+            "-num_shadow_samples",
+            "16",
+        ],
+    );
+    let id = display
+        .find_window(Duration::from_secs(10))
+        .ok_or("no window within 10 s")?;
+    let opened = start.elapsed();
+    assert!(
+        opened < Duration::from_secs(2),
+        "the window took {opened:?} to open"
+    );
+    display.wait_for_title(&id, "MATERIALS", Duration::from_secs(5))?;
+    display.run("xdotool", &["windowfocus", "--sync", &id])?;
+
+    // 'r' until done, then 'o': the screen, the file 'o' writes and the offline render of
+    // the printed command agree pixel for pixel.
+    let trace_start = Instant::now();
+    display.run("xdotool", &["key", "r"])?;
+    let title = display.wait_for_title(&id, "done", Duration::from_secs(120))?;
+    let trace_time = trace_start.elapsed();
+    assert!(title.contains("raytrace: done, 64 spp"), "{title}");
+    eprintln!("viewer: the trace took {trace_time:?}");
+    display.run("xdotool", &["key", "o"])?;
+    let traced_line = viewer.command_line()?;
+    assert!(traced_line.contains("--engine raytrace"), "{traced_line}");
+    let traced = display.screenshot(&id, &dir.join("traced.png"))?;
+    // The README's screenshot is this one (TRILUX_VIEWER_SCREENSHOT=docs/viewer.png).
+    if let Some(keep) = std::env::var_os("TRILUX_VIEWER_SCREENSHOT") {
+        std::fs::copy(dir.join("traced.png"), keep)?;
+    }
+    let written = image::open(dir.join("cornell_box.view.png"))?.to_rgb8();
+    assert_eq!(
+        differing_pixels(&traced, &written)?,
+        0,
+        "the screen and 'o''s file"
+    );
+    let offline = render_offline(&traced_line, &dir)?;
+    assert_eq!(
+        differing_pixels(&traced, &offline)?,
+        0,
+        "the screen and `{traced_line}`"
+    );
+
+    // 'r' again, and a drag while it renders: the camera turns, the trace stops (the title
+    // still shows the preview long after the trace would have ended), and 'o' prints the
+    // preview's command line with the new camera, which renders what is on screen.
+    display.run("xdotool", &["key", "r"])?;
+    display.wait_for_title(&id, "blocks", Duration::from_secs(10))?;
+    let during = display.run("xdotool", &["getwindowname", &id])?;
+    display.run(
+        "xdotool",
+        &[
+            "mousemove",
+            "--window",
+            &id,
+            "64",
+            "64",
+            "mousedown",
+            "1",
+            "mousemove",
+            "--window",
+            &id,
+            "94",
+            "74",
+            "mouseup",
+            "1",
+        ],
+    )?;
+    display.wait_for_title(&id, "MATERIALS", Duration::from_secs(5))?;
+    // The drag came while the trace ran (its last stage is most of its time).
+    let after_drag = display.run("xdotool", &["getwindowname", &id])?;
+    assert!(
+        !during.contains("done"),
+        "the trace ended before the drag: {during}"
+    );
+    assert!(after_drag.contains("MATERIALS"), "{after_drag}");
+    std::thread::sleep(trace_time * 2);
+    let title = display.run("xdotool", &["getwindowname", &id])?;
+    assert!(
+        title.contains("MATERIALS"),
+        "the trace went on after the drag: {title}"
+    );
+    display.run("xdotool", &["key", "o"])?;
+    let moved_line = viewer.command_line()?;
+    assert!(moved_line.contains("--engine raycast"), "{moved_line}");
+    let camera = |line: &str| {
+        line.split(" --camera-position ")
+            .nth(1)
+            .map(|s| s[..30].to_string())
+    };
+    assert_ne!(
+        camera(&moved_line),
+        camera(&traced_line),
+        "the drag moved the camera"
+    );
+    let moved = display.screenshot(&id, &dir.join("moved.png"))?;
+    assert!(
+        differing_pixels(&moved, &traced)? > 1000,
+        "the screen changed"
+    );
+    let offline = render_offline(&moved_line, &dir)?;
+    assert_eq!(
+        differing_pixels(&moved, &offline)?,
+        0,
+        "the screen and `{moved_line}`"
+    );
+
+    // 'q': the viewer ends, with status 0.
+    display.run("xdotool", &["key", "q"])?;
+    assert_eq!(
+        viewer.wait(Duration::from_secs(10))?,
+        0,
+        "'q' exits with status 0"
+    );
+    std::fs::remove_dir_all(&dir)?;
+    Ok(())
+}
+
+/// A scene file with an error: the message names the file and line, the status is 1, and no
+/// window ever appears.
+fn a_scene_with_an_error_opens_no_window() -> Result<(), Failed> {
+    let dir = common::temp_dir("viewer-error");
+    let bad = dir.join("bad.obj");
+    std::fs::write(&bad, "material\ndiffuse 0.5 0.5\nv 0 0 0\n")?;
+    let display = Display::start();
+    let mut viewer = Command::new(env!("CARGO_BIN_EXE_render"))
+        .args(["view", bad.to_str().unwrap()])
+        .env("DISPLAY", &display.name)
+        .stderr(Stdio::piped())
+        .spawn()?;
+    let status = viewer.wait()?;
+    let mut stderr = String::new();
+    viewer.stderr.take().unwrap().read_to_string(&mut stderr)?;
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("bad.obj") && stderr.contains(":3"),
+        "{stderr}"
+    );
+    assert_eq!(display.find_window(Duration::from_millis(200)), None);
+    std::fs::remove_dir_all(&dir)?;
+    Ok(())
+}
