@@ -46,6 +46,14 @@ fn main() {
             shows_what_its_offline_command_renders,
         ),
         trial(
+            "radiosity_shots_and_photons_show_what_their_command_lines_render",
+            radiosity_shots_and_photons,
+        ),
+        trial(
+            "the_ray_tree_under_the_pointer_is_the_offline_ray_tree",
+            the_ray_tree_under_the_pointer_is_the_offline_ray_tree,
+        ),
+        trial(
             "a_scene_with_an_error_opens_no_window",
             a_scene_with_an_error_opens_no_window,
         ),
@@ -217,8 +225,8 @@ impl Drop for Viewer {
 }
 
 /// Runs a printed command line offline in `dir` (the program is this build's `render`); the
-/// image it writes.
-fn render_offline(line: &str, dir: &Path) -> Result<image::RgbImage, Failed> {
+/// image it writes (`-o`).
+fn render_offline(line: &str, dir: &Path) -> Result<PathBuf, Failed> {
     let rest = line.strip_prefix("render ").expect("a render command line");
     let out = Command::new("bash")
         .arg("-c")
@@ -229,10 +237,36 @@ fn render_offline(line: &str, dir: &Path) -> Result<image::RgbImage, Failed> {
         return Err(format!("{line}: {}", String::from_utf8_lossy(&out.stderr)).into());
     }
     let output = rest
-        .rsplit_once(" -o ")
-        .map(|(_, o)| o.trim())
+        .split(" -o ")
+        .nth(1)
+        .and_then(|o| o.split_whitespace().next())
         .ok_or("the command line names no -o output")?;
-    Ok(image::open(dir.join(output))?.to_rgb8())
+    Ok(dir.join(output))
+}
+
+fn rgb(path: &Path) -> Result<image::RgbImage, Failed> {
+    Ok(image::open(path)?.to_rgb8())
+}
+
+/// 'o', then the screen photographed and the printed command line run offline: the two
+/// images must be the same, pixel for pixel. Returns the command line and the screenshot.
+fn screen_is_offline_render(
+    display: &Display,
+    viewer: &Viewer,
+    id: &str,
+    dir: &Path,
+    name: &str,
+) -> Result<(String, image::RgbImage), Failed> {
+    display.run("xdotool", &["key", "o"])?;
+    let line = viewer.command_line()?;
+    let shot = display.screenshot(id, &dir.join(format!("{name}.png")))?;
+    let offline = rgb(&render_offline(&line, dir)?)?;
+    assert_eq!(
+        differing_pixels(&shot, &offline)?,
+        0,
+        "the screen and `{line}`"
+    );
+    Ok((line, shot))
 }
 
 /// How many pixels two images of the same size differ in.
@@ -256,7 +290,7 @@ fn scene(name: &str) -> PathBuf {
 
 /// Opening, 'r', 'o', a drag during a trace, 'q': on the Cornell box.
 fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
-    let dir = common::temp_dir("viewer");
+    let dir = common::temp_dir("viewer-trace");
     let display = Display::start();
     let cornell = scene("cornell_box.obj");
     let start = Instant::now();
@@ -293,25 +327,17 @@ fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
     let trace_time = trace_start.elapsed();
     assert!(title.contains("raytrace: done, 64 spp"), "{title}");
     eprintln!("viewer: the trace took {trace_time:?}");
-    display.run("xdotool", &["key", "o"])?;
-    let traced_line = viewer.command_line()?;
+    let (traced_line, traced) = screen_is_offline_render(&display, &viewer, &id, &dir, "traced")?;
     assert!(traced_line.contains("--engine raytrace"), "{traced_line}");
-    let traced = display.screenshot(&id, &dir.join("traced.png"))?;
     // The README's screenshot is this one (TRILUX_VIEWER_SCREENSHOT=docs/viewer.png).
     if let Some(keep) = std::env::var_os("TRILUX_VIEWER_SCREENSHOT") {
         std::fs::copy(dir.join("traced.png"), keep)?;
     }
-    let written = image::open(dir.join("cornell_box.view.png"))?.to_rgb8();
+    let written = rgb(&dir.join("cornell_box.view.png"))?;
     assert_eq!(
         differing_pixels(&traced, &written)?,
         0,
         "the screen and 'o''s file"
-    );
-    let offline = render_offline(&traced_line, &dir)?;
-    assert_eq!(
-        differing_pixels(&traced, &offline)?,
-        0,
-        "the screen and `{traced_line}`"
     );
 
     // 'r' again, and a drag while it renders: the camera turns, the trace stops (the title
@@ -353,8 +379,7 @@ fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
         title.contains("MATERIALS"),
         "the trace went on after the drag: {title}"
     );
-    display.run("xdotool", &["key", "o"])?;
-    let moved_line = viewer.command_line()?;
+    let (moved_line, moved) = screen_is_offline_render(&display, &viewer, &id, &dir, "moved")?;
     assert!(moved_line.contains("--engine raycast"), "{moved_line}");
     let camera = |line: &str| {
         line.split(" --camera-position ")
@@ -366,16 +391,9 @@ fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
         camera(&traced_line),
         "the drag moved the camera"
     );
-    let moved = display.screenshot(&id, &dir.join("moved.png"))?;
     assert!(
         differing_pixels(&moved, &traced)? > 1000,
         "the screen changed"
-    );
-    let offline = render_offline(&moved_line, &dir)?;
-    assert_eq!(
-        differing_pixels(&moved, &offline)?,
-        0,
-        "the screen and `{moved_line}`"
     );
 
     // 'q': the viewer ends, with status 0.
@@ -385,6 +403,124 @@ fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
         0,
         "'q' exits with status 0"
     );
+    std::fs::remove_dir_all(&dir)?;
+    Ok(())
+}
+
+/// Opens the viewer on `scene` with `flags` in `dir` and waits for its window; the viewer
+/// and the window's id, focused.
+fn open(
+    display: &Display,
+    dir: &Path,
+    scene_name: &str,
+    flags: &[&str],
+) -> Result<(Viewer, String), Failed> {
+    let path = scene(scene_name);
+    let mut args = vec![path.to_str().unwrap()];
+    args.extend_from_slice(flags);
+    let viewer = Viewer::start(display, dir, &args);
+    let id = display
+        .find_window(Duration::from_secs(10))
+        .ok_or("no window within 10 s")?;
+    display.wait_for_title(&id, "MATERIALS", Duration::from_secs(10))?;
+    display.run("xdotool", &["windowfocus", "--sync", &id])?;
+    Ok((viewer, id))
+}
+
+/// Space × 16 on the Cornell box shows what `--radiosity-iterations 16 --visualize radiance`
+/// renders; 'p' then 'l' shows the photons `--visualize photons` draws.
+fn radiosity_shots_and_photons() -> Result<(), Failed> {
+    let dir = common::temp_dir("viewer-radiosity");
+    let display = Display::start();
+    let flags = [
+        "-size",
+        "96",
+        "96",
+        "-num_shadow_samples",
+        "1",
+        "-num_photons_to_shoot",
+        "20000",
+    ];
+    let (mut viewer, id) = open(&display, &dir, "cornell_box.obj", &flags)?;
+    let mut keys = vec!["key", "--delay", "30"];
+    keys.extend(["space"; 16]);
+    display.run("xdotool", &keys)?;
+    let title = display.wait_for_title(&id, "16 shots)", Duration::from_secs(30))?;
+    assert!(title.contains("RADIANCE"), "{title}");
+    let (line, radiance) = screen_is_offline_render(&display, &viewer, &id, &dir, "radiance")?;
+    assert!(
+        line.contains("--engine radiosity")
+            && line.contains("--radiosity-iterations 16 --visualize radiance"),
+        "{line}"
+    );
+    display.run("xdotool", &["key", "p", "l"])?;
+    display.wait_for_title(&id, "PHOTONS", Duration::from_secs(30))?;
+    let (line, photons) = screen_is_offline_render(&display, &viewer, &id, &dir, "photons")?;
+    assert!(
+        line.contains("--engine photon") && line.contains("--visualize photons"),
+        "{line}"
+    );
+    assert!(
+        differing_pixels(&photons, &radiance)? > 1000,
+        "the photons are shown"
+    );
+    display.run("xdotool", &["key", "q"])?;
+    assert_eq!(viewer.wait(Duration::from_secs(10))?, 0);
+    std::fs::remove_dir_all(&dir)?;
+    Ok(())
+}
+
+/// 't' over a reflective sphere after 'r': the screen is the offline `--ray-tree` image of
+/// that pixel, and the rays 'o' writes are those of the offline OBJ, coordinate for
+/// coordinate.
+fn the_ray_tree_under_the_pointer_is_the_offline_ray_tree() -> Result<(), Failed> {
+    let dir = common::temp_dir("viewer-ray-tree");
+    let display = Display::start();
+    let flags = [
+        "-size",
+        "128",
+        "128",
+        "-num_bounces",
+        "3",
+        "-num_shadow_samples",
+        "1",
+    ];
+    let (mut viewer, id) = open(&display, &dir, "reflective_spheres.obj", &flags)?;
+    display.run("xdotool", &["key", "r"])?;
+    display.wait_for_title(&id, "done", Duration::from_secs(60))?;
+    // The large sphere, top right of the default view.
+    display.run(
+        "xdotool",
+        &[
+            "mousemove",
+            "--window",
+            &id,
+            "85",
+            "45",
+            "key",
+            "t",
+            "key",
+            "o",
+        ],
+    )?;
+    let line = viewer.command_line()?;
+    assert!(line.ends_with(" --ray-tree 85 82"), "{line}");
+    let shot = display.screenshot(&id, &dir.join("tree.png"))?;
+    let offline = render_offline(&line, &dir)?;
+    let tree_image = offline.with_extension("raytree.png");
+    assert_eq!(
+        differing_pixels(&shot, &rgb(&tree_image)?)?,
+        0,
+        "the screen and {}",
+        tree_image.display()
+    );
+    let ours = std::fs::read_to_string(dir.join("reflective_spheres.view.raytree.obj"))?;
+    let theirs = std::fs::read_to_string(offline.with_extension("raytree.obj"))?;
+    assert_eq!(ours, theirs);
+    // A reflective sphere: the eye ray is reflected.
+    assert!(ours.contains("o Specular"), "{ours}");
+    display.run("xdotool", &["key", "q"])?;
+    assert_eq!(viewer.wait(Duration::from_secs(10))?, 0);
     std::fs::remove_dir_all(&dir)?;
     Ok(())
 }

@@ -308,7 +308,7 @@ fn write_ray_tree(
     output: &Path,
     (x, y): (u32, u32),
 ) -> Result<(), String> {
-    let segments = raytrace::ray_tree(scene, accel, settings, x, y);
+    let segments = raytrace::ray_tree(scene, &scene.camera(), accel, settings, (x, y));
     let stem = output.with_extension("");
     let png = PathBuf::from(format!("{}.raytree.png", stem.display()));
     let obj = PathBuf::from(format!("{}.raytree.obj", stem.display()));

@@ -21,7 +21,7 @@ use crate::render::adaptive::visible_form_factor;
 use crate::render::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
 use crate::render::{render_pixels, Ambient, CameraSampler, Counts, IndirectLight, RenderStats};
 use crate::sampling::{LightSampling, Rng, Strata};
-use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
+use crate::scene::{Camera, Color, PrimRef, Scene, SurfaceHit};
 use std::collections::HashMap;
 
 /// Branches of the ray tree whose weight falls below this are not traced: their
@@ -506,19 +506,20 @@ pub fn render_with(
 }
 
 /// The ray tree of pixel (x, y) (column from the left, row from the bottom, as the course's
-/// screen coordinates): every ray its samples trace, in the order traced. The samples are
-/// those of `render` with the same settings, so the tree explains that pixel of the image.
+/// screen coordinates) seen through `camera`: every ray its samples trace, in the order
+/// traced. The samples are those of `render` with the same settings and camera, so the tree
+/// explains that pixel of the image.
 pub fn ray_tree(
     scene: &Scene,
+    camera: &Camera,
     accel: &dyn Accel,
     settings: &RenderSettings,
-    x: u32,
-    y: u32,
+    (x, y): (u32, u32),
 ) -> Vec<Segment> {
     let ambient = Ambient(settings.ambient_light);
     let tree = Some(std::sync::Mutex::new(Vec::new()));
     let tracer = Tracer::new(scene, accel, settings, &ambient, tree);
-    let camera = CameraSampler::new(scene, &settings.image());
+    let camera = CameraSampler::with_camera(camera, &settings.image());
     let spp = settings.num_antialias_samples.max(1);
     let mut counts = Counts::default();
     for k in 0..spp {

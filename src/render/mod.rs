@@ -134,7 +134,12 @@ pub struct CameraSampler {
 
 impl CameraSampler {
     pub fn new(scene: &Scene, settings: &ImageSettings) -> CameraSampler {
-        let camera = scene.camera();
+        CameraSampler::with_camera(&scene.camera(), settings)
+    }
+
+    /// The samples of `camera` (the viewer's ray tree: the camera of the image on screen,
+    /// which need not be the scene's).
+    pub fn with_camera(camera: &Camera, settings: &ImageSettings) -> CameraSampler {
         let spp = settings.num_antialias_samples.max(1);
         CameraSampler {
             view: camera.view(),

@@ -13,6 +13,8 @@ mod orbit;
 #[cfg(feature = "viewer")]
 mod session;
 #[cfg(feature = "viewer")]
+mod view;
+#[cfg(feature = "viewer")]
 mod window;
 #[cfg(feature = "viewer")]
 mod worker;
@@ -31,15 +33,16 @@ pub fn run(words: &[String]) -> Result<(), String> {
     let accel = pool
         .install(|| crate::accel::build(&scene, kind, &args.accel_options()))
         .map_err(|e| e.to_string())?;
+    let scene = std::sync::Arc::new(std::sync::RwLock::new(scene));
+    let accel: std::sync::Arc<dyn crate::accel::Accel> = accel.into();
     let renderer = worker::Renderer {
-        scene,
-        accel,
-        settings: session.settings.clone(),
-        time_limit: args.common.time_limit,
-        engine: session.engine,
+        scene: scene.clone(),
+        accel: accel.clone(),
         pool,
     };
-    window::run(session, |wake_up| worker::Worker::start(renderer, wake_up))
+    window::run(session, (scene, accel), |wake_up| {
+        worker::Worker::start(renderer, wake_up)
+    })
 }
 
 /// Without the `viewer` feature: says so.

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::worker::Job;
 use crate::cli::{normalize_args, Cli, RenderArgs};
 use crate::engines::{EngineKind, RenderSettings};
 use crate::scene::{Camera, Projection, Scene};
@@ -28,14 +29,29 @@ const NOT_IN_VIEWER: [(&str, &str); 7] = [
     ("--farm", "use `render farm`"),
 ];
 
-/// The camera flags and `--engine`, with the number of values each takes: the viewer writes
-/// its own into the offline command line in place of those given.
-const REPLACED: [(&str, usize); 5] = [
+/// The flags the viewer writes into the offline command line in place of those given, with
+/// the number of values each takes: the camera's and `--engine` always, the others when the
+/// image on screen sets them (a radiosity view's shots and mode).
+const REPLACED: [(&str, usize); 10] = [
     ("--camera-position", 3),
     ("--look-at", 3),
     ("--up", 3),
     ("--fov", 1),
     ("--engine", 1),
+    ("--radiosity-iterations", 1),
+    ("--visualize", 1),
+    ("--subdivide", 1),
+    ("--interpolate", 0),
+    ("--wireframe", 0),
+];
+
+/// The flags replaced in every offline command line.
+const ALWAYS_REPLACED: [&str; 5] = [
+    "--camera-position",
+    "--look-at",
+    "--up",
+    "--fov",
+    "--engine",
 ];
 
 /// A viewer's starting point.
@@ -128,16 +144,28 @@ impl Session {
         PathBuf::from(format!("{stem}.{suffix}"))
     }
 
-    /// The `render` command line that renders, offline, what `engine` makes with the
-    /// viewer's flags and `camera`, written to `output`.
-    pub fn offline_command(&self, engine: EngineKind, camera: &Camera, output: &Path) -> String {
+    /// The `render` command line that renders, offline, the image of `job`, written to
+    /// `output`: the session's flags without those the job sets, then the job's engine, its
+    /// flags and its camera.
+    pub fn offline_command(&self, job: &Job, output: &Path) -> String {
         let mut words = vec![
             "render".to_string(),
             "-input".into(),
             shell_word(&self.input.to_string_lossy()),
         ];
-        words.extend(without_replaced(&self.flags).iter().map(|w| shell_word(w)));
-        words.push(format!("--engine {engine}"));
+        let replaced: Vec<&str> = ALWAYS_REPLACED
+            .iter()
+            .chain(job.controls)
+            .copied()
+            .collect();
+        words.extend(
+            without(&self.flags, &replaced)
+                .iter()
+                .map(|w| shell_word(w)),
+        );
+        words.push(format!("--engine {}", job.engine));
+        words.extend(job.flags.iter().map(|w| shell_word(w)));
+        let camera = &job.camera;
         let v = |v: crate::geometry::Vec3| format!("{} {} {}", v.x, v.y, v.z);
         words.push(format!("--camera-position {}", v(camera.position)));
         words.push(format!("--look-at {}", v(camera.point_of_interest)));
@@ -150,8 +178,9 @@ impl Session {
     }
 }
 
-/// The flags without the camera flags and `--engine` (the viewer prints its own).
-fn without_replaced(flags: &[String]) -> Vec<String> {
+/// The flags without those named in `replaced` and their values (the viewer prints its
+/// own).
+fn without(flags: &[String], replaced: &[&str]) -> Vec<String> {
     let mut kept = Vec::new();
     let mut skip = 0;
     for word in flags {
@@ -159,13 +188,11 @@ fn without_replaced(flags: &[String]) -> Vec<String> {
             skip -= 1;
             continue;
         }
-        if let Some((_, values)) = REPLACED.iter().find(|(f, _)| *f == word) {
-            skip = *values;
-        } else if !REPLACED
-            .iter()
-            .any(|(f, _)| word.starts_with(&format!("{f}=")))
-        {
+        let name = word.split('=').next().unwrap_or(word);
+        if !replaced.contains(&name) {
             kept.push(word.clone());
+        } else if name == word {
+            skip = REPLACED.iter().find(|(f, _)| *f == name).map_or(0, |r| r.1);
         }
     }
     kept
@@ -195,10 +222,17 @@ mod tests {
 
     #[test]
     fn the_viewer_replaces_the_camera_flags_and_the_engine() {
-        let kept = without_replaced(&words(
-            "--num-bounces 2 --fov 30 --camera-position 1 2 3 --engine path --look-at=0,0,0 --seed 4",
-        ));
-        assert_eq!(kept, words("--num-bounces 2 --seed 4"));
+        let given = words(
+            "--num-bounces 2 --fov 30 --camera-position 1 2 3 --engine path --look-at=0,0,0 --seed 4 --interpolate --subdivide 2",
+        );
+        assert_eq!(
+            without(&given, &ALWAYS_REPLACED),
+            words("--num-bounces 2 --seed 4 --interpolate --subdivide 2")
+        );
+        assert_eq!(
+            without(&given, &["--interpolate", "--subdivide"]),
+            words("--num-bounces 2 --fov 30 --camera-position 1 2 3 --engine path --look-at=0,0,0 --seed 4")
+        );
     }
 
     #[test]

@@ -14,42 +14,53 @@ use winit::window::{Window, WindowId};
 
 use super::orbit;
 use super::session::Session;
+use super::view::{Photons, ViewState};
 use super::worker::{Frame, Job, Report, Worker};
-use crate::engines::EngineKind;
-use crate::scene::Camera;
+use crate::accel::Accel;
+use crate::engines::{raytrace, EngineKind};
+use crate::film::ray_tree::{self, Segment};
+use crate::film::Film;
+use crate::scene::{Camera, Scene};
+use std::sync::{Arc, RwLock};
 
 /// The keys, as 'h' prints them.
 const KEYS: &str = "\
 keys:
-  r  ray trace progressively (16x16 blocks, 8x8, 4x4, 2x2, then the full image) with the render flags given
-  o  write the image on screen to <scene stem>.view.png and print the render command line that renders it offline
-  h  print these keys
-  q  quit (closing the window too)
+  t      draw the ray tree of the pixel under the pointer (again on the same pixel: hide it)
+  r      ray trace progressively (16x16 blocks, 8x8, 4x4, 2x2, then the full image) with the render flags given
+  v      cycle the views: MATERIALS, RADIANCE, FORM_FACTORS, LIGHTS, UNDISTRIBUTED, ABSORBED
+  space  one radiosity shot more
+  a      animate the radiosity solver: shots added, the image updating, until it converges or a key stops it
+  c      reset the radiosity solution (0 shots)
+  s      subdivide the radiosity mesh once more
+  i      interpolate the radiosity display (toggle)
+  w      wireframe: the patches' outlines (toggle)
+  p      trace photons (-num_photons_to_shoot) and show them
+  l      show the photons traced ('v' goes back to the views above)
+  k      show the photons' kd-tree
+  g      ray trace with photon gathering (the photon engine)
+  o      write the image on screen to <scene stem>.view.png and print the render command line that renders it offline
+  h      print these keys
+  q      quit (closing the window too)
 mouse:
   left drag    orbit around the point of interest
   right drag   dolly (the wheel too)
   middle drag  pan
-  a camera move cancels a trace and shows the MATERIALS preview again";
+  a camera move cancels a render in flight and shows the current view from the new camera";
 
 /// The course viewer's keys this viewer does not have yet, and what they do there.
-const NOT_YET: [(&str, &str); 13] = [
-    ("t", "the ray tree of the pixel under the pointer"),
-    ("v", "cycling the radiosity visualization"),
-    ("w", "the wireframe"),
-    ("s", "subdividing the radiosity mesh"),
-    ("i", "interpolating the radiosity display"),
-    (" ", "one radiosity iteration"),
-    ("a", "animating the radiosity solver"),
-    ("c", "resetting the radiosity solution"),
-    ("p", "tracing photons"),
-    ("l", "showing the photons"),
-    ("k", "showing the kd-tree"),
-    ("g", "ray tracing with photon gathering"),
-    ("b", "toggling back-face culling"),
-];
+const NOT_YET: [(&str, &str); 1] = [("b", "toggling back-face culling")];
+
+/// The scene and the Accel, shared with the render thread (the window reads them for ray
+/// trees).
+pub type Shared = (Arc<RwLock<Scene>>, Arc<dyn Accel>);
 
 /// Opens the window and runs until 'q' or the window is closed.
-pub fn run(session: Session, worker_start: impl FnOnce(WakeUp) -> Worker) -> Result<(), String> {
+pub fn run(
+    session: Session,
+    shared: Shared,
+    worker_start: impl FnOnce(WakeUp) -> Worker,
+) -> Result<(), String> {
     let event_loop = EventLoop::<Report>::with_user_event()
         .build()
         .map_err(|e| format!("render view: cannot open a window: {e}"))?;
@@ -58,8 +69,8 @@ pub fn run(session: Session, worker_start: impl FnOnce(WakeUp) -> Worker) -> Res
         // The loop is gone only once the window has closed: nobody is left to show it.
         let _ = proxy.send_event(report);
     }));
-    let mut app = App::new(session, worker);
-    app.submit(Job::Preview(app.camera));
+    let mut app = App::new(session, shared, worker);
+    app.show_view();
     let result = event_loop.run_app(&mut app);
     if let Some(worker) = app.worker.take() {
         worker.stop();
@@ -71,8 +82,19 @@ pub fn run(session: Session, worker_start: impl FnOnce(WakeUp) -> Worker) -> Res
 /// How the render thread hands a report to the event loop.
 pub type WakeUp = Box<dyn Fn(Report) + Send>;
 
+/// A ray tree drawn over the image: its pixel (column, row from the bottom), the camera it
+/// was traced through, and its rays.
+struct RayTree {
+    pixel: (u32, u32),
+    camera: Camera,
+    segments: Vec<Segment>,
+}
+
 struct App {
     session: Session,
+    shared: Shared,
+    /// The ray tree drawn over every image, whatever the camera ('t').
+    ray_tree: Option<RayTree>,
     worker: Option<Worker>,
     window: Option<Rc<Window>>,
     surface: Option<softbuffer::Surface<Rc<Window>, Rc<Window>>>,
@@ -80,6 +102,8 @@ struct App {
     shown: Option<Box<Frame>>,
     /// The camera of the newest job.
     camera: Camera,
+    /// What is shown when no trace is ('v', the radiosity and photon keys).
+    view: ViewState,
     /// The camera's distance to its point of interest at start (bounds the dolly).
     start_distance: f32,
     pointer: PhysicalPosition<f64>,
@@ -89,11 +113,14 @@ struct App {
 }
 
 impl App {
-    fn new(session: Session, worker: Worker) -> App {
+    fn new(session: Session, shared: Shared, worker: Worker) -> App {
         let camera = session.camera;
         App {
+            shared,
+            ray_tree: None,
             start_distance: camera.focus_distance(),
             camera,
+            view: ViewState::new(&session),
             session,
             worker: Some(worker),
             window: None,
@@ -109,6 +136,27 @@ impl App {
         if let Some(worker) = &self.worker {
             worker.submit(job);
         }
+    }
+
+    /// The current view from the current camera.
+    fn show_view(&self) {
+        self.submit(self.view.job(&self.session, self.camera));
+    }
+
+    /// A render with `engine` and the flags given, in stages where the engine has no
+    /// pre-pass ('r', 'g').
+    fn trace(&self, engine: EngineKind) {
+        let settings = self.session.settings.clone();
+        self.submit(Job {
+            camera: self.camera,
+            engine,
+            settings,
+            progressive: true,
+            time_limit: self.session.args.common.time_limit,
+            label: engine.to_string(),
+            controls: &[],
+            flags: Vec::new(),
+        });
     }
 
     fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<(), String> {
@@ -139,20 +187,31 @@ impl App {
         );
         let what = match &self.shown {
             None => "loading".to_string(),
-            Some(f) if f.engine == EngineKind::Raycast => "MATERIALS (raycast)".to_string(),
-            Some(f) if f.finished => {
-                format!("{}: done, {} in {:.2} s", f.engine, f.stage, f.seconds)
-            }
-            Some(f) => format!(
+            Some(f) if !f.finished => format!(
                 "{}: {} ({}/{}), {:.1} s",
-                f.engine, f.stage, f.step.0, f.step.1, f.seconds
+                f.job.label, f.stage, f.step.0, f.step.1, f.seconds
             ),
+            Some(f) if f.job.progressive => {
+                format!("{}: done, {} in {:.2} s", f.job.label, f.stage, f.seconds)
+            }
+            Some(f) => format!("{} in {:.2} s", f.job.label, f.seconds),
         };
-        format!("trilux: {name}: {what}")
+        let residual = self
+            .shown
+            .as_ref()
+            .and_then(|f| super::view::residual(&f.summary))
+            .map_or(String::new(), |r| format!(", residual {r:.1e}"));
+        let animating = if self.view.animating {
+            ", animating"
+        } else {
+            ""
+        };
+        format!("trilux: {name}: {what}{residual}{animating}")
     }
 
     /// Draws the image on screen, centred on black if the window is larger.
     fn draw(&mut self) -> Result<(), String> {
+        let image = self.on_screen();
         let (Some(window), Some(surface)) = (&self.window, &mut self.surface) else {
             return Ok(());
         };
@@ -164,8 +223,7 @@ impl App {
         surface.resize(w, h).map_err(fail)?;
         let mut buffer = surface.buffer_mut().map_err(fail)?;
         buffer.fill(0);
-        if let Some(frame) = &self.shown {
-            let film = &frame.film;
+        if let Some(film) = image {
             let rgb = film.to_srgb8();
             let (fw, fh) = (film.width as usize, film.height as usize);
             let (ww, wh) = (size.width as usize, size.height as usize);
@@ -181,48 +239,170 @@ impl App {
         buffer.present().map_err(fail)
     }
 
+    /// The image on screen: the shown frame, with the ray tree drawn over it.
+    fn on_screen(&self) -> Option<Film> {
+        let frame = self.shown.as_ref()?;
+        Some(match &self.ray_tree {
+            Some(tree) => ray_tree::overlay(&frame.film, &frame.job.camera, &tree.segments),
+            None => frame.film.clone(),
+        })
+    }
+
+    /// 't': the ray tree of the pixel under the pointer, as the ray tracer traces it with
+    /// the flags given, through the camera of the image on screen; the same pixel again
+    /// hides it.
+    fn toggle_ray_tree(&mut self) {
+        let (w, h) = (self.session.settings.width, self.session.settings.height);
+        let Some(window) = &self.window else { return };
+        let size = window.inner_size();
+        let (x0, y0) = (
+            size.width.saturating_sub(w) as f64 / 2.0,
+            size.height.saturating_sub(h) as f64 / 2.0,
+        );
+        let (column, row) = (self.pointer.x - x0, self.pointer.y - y0);
+        if !(0.0..w as f64).contains(&column) || !(0.0..h as f64).contains(&row) {
+            return eprintln!("render view: 't': the pointer is not over the image");
+        }
+        let pixel = (column as u32, h - 1 - row as u32);
+        if self.ray_tree.as_ref().is_some_and(|t| t.pixel == pixel) {
+            self.ray_tree = None;
+            return;
+        }
+        let Some(camera) = self.shown.as_ref().map(|f| f.job.camera) else {
+            return;
+        };
+        let Ok(scene) = self.shared.0.read() else {
+            return eprintln!("render view: 't': the scene's lock was poisoned by a failed render");
+        };
+        let segments = raytrace::ray_tree(
+            &scene,
+            &camera,
+            self.shared.1.as_ref(),
+            &self.session.settings,
+            pixel,
+        );
+        println!(
+            "ray tree of pixel {} {}: {} rays",
+            pixel.0,
+            pixel.1,
+            segments.len()
+        );
+        self.ray_tree = Some(RayTree {
+            pixel,
+            camera,
+            segments,
+        });
+    }
+
     fn key(&mut self, key: &str, event_loop: &ActiveEventLoop) {
+        // Any key but 'a' stops an animation ('o' and 'h' only look).
+        if !matches!(key, "a" | "o" | "h") {
+            self.view.animating = false;
+        }
+        let view = &mut self.view;
         match key {
-            "q" => event_loop.exit(),
-            "r" => self.submit(Job::Trace(self.camera)),
-            "o" => self.write_shown(),
-            "h" => println!("{KEYS}"),
+            "q" => return event_loop.exit(),
+            "r" => return self.trace(self.session.engine),
+            "g" => return self.trace(EngineKind::Photon),
+            "o" => return self.write_shown(),
+            "t" => {
+                self.toggle_ray_tree();
+                if let Some(window) = &self.window {
+                    window.request_redraw();
+                }
+                return;
+            }
+            "h" => return println!("{KEYS}"),
+            "v" => view.next_mode(),
+            " " => view.shoot(),
+            "a" => {
+                view.animating = !view.animating;
+                if view.animating {
+                    view.animate_step();
+                }
+            }
+            "c" => view.shots = Some(0),
+            "s" => {
+                view.subdivide += 1;
+                view.shots.get_or_insert(0);
+            }
+            "i" => view.interpolate = !view.interpolate,
+            "w" => view.wireframe = !view.wireframe,
+            "p" | "l" | "k" => {
+                if self.session.settings.photon.num_photons_to_shoot == 0 {
+                    return eprintln!(
+                        "render view: '{key}': no photons to shoot; start the viewer with -num_photons_to_shoot N"
+                    );
+                }
+                if key != "p" && !view.photons_traced {
+                    return eprintln!("render view: '{key}': no photons yet; 'p' traces them");
+                }
+                view.photons_traced = true;
+                view.photons = Some(match key {
+                    "k" => Photons::KdTree,
+                    _ => Photons::Points,
+                });
+            }
             other => {
                 if let Some((_, what)) = NOT_YET.iter().find(|(k, _)| *k == other) {
                     eprintln!(
                         "render view: '{other}' ({what}) is not in the viewer yet; 'h' lists the keys it has"
                     );
                 }
+                return;
             }
+        }
+        self.show_view();
+        if let Some(window) = &self.window {
+            window.set_title(&self.title());
         }
     }
 
-    /// 'o': the image on screen to `<stem>.view.png`, and the command line that renders it.
+    /// 'o': the image on screen to `<stem>.view.png` (and its ray tree to
+    /// `<stem>.view.raytree.obj`), and the command line that renders them offline.
     fn write_shown(&mut self) {
-        let Some(frame) = &self.shown else {
+        let (Some(frame), Some(film)) = (&self.shown, self.on_screen()) else {
             eprintln!("render view: 'o': no image yet");
             return;
         };
         let path = self.session.beside_stem("view.png");
-        if let Err(e) = frame.film.write(&path) {
+        if let Err(e) = film.write(&path) {
             eprintln!("render view: 'o': {e}");
             return;
         }
         let offline = self.session.beside_stem("png");
-        let command = self
-            .session
-            .offline_command(frame.engine, &frame.camera, &offline);
+        let mut command = self.session.offline_command(&frame.job, &offline);
+        let mut written = path.display().to_string();
+        if let Some(tree) = &self.ray_tree {
+            let obj = self.session.beside_stem("view.raytree.obj");
+            if let Err(e) = ray_tree::write_obj(&tree.segments, &obj) {
+                eprintln!("render view: 'o': {e}");
+                return;
+            }
+            written += &format!(" and {}", obj.display());
+            if tree.camera == frame.job.camera {
+                command += &format!(" --ray-tree {} {}", tree.pixel.0, tree.pixel.1);
+            } else {
+                eprintln!(
+                    "render view: the ray tree drawn is pixel {} {} of an earlier camera: the command below leaves it out; {} holds its rays",
+                    tree.pixel.0,
+                    tree.pixel.1,
+                    obj.display()
+                );
+            }
+        }
         if !frame.finished {
             eprintln!(
-                "render view: wrote {} while the trace is at {}; this command renders the finished image:",
-                path.display(),
+                "render view: wrote {written} while the render is at {}; this command renders the finished image:",
                 frame.stage
             );
-        } else {
+        } else if command.contains(" --ray-tree ") {
             eprintln!(
-                "render view: wrote {}; this command renders it offline:",
-                path.display()
+                "render view: wrote {written}; this command renders them offline (the image with the tree as {}):",
+                self.session.beside_stem("raytree.png").display()
             );
+        } else {
+            eprintln!("render view: wrote {written}; this command renders it offline:");
         }
         println!("{command}");
     }
@@ -251,7 +431,24 @@ impl App {
     fn move_camera(&mut self, camera: Camera) {
         if camera != self.camera {
             self.camera = camera;
-            self.submit(Job::Preview(camera));
+            self.view.animating = false;
+            self.show_view();
+        }
+    }
+
+    /// An animation's next step once its last image is in: more shots, unless the solver
+    /// stopped before the shots asked for (converged, or nothing emits).
+    fn animate(&mut self, frame: &Frame) {
+        if !self.view.animating || frame.job.engine != EngineKind::Radiosity {
+            return;
+        }
+        let tolerance = self.session.settings.radiosity.tolerance;
+        let converged = super::view::residual(&frame.summary).is_none_or(|r| r <= tolerance);
+        if !converged {
+            self.view.animate_step();
+            self.show_view();
+        } else {
+            self.view.animating = false;
         }
     }
 }
@@ -269,6 +466,9 @@ impl ApplicationHandler<Report> for App {
     fn user_event(&mut self, _: &ActiveEventLoop, report: Report) {
         match report {
             Report::Frame(frame) => {
+                if frame.finished {
+                    self.animate(&frame);
+                }
                 self.shown = Some(frame);
                 if let Some(window) = &self.window {
                     window.set_title(&self.title());

@@ -10,40 +10,52 @@
 //! render itself: its pixels equal those of the printed command line's image.
 
 use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::{Arc, RwLock};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
 use crate::accel::Accel;
-use crate::engines::{self, EngineKind, RenderSettings};
+use crate::engines::{self, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::scene::{Camera, Scene};
 
 /// The block sides of a progressive trace's coarse stages, coarsest first.
 const BLOCKS: [u32; 4] = [16, 8, 4, 2];
 
-/// What the window asks for.
-pub enum Job {
-    /// The MATERIALS view (`--engine raycast`) from this camera.
-    Preview(Camera),
-    /// A progressive render with the session's engine from this camera.
-    Trace(Camera),
+/// What the window asks for: an image of `engine` with `settings` from `camera`.
+#[derive(Clone)]
+pub struct Job {
+    pub camera: Camera,
+    pub engine: EngineKind,
+    pub settings: RenderSettings,
+    /// Coarse stages first ('r'), or the image at once (the views).
+    pub progressive: bool,
+    /// The seconds of `--time-limit`, counted from the start of the last stage.
+    pub time_limit: Option<f64>,
+    /// What the window calls it: "MATERIALS (raycast)", "RADIANCE (radiosity, 16 shots)".
+    pub label: String,
+    /// The flags that make the offline command render this job's image besides the
+    /// session's: the names it sets (removed from the session's flags) and the words added.
+    pub controls: &'static [&'static str],
+    pub flags: Vec<String>,
 }
 
 /// One image for the window.
 pub struct Frame {
     /// At the session's full resolution (coarse stages drawn block by block).
     pub film: Film,
-    pub camera: Camera,
-    /// The engine that rendered it.
-    pub engine: EngineKind,
-    /// What it is: "MATERIALS", "16×16 blocks", "4 spp".
+    /// The job it is an image of.
+    pub job: Job,
+    /// This stage: "16×16 blocks", "64 spp".
     pub stage: String,
-    /// This stage's number and the number of stages (1 of 1 for a preview).
+    /// This stage's number and the number of stages (1 of 1 for a view).
     pub step: (usize, usize),
     /// Whether this is the job's last stage: the image the offline command renders.
     pub finished: bool,
     /// Seconds since the job started.
     pub seconds: f64,
+    /// What the engine said of the render (the radiosity solve's summary: how it stopped).
+    pub summary: Vec<String>,
 }
 
 /// What the render thread tells the window.
@@ -59,14 +71,12 @@ pub struct Worker {
     thread: JoinHandle<()>,
 }
 
-/// What the render thread owns.
+/// What the render thread works with. The scene is shared with the window, which reads it
+/// for ray trees; the render thread alone writes it, setting each job's camera between
+/// renders.
 pub struct Renderer {
-    pub scene: Scene,
-    pub accel: Box<dyn Accel>,
-    pub settings: RenderSettings,
-    /// Seconds of `--time-limit`, counted from the start of each trace.
-    pub time_limit: Option<f64>,
-    pub engine: EngineKind,
+    pub scene: Arc<RwLock<Scene>>,
+    pub accel: Arc<dyn Accel>,
     pub pool: rayon::ThreadPool,
 }
 
@@ -94,49 +104,30 @@ impl Worker {
 }
 
 /// The render thread: the newest job each time, until the window drops its end.
-fn serve(mut renderer: Renderer, inbox: Receiver<(u64, Job)>, report: impl Fn(Report)) {
+fn serve(renderer: Renderer, inbox: Receiver<(u64, Job)>, report: impl Fn(Report)) {
     crate::parallel::worker_start();
     while let Ok(mut job) = inbox.recv() {
         while let Ok(newer) = inbox.try_recv() {
             job = newer;
         }
         crate::interrupt::start_job(job.0);
-        let result = match job.1 {
-            Job::Preview(camera) => renderer.preview(camera, &report),
-            Job::Trace(camera) => renderer.trace(camera, &report),
-        };
-        if let Err(message) = result {
+        if let Err(message) = renderer.run(job.1, &report) {
             report(Report::Failed(message));
         }
     }
 }
 
 impl Renderer {
-    fn preview(&mut self, camera: Camera, report: &impl Fn(Report)) -> Result<(), String> {
+    /// Renders `job`, stage by stage, reporting each image; stops where it is superseded.
+    fn run(&self, job: Job, report: &impl Fn(Report)) -> Result<(), String> {
         let start = Instant::now();
-        let settings = self.settings.clone();
-        if let Some(film) = self.render(EngineKind::Raycast, camera, &settings)? {
-            report(Report::Frame(Box::new(Frame {
-                film,
-                camera,
-                engine: EngineKind::Raycast,
-                stage: "MATERIALS".into(),
-                step: (1, 1),
-                finished: true,
-                seconds: start.elapsed().as_secs_f64(),
-            })));
-        }
-        Ok(())
-    }
-
-    fn trace(&mut self, camera: Camera, report: &impl Fn(Report)) -> Result<(), String> {
-        let start = Instant::now();
-        let (width, height) = (self.settings.width, self.settings.height);
+        let (width, height) = (job.settings.width, job.settings.height);
         // Engines with a pre-pass (photon maps, a radiosity solve) would compute it again
         // for every coarse stage: they go straight to the full image.
-        let coarse: Vec<u32> = if engines::engine(self.engine)
-            .pre_pass(&self.settings)
-            .is_some()
+        let coarse: Vec<u32> = if !job.progressive
+            || engines::engine(job.engine)
+                .pre_pass(&job.settings)
+                .is_some()
         {
             Vec::new()
         } else {
@@ -151,36 +142,36 @@ impl Renderer {
                 width: width.div_ceil(block),
                 height: height.div_ceil(block),
                 num_antialias_samples: 1,
-                ..self.settings.clone()
+                ..job.settings.clone()
             };
-            let Some(low) = self.render(self.engine, camera, &settings)? else {
+            let Some(low) = self.render(job.engine, job.camera, &settings)? else {
                 return Ok(());
             };
             report(Report::Frame(Box::new(Frame {
-                film: blocks(&low, block, width, height),
-                camera,
-                engine: self.engine,
+                film: blocks(&low.film, block, width, height),
+                job: job.clone(),
                 stage: format!("{block}×{block} blocks"),
                 step: (k + 1, stages),
                 finished: false,
                 seconds: start.elapsed().as_secs_f64(),
+                summary: Vec::new(),
             })));
         }
         let settings = RenderSettings {
-            deadline: self
+            deadline: job
                 .time_limit
                 .map(|t| Instant::now() + std::time::Duration::from_secs_f64(t)),
-            ..self.settings.clone()
+            ..job.settings.clone()
         };
-        if let Some(film) = self.render(self.engine, camera, &settings)? {
+        if let Some(rendered) = self.render(job.engine, job.camera, &settings)? {
             report(Report::Frame(Box::new(Frame {
-                film,
-                camera,
-                engine: self.engine,
+                film: rendered.film,
                 stage: format!("{} spp", settings.num_antialias_samples),
+                job,
                 step: (stages, stages),
                 finished: true,
                 seconds: start.elapsed().as_secs_f64(),
+                summary: rendered.summary,
             })));
         }
         Ok(())
@@ -188,20 +179,22 @@ impl Renderer {
 
     /// The image `engine` renders from `camera`, or None if the job was superseded.
     fn render(
-        &mut self,
+        &self,
         engine: EngineKind,
         camera: Camera,
         settings: &RenderSettings,
-    ) -> Result<Option<Film>, String> {
+    ) -> Result<Option<Rendered>, String> {
         if crate::interrupt::superseded() {
             return Ok(None);
         }
-        self.scene.camera = Some(camera);
-        let (scene, accel) = (&self.scene, self.accel.as_ref());
+        const POISONED: &str = "the scene's lock was poisoned by a failed render";
+        self.scene.write().map_err(|_| POISONED)?.camera = Some(camera);
+        let guard = self.scene.read().map_err(|_| POISONED)?;
+        let (scene, accel): (&Scene, &dyn Accel) = (&guard, self.accel.as_ref());
         let rendered = self
             .pool
             .install(|| engines::render(engine, scene, accel, settings))?;
-        Ok((!crate::interrupt::superseded()).then_some(rendered.film))
+        Ok((!crate::interrupt::superseded()).then_some(rendered))
     }
 }
 
