@@ -453,6 +453,24 @@ fn radiosity_shots_and_photons() -> Result<(), Failed> {
             && line.contains("--radiosity-iterations 16 --visualize radiance"),
         "{line}"
     );
+    // 'b': the quads' back faces too, as --two-sided renders them (the default camera
+    // looks in through the back of the light wall, which now hides the room).
+    display.run("xdotool", &["key", "v", "b"])?;
+    let title = display.wait_for_title(&id, ", two-sided", Duration::from_secs(30))?;
+    assert!(
+        title.contains("FORM_FACTORS (radiosity, 16 shots)"),
+        "{title}"
+    );
+    let (line, two_sided) = screen_is_offline_render(&display, &viewer, &id, &dir, "two-sided")?;
+    assert!(
+        line.contains("--two-sided") && line.contains("--visualize form-factors"),
+        "{line}"
+    );
+    assert!(
+        differing_pixels(&two_sided, &radiance)? > 1000,
+        "the back faces are drawn"
+    );
+    display.run("xdotool", &["key", "b"])?;
     display.run("xdotool", &["key", "p", "l"])?;
     display.wait_for_title(&id, "PHOTONS", Duration::from_secs(30))?;
     let (line, photons) = screen_is_offline_render(&display, &viewer, &id, &dir, "photons")?;

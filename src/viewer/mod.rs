@@ -33,14 +33,14 @@ pub fn run(words: &[String]) -> Result<(), String> {
     let accel = pool
         .install(|| crate::accel::build(&scene, kind, &args.accel_options()))
         .map_err(|e| e.to_string())?;
-    let scene = std::sync::Arc::new(std::sync::RwLock::new(scene));
-    let accel: std::sync::Arc<dyn crate::accel::Accel> = accel.into();
+    let world = std::sync::Arc::new(std::sync::RwLock::new(worker::World { scene, accel }));
     let renderer = worker::Renderer {
-        scene: scene.clone(),
-        accel: accel.clone(),
+        world: world.clone(),
         pool,
+        accel_kind: kind,
+        accel_options: args.accel_options(),
     };
-    window::run(session, (scene, accel), |wake_up| {
+    window::run(session, world, |wake_up| {
         worker::Worker::start(renderer, wake_up)
     })
 }

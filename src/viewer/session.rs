@@ -32,7 +32,8 @@ const NOT_IN_VIEWER: [(&str, &str); 7] = [
 /// The flags the viewer writes into the offline command line in place of those given, with
 /// the number of values each takes: the camera's and `--engine` always, the others when the
 /// image on screen sets them (a radiosity view's shots and mode).
-const REPLACED: [(&str, usize); 10] = [
+const REPLACED: [(&str, usize); 11] = [
+    ("--two-sided", 0),
     ("--camera-position", 3),
     ("--look-at", 3),
     ("--up", 3),
@@ -164,6 +165,9 @@ impl Session {
                 .map(|w| shell_word(w)),
         );
         words.push(format!("--engine {}", job.engine));
+        if job.two_sided {
+            words.push("--two-sided".into());
+        }
         words.extend(job.flags.iter().map(|w| shell_word(w)));
         let camera = &job.camera;
         let v = |v: crate::geometry::Vec3| format!("{} {} {}", v.x, v.y, v.z);

@@ -68,6 +68,8 @@ pub struct ViewState {
     pub photons: Option<Photons>,
     /// Shots added until the solver converges ('a').
     pub animating: bool,
+    /// Quads seen from behind too ('b'; `--two-sided`): back faces not culled.
+    pub two_sided: bool,
 }
 
 impl ViewState {
@@ -83,6 +85,7 @@ impl ViewState {
             photons_traced: false,
             photons: None,
             animating: false,
+            two_sided: session.args.common.two_sided,
         }
     }
 
@@ -121,6 +124,7 @@ impl ViewState {
             settings,
             progressive: false,
             time_limit: None,
+            two_sided: self.two_sided,
             label,
             controls,
             flags,

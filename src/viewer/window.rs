@@ -15,12 +15,11 @@ use winit::window::{Window, WindowId};
 use super::orbit;
 use super::session::Session;
 use super::view::{Photons, ViewState};
-use super::worker::{Frame, Job, Report, Worker};
-use crate::accel::Accel;
+use super::worker::{Frame, Job, Report, Worker, World};
 use crate::engines::{raytrace, EngineKind};
 use crate::film::ray_tree::{self, Segment};
 use crate::film::Film;
-use crate::scene::{Camera, Scene};
+use crate::scene::Camera;
 use std::sync::{Arc, RwLock};
 
 /// The keys, as 'h' prints them.
@@ -35,6 +34,7 @@ keys:
   s      subdivide the radiosity mesh once more
   i      interpolate the radiosity display (toggle)
   w      wireframe: the patches' outlines (toggle)
+  b      back faces: quads seen from behind too (--two-sided; toggle)
   p      trace photons (-num_photons_to_shoot) and show them
   l      show the photons traced ('v' goes back to the views above)
   k      show the photons' kd-tree
@@ -48,17 +48,10 @@ mouse:
   middle drag  pan
   a camera move cancels a render in flight and shows the current view from the new camera";
 
-/// The course viewer's keys this viewer does not have yet, and what they do there.
-const NOT_YET: [(&str, &str); 1] = [("b", "toggling back-face culling")];
-
-/// The scene and the Accel, shared with the render thread (the window reads them for ray
-/// trees).
-pub type Shared = (Arc<RwLock<Scene>>, Arc<dyn Accel>);
-
 /// Opens the window and runs until 'q' or the window is closed.
 pub fn run(
     session: Session,
-    shared: Shared,
+    world: Arc<RwLock<World>>,
     worker_start: impl FnOnce(WakeUp) -> Worker,
 ) -> Result<(), String> {
     let event_loop = EventLoop::<Report>::with_user_event()
@@ -69,7 +62,7 @@ pub fn run(
         // The loop is gone only once the window has closed: nobody is left to show it.
         let _ = proxy.send_event(report);
     }));
-    let mut app = App::new(session, shared, worker);
+    let mut app = App::new(session, world, worker);
     app.show_view();
     let result = event_loop.run_app(&mut app);
     if let Some(worker) = app.worker.take() {
@@ -92,7 +85,8 @@ struct RayTree {
 
 struct App {
     session: Session,
-    shared: Shared,
+    /// The scene and the Accel, read for ray trees.
+    world: Arc<RwLock<World>>,
     /// The ray tree drawn over every image, whatever the camera ('t').
     ray_tree: Option<RayTree>,
     worker: Option<Worker>,
@@ -113,10 +107,10 @@ struct App {
 }
 
 impl App {
-    fn new(session: Session, shared: Shared, worker: Worker) -> App {
+    fn new(session: Session, world: Arc<RwLock<World>>, worker: Worker) -> App {
         let camera = session.camera;
         App {
-            shared,
+            world,
             ray_tree: None,
             start_distance: camera.focus_distance(),
             camera,
@@ -153,6 +147,7 @@ impl App {
             settings,
             progressive: true,
             time_limit: self.session.args.common.time_limit,
+            two_sided: self.view.two_sided,
             label: engine.to_string(),
             controls: &[],
             flags: Vec::new(),
@@ -206,7 +201,11 @@ impl App {
         } else {
             ""
         };
-        format!("trilux: {name}: {what}{residual}{animating}")
+        let sides = match &self.shown {
+            Some(f) if f.job.two_sided => ", two-sided",
+            _ => "",
+        };
+        format!("trilux: {name}: {what}{sides}{residual}{animating}")
     }
 
     /// Draws the image on screen, centred on black if the window is larger.
@@ -271,13 +270,13 @@ impl App {
         let Some(camera) = self.shown.as_ref().map(|f| f.job.camera) else {
             return;
         };
-        let Ok(scene) = self.shared.0.read() else {
+        let Ok(world) = self.world.read() else {
             return eprintln!("render view: 't': the scene's lock was poisoned by a failed render");
         };
         let segments = raytrace::ray_tree(
-            &scene,
+            &world.scene,
             &camera,
-            self.shared.1.as_ref(),
+            world.accel.as_ref(),
             &self.session.settings,
             pixel,
         );
@@ -343,14 +342,8 @@ impl App {
                     _ => Photons::Points,
                 });
             }
-            other => {
-                if let Some((_, what)) = NOT_YET.iter().find(|(k, _)| *k == other) {
-                    eprintln!(
-                        "render view: '{other}' ({what}) is not in the viewer yet; 'h' lists the keys it has"
-                    );
-                }
-                return;
-            }
+            "b" => view.two_sided = !view.two_sided,
+            _ => return,
         }
         self.show_view();
         if let Some(window) = &self.window {

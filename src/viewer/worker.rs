@@ -14,7 +14,7 @@ use std::sync::{Arc, RwLock};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
-use crate::accel::Accel;
+use crate::accel::{Accel, AccelKind, AccelOptions};
 use crate::engines::{self, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::scene::{Camera, Scene};
@@ -32,6 +32,8 @@ pub struct Job {
     pub progressive: bool,
     /// The seconds of `--time-limit`, counted from the start of the last stage.
     pub time_limit: Option<f64>,
+    /// Quads opaque from both sides (`--two-sided`; 'b').
+    pub two_sided: bool,
     /// What the window calls it: "MATERIALS (raycast)", "RADIANCE (radiosity, 16 shots)".
     pub label: String,
     /// The flags that make the offline command render this job's image besides the
@@ -71,13 +73,20 @@ pub struct Worker {
     thread: JoinHandle<()>,
 }
 
-/// What the render thread works with. The scene is shared with the window, which reads it
-/// for ray trees; the render thread alone writes it, setting each job's camera between
-/// renders.
+/// The scene and its Accel. The render thread alone changes them, between renders (a job's
+/// camera; the quads' sides, rebuilding the Accel); the window reads them for ray trees.
+pub struct World {
+    pub scene: Scene,
+    pub accel: Box<dyn Accel>,
+}
+
+/// What the render thread works with.
 pub struct Renderer {
-    pub scene: Arc<RwLock<Scene>>,
-    pub accel: Arc<dyn Accel>,
+    pub world: Arc<RwLock<World>>,
     pub pool: rayon::ThreadPool,
+    /// How to build the Accel again when a job turns `--two-sided` on or off.
+    pub accel_kind: AccelKind,
+    pub accel_options: AccelOptions,
 }
 
 impl Worker {
@@ -144,7 +153,7 @@ impl Renderer {
                 num_antialias_samples: 1,
                 ..job.settings.clone()
             };
-            let Some(low) = self.render(job.engine, job.camera, &settings)? else {
+            let Some(low) = self.render(&job, &settings)? else {
                 return Ok(());
             };
             report(Report::Frame(Box::new(Frame {
@@ -163,7 +172,7 @@ impl Renderer {
                 .map(|t| Instant::now() + std::time::Duration::from_secs_f64(t)),
             ..job.settings.clone()
         };
-        if let Some(rendered) = self.render(job.engine, job.camera, &settings)? {
+        if let Some(rendered) = self.render(&job, &settings)? {
             report(Report::Frame(Box::new(Frame {
                 film: rendered.film,
                 stage: format!("{} spp", settings.num_antialias_samples),
@@ -177,23 +186,30 @@ impl Renderer {
         Ok(())
     }
 
-    /// The image `engine` renders from `camera`, or None if the job was superseded.
-    fn render(
-        &self,
-        engine: EngineKind,
-        camera: Camera,
-        settings: &RenderSettings,
-    ) -> Result<Option<Rendered>, String> {
+    /// The image `job.engine` renders with `settings`, or None if the job was superseded.
+    fn render(&self, job: &Job, settings: &RenderSettings) -> Result<Option<Rendered>, String> {
         if crate::interrupt::superseded() {
             return Ok(None);
         }
         const POISONED: &str = "the scene's lock was poisoned by a failed render";
-        self.scene.write().map_err(|_| POISONED)?.camera = Some(camera);
-        let guard = self.scene.read().map_err(|_| POISONED)?;
-        let (scene, accel): (&Scene, &dyn Accel) = (&guard, self.accel.as_ref());
+        {
+            let mut world = self.world.write().map_err(|_| POISONED)?;
+            world.scene.camera = Some(job.camera);
+            if world.scene.two_sided_quads != job.two_sided {
+                world.scene.two_sided_quads = job.two_sided;
+                let scene = &world.scene;
+                let accel = self
+                    .pool
+                    .install(|| crate::accel::build(scene, self.accel_kind, &self.accel_options))
+                    .map_err(|e| e.to_string())?;
+                world.accel = accel;
+            }
+        }
+        let world = self.world.read().map_err(|_| POISONED)?;
+        let (scene, accel): (&Scene, &dyn Accel) = (&world.scene, world.accel.as_ref());
         let rendered = self
             .pool
-            .install(|| engines::render(engine, scene, accel, settings))?;
+            .install(|| engines::render(job.engine, scene, accel, settings))?;
         Ok((!crate::interrupt::superseded()).then_some(rendered))
     }
 }
