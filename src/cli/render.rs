@@ -41,20 +41,8 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         .unwrap_or_else(AccelKind::default_available);
     let plan = Plan::new(&scene, engine, kind, &settings);
     let unused = args.unused_flags();
-    let max_memory = args
-        .common
-        .max_memory
-        .unwrap_or_else(crate::plan::default_max_memory);
-    let limit = format!(
-        "--max-memory {}{}",
-        crate::plan::human_bytes(max_memory),
-        if args.common.max_memory.is_none() {
-            " (80% of this machine's memory)"
-        } else {
-            ""
-        }
-    );
     if args.common.plan {
+        let (_, limit) = memory_limit(args);
         let notes: String = unused
             .iter()
             .map(|f| format!("note: {f} is ignored: the {engine} engine does not read it\n"))
@@ -64,12 +52,8 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             input.display()
         ));
     }
-    if plan.memory > max_memory {
-        return Err(format!(
-            "this render would need about {}, more than {limit}; ask for less (-size, -num_photons_to_shoot, --subdivide) or raise --max-memory",
-            plan.memory_summary(),
-        ));
-    }
+    // What the plan leaves of --max-memory bounds what the hierarchical solver refines.
+    settings.radiosity.memory_budget = check_memory(&plan, args)?;
     let engine_impl = engines::engine(engine);
     if settings.pixel_samples.is_some() && !engine_impl.samples_pixels(&settings) {
         return Err(format!(
@@ -101,8 +85,6 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             Some(_) => {}
         }
     }
-    // What the plan leaves of --max-memory bounds what the hierarchical solver refines.
-    settings.radiosity.memory_budget = max_memory - plan.memory;
     crate::interrupt::install();
     for flag in unused {
         eprintln!(
@@ -217,6 +199,37 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
         }
     }
     Ok(scene)
+}
+
+/// `--max-memory` in bytes (default: 80% of this machine's), and as the messages name it.
+fn memory_limit(args: &RenderArgs) -> (u64, String) {
+    let max_memory = args
+        .common
+        .max_memory
+        .unwrap_or_else(crate::plan::default_max_memory);
+    let limit = format!(
+        "--max-memory {}{}",
+        crate::plan::human_bytes(max_memory),
+        if args.common.max_memory.is_none() {
+            " (80% of this machine's memory)"
+        } else {
+            ""
+        }
+    );
+    (max_memory, limit)
+}
+
+/// Refuses a plan above `--max-memory`; returns what the limit leaves beside the plan (what
+/// the hierarchical solver may refine into).
+pub fn check_memory(plan: &Plan, args: &RenderArgs) -> Result<u64, String> {
+    let (max_memory, limit) = memory_limit(args);
+    if plan.memory > max_memory {
+        return Err(format!(
+            "this render would need about {}, more than {limit}; ask for less (-size, -num_photons_to_shoot, --subdivide) or raise --max-memory",
+            plan.memory_summary(),
+        ));
+    }
+    Ok(max_memory - plan.memory)
 }
 
 /// Writes the image. A part of a split render (`--crop-window`, `--pixel-samples`) written as

@@ -25,10 +25,7 @@ pub fn run(words: &[String]) -> Result<(), String> {
     let (session, scene) = session::Session::start(words)?;
     let args = &session.args;
     let pool = crate::parallel::thread_pool(args.common.threads).map_err(|e| e.to_string())?;
-    let kind = args
-        .common
-        .accel
-        .unwrap_or_else(crate::accel::AccelKind::default_available);
+    let kind = session::accel_kind(args);
     crate::parallel::worker_start();
     let accel = pool
         .install(|| crate::accel::build(&scene, kind, &args.accel_options()))
@@ -39,6 +36,7 @@ pub fn run(words: &[String]) -> Result<(), String> {
         pool,
         accel_kind: kind,
         accel_options: args.accel_options(),
+        radiosity: None,
     };
     window::run(session, world, |wake_up| {
         worker::Worker::start(renderer, wake_up)

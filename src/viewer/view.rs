@@ -3,10 +3,9 @@
 //! state is one job for the render thread — an engine, its settings and the flags that make
 //! the offline command render the same image.
 //!
-//! The radiosity views solve again from the start for every image (the solve is the
-//! library's, with `--radiosity-iterations` shots): a camera move, a mode or a shot costs one
-//! solve of that many shots. On the course's scenes that is milliseconds; a solution kept
-//! between images is left for later.
+//! The radiosity views are the library's solve with `--radiosity-iterations` shots; the
+//! render thread keeps the last solution, so that a camera move or another mode only draws
+//! it, while another number of shots solves again from the start.
 
 use super::session::Session;
 use super::worker::Job;

@@ -15,6 +15,7 @@ use std::thread::JoinHandle;
 use std::time::Instant;
 
 use crate::accel::{Accel, AccelKind, AccelOptions};
+use crate::engines::radiosity::{self, Solution};
 use crate::engines::{self, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::scene::{Camera, Scene};
@@ -87,6 +88,10 @@ pub struct Renderer {
     /// How to build the Accel again when a job turns `--two-sided` on or off.
     pub accel_kind: AccelKind,
     pub accel_options: AccelOptions,
+    /// The last radiosity solution, and what it was solved with (the settings with their
+    /// display fields reset, see `solve_key`, and the quads' sides): another view of it or
+    /// another camera renders it without solving again.
+    pub radiosity: Option<((RenderSettings, bool), Solution)>,
 }
 
 impl Worker {
@@ -113,7 +118,7 @@ impl Worker {
 }
 
 /// The render thread: the newest job each time, until the window drops its end.
-fn serve(renderer: Renderer, inbox: Receiver<(u64, Job)>, report: impl Fn(Report)) {
+fn serve(mut renderer: Renderer, inbox: Receiver<(u64, Job)>, report: impl Fn(Report)) {
     crate::parallel::worker_start();
     while let Ok(mut job) = inbox.recv() {
         while let Ok(newer) = inbox.try_recv() {
@@ -128,7 +133,7 @@ fn serve(renderer: Renderer, inbox: Receiver<(u64, Job)>, report: impl Fn(Report
 
 impl Renderer {
     /// Renders `job`, stage by stage, reporting each image; stops where it is superseded.
-    fn run(&self, job: Job, report: &impl Fn(Report)) -> Result<(), String> {
+    fn run(&mut self, job: Job, report: &impl Fn(Report)) -> Result<(), String> {
         let start = Instant::now();
         let (width, height) = (job.settings.width, job.settings.height);
         // Engines with a pre-pass (photon maps, a radiosity solve) would compute it again
@@ -187,7 +192,7 @@ impl Renderer {
     }
 
     /// The image `job.engine` renders with `settings`, or None if the job was superseded.
-    fn render(&self, job: &Job, settings: &RenderSettings) -> Result<Option<Rendered>, String> {
+    fn render(&mut self, job: &Job, settings: &RenderSettings) -> Result<Option<Rendered>, String> {
         if crate::interrupt::superseded() {
             return Ok(None);
         }
@@ -207,11 +212,51 @@ impl Renderer {
         }
         let world = self.world.read().map_err(|_| POISONED)?;
         let (scene, accel): (&Scene, &dyn Accel) = (&world.scene, world.accel.as_ref());
-        let rendered = self
-            .pool
-            .install(|| engines::render(job.engine, scene, accel, settings))?;
+        let pool = &self.pool;
+        // A radiosity image of a solution solved before (no time limit: a deadline makes
+        // the solve depend on the clock).
+        let key = (solve_key(settings), job.two_sided);
+        if job.engine == EngineKind::Radiosity && settings.deadline.is_none() {
+            let cached = self.radiosity.take().filter(|(k, _)| *k == key);
+            let solution = match cached {
+                Some((_, solution)) => solution,
+                None => pool.install(|| radiosity::solve_with_progress(scene, accel, settings))?,
+            };
+            if crate::interrupt::superseded() {
+                // Cut short: not the solution the settings ask for.
+                return Ok(None);
+            }
+            let (film, stats) =
+                pool.install(|| radiosity::render_solved(scene, accel, settings, &solution));
+            let rendered = solution.rendered(film, stats, settings)?;
+            self.radiosity = Some((key, solution));
+            return Ok((!crate::interrupt::superseded()).then_some(rendered));
+        }
+        let rendered = pool.install(|| engines::render(job.engine, scene, accel, settings))?;
         Ok((!crate::interrupt::superseded()).then_some(rendered))
     }
+}
+
+/// What a radiosity solve reads of the settings: all of them but how the solution is shown
+/// (image, samples, lens, display mode, outlines, interpolation, the form factors' source)
+/// and whether progress is drawn.
+fn solve_key(settings: &RenderSettings) -> RenderSettings {
+    let defaults = RenderSettings::default();
+    let mut key = RenderSettings {
+        width: defaults.width,
+        height: defaults.height,
+        num_antialias_samples: defaults.num_antialias_samples,
+        aperture: defaults.aperture,
+        focus_distance: defaults.focus_distance,
+        quiet: defaults.quiet,
+        ..settings.clone()
+    };
+    let r = &mut key.radiosity;
+    r.display = defaults.radiosity.display;
+    r.wireframe = defaults.radiosity.wireframe;
+    r.interpolate = defaults.radiosity.interpolate;
+    r.ff_source = defaults.radiosity.ff_source;
+    key
 }
 
 /// A coarse image drawn at full resolution: each of its pixels as a `block`×`block` square.

@@ -541,9 +541,21 @@ pub fn render(
     settings: &RenderSettings,
 ) -> Result<(Film, RenderStats, Solution), String> {
     let solution = solve_with_progress(scene, accel, settings)?;
-    let (film, stats) = render_solution(scene, accel, settings, &solution);
-    stats.form_factor_rays.store(solution.rays, Relaxed);
+    let (film, stats) = render_solved(scene, accel, settings, &solution);
     Ok((film, stats, solution))
+}
+
+/// The image of a solution already solved, as the engine renders it after its solve (the
+/// viewer keeps a solution between images of it).
+pub fn render_solved(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+    solution: &Solution,
+) -> (Film, RenderStats) {
+    let (film, stats) = render_solution(scene, accel, settings, solution);
+    stats.form_factor_rays.store(solution.rays, Relaxed);
+    (film, stats)
 }
 
 /// A solution's indirect light for the ray tracer (`--indirect radiosity`): the incident
