@@ -6,8 +6,9 @@
 //!
 //! A progressive trace ('r') renders first with one sample per 16×16 block of pixels (the
 //! image at a sixteenth of the resolution, each pixel drawn as its block), then 8×8, 4×4 and
-//! 2×2, then the full image with every setting as given. That last stage is the offline
-//! render itself: its pixels equal those of the printed command line's image.
+//! 2×2, then every pixel with one sample (when more are asked for), then the full image with
+//! every setting as given. That last stage is the offline render itself: its pixels equal
+//! those of the printed command line's image.
 
 use std::sync::mpsc::{channel, Receiver, Sender};
 use std::sync::{Arc, RwLock};
@@ -20,8 +21,9 @@ use crate::engines::{self, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::scene::{Camera, Scene};
 
-/// The block sides of a progressive trace's coarse stages, coarsest first.
-const BLOCKS: [u32; 4] = [16, 8, 4, 2];
+/// The block sides of a progressive trace's coarse stages (one sample each), coarsest first;
+/// 1 is the full resolution, a stage of its own when the image asks for more samples.
+const BLOCKS: [u32; 5] = [16, 8, 4, 2, 1];
 
 /// What the window asks for: an image of `engine` with `settings` from `camera`.
 #[derive(Clone)]
@@ -148,6 +150,7 @@ impl Renderer {
             BLOCKS
                 .into_iter()
                 .filter(|&b| b < width.max(height))
+                .filter(|&b| b > 1 || job.settings.num_antialias_samples > 1)
                 .collect()
         };
         let stages = coarse.len() + 1;
@@ -164,7 +167,11 @@ impl Renderer {
             report(Report::Frame(Box::new(Frame {
                 film: blocks(&low.film, block, width, height),
                 job: job.clone(),
-                stage: format!("{block}×{block} blocks"),
+                stage: if block == 1 {
+                    "1 spp".to_string()
+                } else {
+                    format!("{block}×{block} blocks")
+                },
                 step: (k + 1, stages),
                 finished: false,
                 seconds: start.elapsed().as_secs_f64(),
