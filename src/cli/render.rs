@@ -15,15 +15,7 @@ use crate::scene::Scene;
 /// `render -input SCENE …`.
 pub fn run(args: &RenderArgs) -> Result<(), String> {
     let input = args.common.input.as_ref().ok_or("missing -input")?;
-    args.validate()?;
-    let mut settings = args.settings();
-    let chosen = args.choose_for_time_limit(&mut settings);
-    if !chosen.is_empty() && !args.common.quiet {
-        eprintln!(
-            "--time-limit without quality flags: chose {}",
-            chosen.join(" ")
-        );
-    }
+    let mut settings = checked_settings(args)?;
     let pool = crate::parallel::thread_pool(args.common.threads).map_err(|e| e.to_string())?;
     crate::parallel::worker_start();
 
@@ -168,6 +160,21 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         eprintln!("wrote {}", output.display());
     }
     Ok(())
+}
+
+/// The settings of the flags, checked; with `--time-limit`, what it chose where flags were
+/// not given (said on stderr unless `--quiet`). The viewer starts here too.
+pub fn checked_settings(args: &RenderArgs) -> Result<RenderSettings, String> {
+    args.validate()?;
+    let mut settings = args.settings();
+    let chosen = args.choose_for_time_limit(&mut settings);
+    if !chosen.is_empty() && !args.common.quiet {
+        eprintln!(
+            "--time-limit without quality flags: chose {}",
+            chosen.join(" ")
+        );
+    }
+    Ok(settings)
 }
 
 /// The scene as `render` reads it: loaded (its warnings printed), `--two-sided` and the

@@ -100,15 +100,7 @@ impl Session {
                 .chain(words.iter().cloned()),
         );
         let args = cli.render;
-        args.validate()?;
-        let mut settings = args.settings();
-        let chosen = args.choose_for_time_limit(&mut settings);
-        if !chosen.is_empty() && !args.common.quiet {
-            eprintln!(
-                "--time-limit without quality flags: chose {}",
-                chosen.join(" ")
-            );
-        }
+        let mut settings = crate::cli::render::checked_settings(&args)?;
         // The window shows the progress; no bars on the terminal.
         settings.quiet = true;
         let engine = args.engine();
