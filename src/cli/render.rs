@@ -195,17 +195,30 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
             input.display()
         ));
     }
-    // Media and skies are the path tracer's alone so far (issue #18): refused, not left out.
-    let path_only = [(scene.fog.is_some(), "fog"), (scene.sky.is_some(), "a sky")];
-    if let Some((_, what)) = path_only.iter().find(|(has, _)| *has) {
-        if !matches!(engine, EngineKind::Path | EngineKind::Raycast) {
-            return Err(format!(
-                "{}: the scene has {what}, which only the path tracer renders so far (--engine path); the {engine} engine would leave it out",
-                input.display()
-            ));
+    // What an engine does not render yet is refused, not left out (issue #18): fog and skies
+    // are the path tracer's and the ray tracer's (not with radiosity as its indirect light,
+    // whose solution leaves them out).
+    let radiosity_indirect = args.ray_trace.indirect == engines::IndirectKind::Radiosity;
+    let renders_media = match engine {
+        EngineKind::Path | EngineKind::Raycast => true,
+        EngineKind::Raytrace => !radiosity_indirect,
+        _ => false,
+    };
+    let what = match (scene.fog.is_some(), scene.sky.is_some()) {
+        _ if renders_media => return Ok(scene),
+        (true, _) => "fog",
+        (_, true) => "a sky",
+        _ => return Ok(scene),
+    };
+    Err(format!(
+        "{}: the scene has {what}, which the path tracer and the ray tracer render so far (--engine path, or raytrace without --indirect radiosity); the {engine} engine{} would leave it out",
+        input.display(),
+        if engine == EngineKind::Raytrace && radiosity_indirect {
+            " with --indirect radiosity"
+        } else {
+            ""
         }
-    }
-    Ok(scene)
+    ))
 }
 
 /// `--max-memory` in bytes (default: 80% of this machine's), and as the messages name it.

@@ -12,7 +12,7 @@
 //! radiosity`).
 
 use super::engine::RenderSettings;
-use super::scattering::{power_heuristic, reflect, Dielectric, GlossyLobe};
+use super::scattering::{diffuse_sample, power_heuristic, reflect, Dielectric, GlossyLobe};
 use crate::accel::Accel;
 use crate::film::ray_tree::{Segment, SegmentKind};
 use crate::film::Film;
@@ -21,6 +21,7 @@ use crate::render::adaptive::visible_form_factor;
 use crate::render::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
 use crate::render::{render_pixels, Ambient, CameraSampler, Counts, IndirectLight, RenderStats};
 use crate::sampling::{LightSampling, Rng, Strata};
+use crate::scene::medium::Medium;
 use crate::scene::{Camera, Color, PrimRef, Scene, SurfaceHit};
 use std::collections::HashMap;
 
@@ -41,6 +42,8 @@ struct Tracer<'a> {
     light_strata: Strata,
     /// The rays traced, when recording a ray tree (`--ray-tree`); None while rendering.
     tree: Option<std::sync::Mutex<Vec<Segment>>>,
+    /// The medium that fills the space where the camera is (`fog K`), if any.
+    fog: Option<Medium>,
 }
 
 /// How a ray was chosen, for weighing the emitter it finds: from the camera or by a delta
@@ -80,6 +83,7 @@ impl<'a> Tracer<'a> {
                 settings.num_shadow_samples,
             ),
             tree,
+            fog: scene.fog.map(|k| scene.media[k]),
         }
     }
 }
@@ -92,30 +96,37 @@ struct Branch {
     arrival: Arrival,
     depth: u32,
     weight: f32,
+    /// Whether the ray travels through the fog (outside the closed objects it passes into).
+    in_fog: bool,
 }
 
 impl Branch {
-    /// The camera's ray.
-    const PRIMARY: Branch = Branch {
-        arrival: Arrival::Delta,
-        depth: 0,
-        weight: 1.0,
-    };
+    /// The camera's ray, in the fog if the scene has one.
+    fn primary(scene: &Scene) -> Branch {
+        Branch {
+            arrival: Arrival::Delta,
+            depth: 0,
+            weight: 1.0,
+            in_fog: scene.fog.is_some(),
+        }
+    }
 
     /// A ray one bounce below this one, chosen as `arrival` says, carrying `factor` of its
-    /// weight.
+    /// weight, on the same side of the surface (reflected).
     fn child(&self, arrival: Arrival, factor: f32) -> Branch {
         Branch {
             arrival,
             depth: self.depth + 1,
             weight: self.weight * factor,
+            in_fog: self.in_fog,
         }
     }
 }
 
 impl Tracer<'_> {
     /// Radiance arriving along `ray` (on `branch` of the ray tree) whose closest hit is
-    /// `hit`.
+    /// `hit`: what leaves the hit, and in the fog, that attenuated along the way plus the
+    /// light the fog scatters into the ray.
     fn shade(
         &self,
         ray: &Ray,
@@ -124,8 +135,34 @@ impl Tracer<'_> {
         rng: &mut Rng,
         counts: &mut Counts,
     ) -> Color {
+        let fog = self.fog.filter(|_| branch.in_fog);
+        let Some(fog) = fog else {
+            return self.leaving(ray, hit, branch, rng, counts);
+        };
+        let length = hit
+            .as_ref()
+            .map_or(f32::INFINITY, |s| s.point.distance(ray.origin));
+        let in_scattered = self.in_scattered(&fog, ray, length, rng, counts);
+        let leaving = self.leaving(ray, hit, branch, rng, counts);
+        fog.transmittance(length) * leaving + in_scattered
+    }
+
+    /// Radiance leaving the closest hit `hit` back along `ray` (the background where there
+    /// is none).
+    fn leaving(
+        &self,
+        ray: &Ray,
+        hit: Option<SurfaceHit>,
+        branch: Branch,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
         let Some(s) = hit else {
-            return self.scene.background;
+            // The sky where the scene has one, else the background.
+            return match self.scene.sky {
+                Some(sky) => sky.radiance(ray.direction.normalize_or_zero()),
+                None => self.scene.background,
+            };
         };
         let m = &self.scene.materials[s.material as usize];
         let (front, n) = s.facing(ray.direction);
@@ -135,7 +172,9 @@ impl Tracer<'_> {
         }
         let albedo = self.scene.albedo(&s);
         if albedo.max_element() > 0.0 {
-            let irradiance_over_pi = self.direct(&s, n, rng, counts);
+            let fog = self.fog.filter(|_| branch.in_fog);
+            let irradiance_over_pi = self.direct(&s, n, fog.as_ref(), rng, counts)
+                + self.sky_light(&s, n, fog.as_ref(), rng, counts);
             let indirect = self
                 .indirect
                 .incident(self.scene, self.accel, &s, n, branch.depth, rng);
@@ -152,7 +191,8 @@ impl Tracer<'_> {
                     self.trace(&r, branch.child(Arrival::Delta, reflective), rng, counts)
                 }
                 Some(lobe) => {
-                    let lit = self.glossy_direct(&s, n, &lobe, rng, counts);
+                    let fog = self.fog.filter(|_| branch.in_fog);
+                    let lit = self.glossy_direct(&s, n, &lobe, fog.as_ref(), rng, counts);
                     let (dir, pdf) = lobe.sample(rng.next_f32(), rng.next_f32());
                     let arrival = match pdf {
                         Some(pdf) if self.samples_glossy_lights() => Arrival::Glossy {
@@ -182,7 +222,10 @@ impl Tracer<'_> {
             if f < 1.0 && w * (1.0 - f) > MIN_WEIGHT {
                 if let Some(t) = glass.refracted(ray.direction, n) {
                     let r = s.spawn_ray(t);
-                    let child = branch.child(Arrival::Delta, transmitted * (1.0 - f));
+                    let mut child = branch.child(Arrival::Delta, transmitted * (1.0 - f));
+                    // Through glass the ray leaves the fog (entering an object) or comes
+                    // back into it (leaving one).
+                    child.in_fog = !front && self.fog.is_some();
                     through += self.trace(&r, child, rng, counts) * (1.0 - f);
                 }
             }
@@ -227,6 +270,7 @@ impl Tracer<'_> {
         s: &SurfaceHit,
         n: Vec3,
         lobe: &GlossyLobe,
+        fog: Option<&Medium>,
         rng: &mut Rng,
         counts: &mut Counts,
     ) -> Color {
@@ -252,7 +296,115 @@ impl Tracer<'_> {
             record_segment(self.tree.as_ref(), origin, d.point, SegmentKind::Shadow);
             counts.shadow += 1;
             if !self.accel.occluded(&ray) {
-                total += light.emitted * (lobe_pdf / d.pdf * power_heuristic(d.pdf, lobe_pdf));
+                total += light.emitted
+                    * transmittance(fog, origin.distance(d.point))
+                    * (lobe_pdf / d.pdf * power_heuristic(d.pdf, lobe_pdf));
+            }
+        }
+        total
+    }
+
+    /// The sky's irradiance at a surface point divided by π (`n`: the normal on the lit
+    /// side): `-num_shadow_samples` directions (at least one) stratified in the cosine about
+    /// `n`, each bringing the sky's radiance where its shadow ray leaves the scene (with 0,
+    /// unoccluded, as the lights are), through the fog if any (which then hides it: the fog
+    /// is infinite). The mean is exact under a uniform sky that nothing hides.
+    fn sky_light(
+        &self,
+        s: &SurfaceHit,
+        n: Vec3,
+        fog: Option<&Medium>,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
+        let Some(sky) = self.scene.sky else {
+            return Vec3::ZERO;
+        };
+        let samples = self.settings.num_shadow_samples;
+        let count = samples.max(1);
+        let strata = Strata::new(crate::sampling::Pattern::Jittered, count);
+        let mut total = Vec3::ZERO;
+        for (u, v) in strata.samples(rng) {
+            let (dir, _) = diffuse_sample(n, u, v);
+            if samples > 0 {
+                counts.shadow += 1;
+                if self.accel.occluded(&s.spawn_ray(dir)) {
+                    continue;
+                }
+            }
+            total += sky.radiance(dir);
+        }
+        total * transmittance(fog, f32::INFINITY) / count as f32
+    }
+
+    /// The light `fog` scatters into `ray` over its first `length` (∞: the ray leaves the
+    /// scene): single scattering of every light, each by `-num_shadow_samples` points
+    /// (the centre for 0 and 1, 0 leaving visibility out as at surfaces) with the distance
+    /// along the ray sampled equiangularly about each point (Kulla & Fajardo 2012: the
+    /// density follows the 1/r² of the light's falloff, so a small light's glow costs no
+    /// more samples than a surface's shadow); and the ambient term scattered in, which a
+    /// constant radiance gives in closed form: (σs/σt)·(1 − transmittance)·ambient.
+    fn in_scattered(
+        &self,
+        fog: &Medium,
+        ray: &Ray,
+        length: f32,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
+        let scale = ray.direction.length();
+        if fog.sigma_s.max_element() <= 0.0 || scale.is_nan() || scale <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let travel = ray.direction / scale;
+        let sigma_t = fog.sigma_t();
+        let albedo = Color::new(
+            ratio(fog.sigma_s.x, sigma_t.x),
+            ratio(fog.sigma_s.y, sigma_t.y),
+            ratio(fog.sigma_s.z, sigma_t.z),
+        );
+        let mut total =
+            albedo * (Vec3::ONE - fog.transmittance(length)) * self.settings.ambient_light;
+        let samples = self.settings.num_shadow_samples;
+        let count = samples.max(1);
+        for light in &self.lights {
+            for _ in 0..count {
+                let (u, v, w) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
+                let point = if samples <= 1 {
+                    light.centre(ray.origin)
+                } else {
+                    light.sample(u, v)
+                };
+                let Some((t, pdf)) = equiangular(ray.origin, travel, length, point.point, w) else {
+                    continue;
+                };
+                let x = ray.origin + travel * t;
+                let to_light = point.point - x;
+                let r2 = to_light.length_squared();
+                let r = r2.sqrt();
+                let cos_light = -point.normal.dot(to_light) / r;
+                let cos_light = if point.one_sided {
+                    cos_light
+                } else {
+                    cos_light.abs()
+                };
+                if cos_light.is_nan() || cos_light <= 0.0 || r2 <= 0.0 {
+                    continue;
+                }
+                if samples > 0 {
+                    counts.shadow += 1;
+                    if self.accel.occluded(&shadow_ray(x, point.point)) {
+                        continue;
+                    }
+                }
+                // Area-sampled point: radiance × cos' × area / r² is the light's solid angle
+                // integral of its radiance, one point's share.
+                let geometry = cos_light * light.area / r2 / count as f32;
+                total += light.emitted
+                    * fog.sigma_s
+                    * fog.transmittance(t)
+                    * fog.transmittance(r)
+                    * (fog.phase(travel, to_light / r) * geometry / pdf);
             }
         }
         total
@@ -272,8 +424,16 @@ impl Tracer<'_> {
     }
 
     /// Direct irradiance at a surface point divided by π, so that albedo × this is the
-    /// reflected radiance. `n`: the normal on the side being lit.
-    fn direct(&self, s: &SurfaceHit, n: Vec3, rng: &mut Rng, counts: &mut Counts) -> Color {
+    /// reflected radiance. `n`: the normal on the side being lit; `fog`: the medium the
+    /// light crosses to reach it, if any.
+    fn direct(
+        &self,
+        s: &SurfaceHit,
+        n: Vec3,
+        fog: Option<&Medium>,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
         let samples = self.settings.num_shadow_samples;
         let count = samples.max(1) as usize;
         // Every shadow ray leaves on the lit side (n · dir > 0): one offset origin serves all.
@@ -290,8 +450,11 @@ impl Tracer<'_> {
             }
             let per_sample = light.area / count as f32 / std::f32::consts::PI;
             if samples == 0 {
-                if let Some(g) = geometric_term(s.point, n, &light.centre(s.point)) {
-                    total += light.emitted * (g * per_sample);
+                let centre = light.centre(s.point);
+                if let Some(g) = geometric_term(s.point, n, &centre) {
+                    total += light.emitted
+                        * transmittance(fog, s.point.distance(centre.point))
+                        * (g * per_sample);
                 }
                 continue;
             }
@@ -307,9 +470,11 @@ impl Tracer<'_> {
             };
             if samples == 1 {
                 batch.push(light.centre(s.point));
-            } else if let (LightSampling::Adaptive, LightShape::Parallelogram(quad)) =
-                (self.settings.light_sampling, &light.shape)
+            } else if let (LightSampling::Adaptive, LightShape::Parallelogram(quad), None) =
+                (self.settings.light_sampling, &light.shape, fog)
             {
+                // (In fog the light's corners do not bound what each point brings through
+                // the medium: the points are sampled by solid angle below instead.)
                 let mut rays = 0;
                 let visible = visible_form_factor(
                     s.point,
@@ -327,7 +492,9 @@ impl Tracer<'_> {
                 total += light.emitted * visible;
                 continue;
             } else {
-                let by_solid_angle = if self.settings.light_sampling == LightSampling::SolidAngle {
+                let by_solid_angle = if self.settings.light_sampling == LightSampling::SolidAngle
+                    || (self.settings.light_sampling == LightSampling::Adaptive && fog.is_some())
+                {
                     light.solid_angle_sampler(s.point)
                 } else {
                     None
@@ -462,6 +629,49 @@ fn record_segment(
     }
 }
 
+/// The transmittance of `fog` over `distance`; 1 without fog.
+#[inline]
+fn transmittance(fog: Option<&Medium>, distance: f32) -> Color {
+    fog.map_or(Vec3::ONE, |m| m.transmittance(distance))
+}
+
+/// a / b, 0 where b is 0.
+fn ratio(a: f32, b: f32) -> f32 {
+    if b > 0.0 {
+        a / b
+    } else {
+        0.0
+    }
+}
+
+/// A distance t in [0, `length`) along the unit `travel` from `origin`, sampled with density
+/// proportional to 1/r² of the distance r to `point` (equiangular sampling: uniform in the
+/// angle subtended at `point`), from a uniform `u`; with its density. None where the ray
+/// passes through the point.
+fn equiangular(origin: Vec3, travel: Vec3, length: f32, point: Vec3, u: f32) -> Option<(f32, f32)> {
+    let along = (point - origin).dot(travel);
+    let distance = ((point - origin).length_squared() - along * along)
+        .max(0.0)
+        .sqrt();
+    if distance.is_nan() || distance <= 1e-7 {
+        return None;
+    }
+    let first = (-along / distance).atan();
+    let last = if length.is_finite() {
+        ((length - along) / distance).atan()
+    } else {
+        std::f32::consts::FRAC_PI_2
+    };
+    let span = last - first;
+    if span.is_nan() || span <= 0.0 {
+        return None;
+    }
+    let t = (along + distance * (first + u * span).tan()).clamp(0.0, length);
+    let offset = t - along;
+    let pdf = distance / (span * (distance * distance + offset * offset));
+    (pdf > 0.0 && pdf.is_finite() && t.is_finite()).then_some((t, pdf))
+}
+
 /// cosθ·cosθ'/r² between the surface point `x` (normal `n`, on the lit side) and the light
 /// point `p`, or None where either faces away. With w unnormalised it is (n·w)(−n'·w)/r⁴: no
 /// square root.
@@ -501,7 +711,7 @@ pub fn render_with(
         accel,
         &settings.image(),
         "raytrace",
-        |ray, hit, rng, counts| tracer.shade(ray, hit, Branch::PRIMARY, rng, counts),
+        |ray, hit, rng, counts| tracer.shade(ray, hit, Branch::primary(scene), rng, counts),
     )
 }
 
@@ -526,7 +736,7 @@ pub fn ray_tree(
         let (ray, mut rng) = camera.sample((x, y), k);
         let hit = crate::accel::closest_surface(accel, scene, &ray);
         tracer.record(&ray, hit.as_ref(), SegmentKind::Eye);
-        tracer.shade(&ray, hit, Branch::PRIMARY, &mut rng, &mut counts);
+        tracer.shade(&ray, hit, Branch::primary(scene), &mut rng, &mut counts);
     }
     tracer
         .tree
