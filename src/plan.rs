@@ -21,6 +21,10 @@ pub struct Plan {
     /// Textures decoded: those of materials some primitive uses.
     pub textures: usize,
     pub emitters: usize,
+    /// The fog the render traces through ("medium 0: σa …, σs …, g …"), None without one.
+    pub fog: Option<String>,
+    /// The sky that lights the render ("uniform …", "gradient …"), None without one.
+    pub sky: Option<String>,
     /// What the engine builds beyond the image and the Accel, by name, and "no" for what
     /// the other engines would build (every name any engine reports, in engine order).
     pub structures: Vec<(&'static str, String)>,
@@ -75,6 +79,28 @@ impl Plan {
             shapes: shape_counts(scene),
             textures: scene.textures.len(),
             emitters,
+            fog: scene.fog.map(|k| {
+                let m = &scene.media[k];
+                let v = |c: crate::geometry::Vec3| format!("{} {} {}", c.x, c.y, c.z);
+                format!(
+                    "medium {k} (sigma_a {}, sigma_s {}, g {}): transmittance on every segment, scattering traced",
+                    v(m.sigma_a),
+                    v(m.sigma_s),
+                    m.g
+                )
+            }),
+            sky: scene.sky.map(|sky| {
+                let v = |c: crate::geometry::Vec3| format!("{} {} {}", c.x, c.y, c.z);
+                match sky {
+                    crate::scene::sky::Sky::Uniform(c) => format!("uniform {}: lights the scene", v(c)),
+                    crate::scene::sky::Sky::Gradient { zenith, horizon, nadir } => format!(
+                        "gradient (zenith {}, horizon {}, nadir {}): lights the scene",
+                        v(zenith),
+                        v(horizon),
+                        v(nadir)
+                    ),
+                }
+            }),
             structures,
         }
     }
@@ -219,6 +245,9 @@ impl fmt::Display for Plan {
         }
         writeln!(f, "textures decoded: {}", self.textures)?;
         writeln!(f, "emitters: {}", self.emitters)?;
+        // Nothing of media or skies is built or traced for a scene without them.
+        writeln!(f, "fog: {}", self.fog.as_deref().unwrap_or("none"))?;
+        writeln!(f, "sky: {}", self.sky.as_deref().unwrap_or("none"))?;
         for (name, what) in &self.structures {
             writeln!(f, "{name}: {what}")?;
         }

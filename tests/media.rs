@@ -332,3 +332,32 @@ fn the_path_tracer_scatters_a_small_light_into_a_passing_ray_as_the_integral_say
         }
     }
 }
+
+/// `--plan` says which fog and sky a render traces, and "none" for a scene without them.
+#[test]
+fn the_plan_says_which_fog_and_sky_a_render_traces() {
+    let plan = |scene: &str| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+            .args(["-input", scene, "--plan"])
+            .output()
+            .expect("runs");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let scenes = common::own_scene_dir();
+    let fog = plan(scenes.join("cornell_box_fog.obj").to_str().unwrap());
+    assert!(
+        fog.contains("fog: medium 0 (sigma_a 0.02 0.02 0.02, sigma_s 0.45 0.45 0.45, g 0.3)"),
+        "{fog}"
+    );
+    assert!(fog.contains("sky: none"), "{fog}");
+    let plain = plan(scenes.join("cornell_box.obj").to_str().unwrap());
+    assert!(
+        plain.contains("fog: none") && plain.contains("sky: none"),
+        "{plain}"
+    );
+}
