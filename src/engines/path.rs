@@ -56,7 +56,7 @@ struct Previous {
     /// The normal the direction was sampled about (light sampling's density depends on it).
     normal: Vec3,
     bsdf_pdf: Option<f32>,
-    /// The vertex scattered in a medium: lights were sampled from it by area.
+    /// The vertex scattered in a medium: lights were sampled from it by `sample_from_medium`.
     in_medium: bool,
 }
 
@@ -92,7 +92,7 @@ impl PathTracer<'_> {
         let light = &self.lights[k];
         self.selection_probability(k)
             * if from.in_medium {
-                light.pdf_by_area(from.point, hit.point, hit.geometric_normal)
+                light.pdf_from_medium(from.point, hit.point, hit.geometric_normal)
             } else {
                 light.pdf_towards(from.point, from.normal, hit.point, hit.geometric_normal)
             }
@@ -114,8 +114,9 @@ impl PathTracer<'_> {
 
     /// Next-event estimation at a point `x` of `medium` reached travelling along the unit
     /// `travel`: in-scattered radiance per unit σs-weighted throughput from one light point
-    /// chosen by area, with the transmittance to it, weighted against sampling the phase
-    /// function by the power heuristic.
+    /// (uniform in a rectangle's solid angle, by area on other lights), with the
+    /// transmittance to it, weighted against sampling the phase function by the power
+    /// heuristic.
     fn sample_light_in_medium(
         &self,
         x: Vec3,
@@ -128,7 +129,7 @@ impl PathTracer<'_> {
             return Vec3::ZERO;
         };
         let light = &self.lights[k];
-        let Some(d) = light.sample_by_area(x, rng.next_f32(), rng.next_f32()) else {
+        let Some(d) = light.sample_from_medium(x, rng.next_f32(), rng.next_f32()) else {
             return Vec3::ZERO;
         };
         let to_light = d.point - x;

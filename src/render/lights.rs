@@ -361,6 +361,31 @@ impl Light {
         }
     }
 
+    /// One point of this light for next-event estimation from `x` inside a medium (no
+    /// receiver cosine to follow): uniform in the solid angle a rectangle subtends, which
+    /// keeps the weight bounded however near the light `x` is; by area on other lights. The
+    /// density is in solid angle (`pdf_from_medium` gives it for any point).
+    pub fn sample_from_medium(&self, x: Vec3, u: f32, v: f32) -> Option<DirectSample> {
+        let Some(SolidAngleSampler::Rectangle(rect)) = self.solid_angle_sampler(x) else {
+            return self.sample_by_area(x, u, v);
+        };
+        let pdf = (1.0 / rect.solid_angle()) as f32;
+        (pdf.is_finite() && pdf > 0.0).then(|| DirectSample {
+            point: rect.sample(u, v),
+            weight: pdf.recip(),
+            pdf,
+        })
+    }
+
+    /// The density in solid angle with which `sample_from_medium` from `x` gives the point
+    /// `p` of this light, of unit normal `normal` there.
+    pub fn pdf_from_medium(&self, x: Vec3, p: Vec3, normal: Vec3) -> f32 {
+        match self.solid_angle_sampler(x) {
+            Some(SolidAngleSampler::Rectangle(rect)) => (1.0 / rect.solid_angle()) as f32,
+            _ => self.pdf_by_area(x, p, normal),
+        }
+    }
+
     /// One point of this light for the shading point `x` with unit normal `n` (on its lit
     /// side), from (u, v) in [0,1)²: by `SolidAngleSampler::sample_towards` where
     /// `solid_angle_sampler` gives one, else uniform by area (cosθ·cosθ'·A/(π·r²)). None
