@@ -239,6 +239,12 @@ impl Scene {
             },
             ..camera
         });
+        // Coefficients are per scene unit: a medium scaled with the scene keeps its optical
+        // depths, and the image.
+        for m in &mut s.media {
+            m.sigma_a /= scale;
+            m.sigma_s /= scale;
+        }
         s.quad_neighbours = Default::default();
         s
     }
