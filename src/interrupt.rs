@@ -28,7 +28,12 @@ pub fn install() {
 
 /// Whether Ctrl-C has been pressed or the running job is superseded.
 pub fn requested() -> bool {
-    REQUESTED.load(Ordering::Relaxed) || superseded()
+    ctrl_c() || superseded()
+}
+
+/// Whether Ctrl-C has been pressed.
+pub fn ctrl_c() -> bool {
+    REQUESTED.load(Ordering::Relaxed)
 }
 
 /// Whether a newer job than the running one has been submitted.

@@ -288,20 +288,31 @@ fn small_light_in_fog(sigma_a: f64, sigma_s: f64, g: f64) -> (Scene, f64) {
 /// (g 0.6) off; at 16 and 16, +0.4% and +1.5% (seed 0).
 #[test]
 fn the_ray_tracer_scatters_a_small_light_into_a_passing_ray_as_the_integral_says() {
+    let settings = RenderSettings {
+        num_shadow_samples: 64,
+        num_antialias_samples: 64,
+        ambient_light: trilux::geometry::Vec3::ZERO,
+        ..RenderSettings::default()
+    };
+    single_scattering_within_2_percent("ray tracer", raytrace::render, (0.2, 0.3), settings);
+}
+
+/// Renders `small_light_in_fog` with `engine` (isotropic, then g = 0.6) and asserts the mean
+/// pixel within 2% of the integral.
+fn single_scattering_within_2_percent(
+    name: &str,
+    engine: Engine,
+    (sigma_a, sigma_s): (f64, f64),
+    settings: RenderSettings,
+) {
     for g in [0.0, 0.6] {
-        let (scene, truth) = small_light_in_fog(0.2, 0.3, g);
+        let (scene, truth) = small_light_in_fog(sigma_a, sigma_s, g);
         for kind in backends() {
-            let settings = RenderSettings {
-                num_shadow_samples: 64,
-                num_antialias_samples: 64,
-                ambient_light: trilux::geometry::Vec3::ZERO,
-                ..RenderSettings::default()
-            };
-            let mean = mean_of(raytrace::render, &scene, kind, settings);
-            println!("single scattering, ray tracer, g {g} ({kind}): {mean:?} against {truth}");
+            let mean = mean_of(engine, &scene, kind, settings.clone());
+            println!("single scattering, {name}, g {g} ({kind}): {mean:?} against {truth}");
             assert!(
                 (mean[0] / truth - 1.0).abs() < 0.02,
-                "{kind}: g {g}: {} against {truth}",
+                "{name} ({kind}): g {g}: {} against {truth}",
                 mean[0]
             );
         }
@@ -315,22 +326,11 @@ fn the_ray_tracer_scatters_a_small_light_into_a_passing_ray_as_the_integral_says
 /// adds 6.2% at albedo 0.1 and 0.6–0.9% at albedo 0.01, the fog here.
 #[test]
 fn the_path_tracer_scatters_a_small_light_into_a_passing_ray_as_the_integral_says() {
-    for g in [0.0, 0.6] {
-        let (scene, truth) = small_light_in_fog(0.495, 0.005, g);
-        for kind in backends() {
-            let settings = RenderSettings {
-                num_antialias_samples: 4096,
-                ..RenderSettings::default()
-            };
-            let mean = mean_of(path::render, &scene, kind, settings);
-            println!("single scattering, path tracer, g {g} ({kind}): {mean:?} against {truth}");
-            assert!(
-                (mean[0] / truth - 1.0).abs() < 0.02,
-                "{kind}: g {g}: {} against {truth}",
-                mean[0]
-            );
-        }
-    }
+    let settings = RenderSettings {
+        num_antialias_samples: 4096,
+        ..RenderSettings::default()
+    };
+    single_scattering_within_2_percent("path tracer", path::render, (0.495, 0.005), settings);
 }
 
 /// `--plan` says which fog and sky a render traces, and "none" for a scene without them.

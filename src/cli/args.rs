@@ -668,6 +668,13 @@ impl RenderArgs {
         chosen
     }
 
+    /// The Accel asked for (`--accel`), or the best this build has.
+    pub fn accel_kind(&self) -> AccelKind {
+        self.common
+            .accel
+            .unwrap_or_else(AccelKind::default_available)
+    }
+
     pub fn accel_options(&self) -> AccelOptions {
         AccelOptions {
             embree_quality: self.common.embree_quality,

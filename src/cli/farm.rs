@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use super::{normalize_args, Cli};
-use crate::accel::AccelKind;
 use crate::engines;
 use crate::farm::{self, Farm, Split};
 use crate::plan::Plan;
@@ -205,10 +204,7 @@ pub fn run(args: &FarmArgs) -> Result<(), String> {
     }
     let loads_pre_pass = settings.photon.load.is_some() || settings.radiosity.load.is_some();
     let pre_pass = engine_impl.pre_pass(&settings).filter(|_| !loads_pre_pass);
-    let accel = render
-        .common
-        .accel
-        .unwrap_or_else(AccelKind::default_available);
+    let accel = render.accel_kind();
     let plan = Plan::new(&scene, engine, accel, &settings);
     let stem = scene_path
         .file_stem()

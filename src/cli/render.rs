@@ -6,7 +6,7 @@ use std::sync::atomic::Ordering::Relaxed;
 use std::time::Instant;
 
 use super::{emit, RenderArgs};
-use crate::accel::{self, Accel, AccelKind};
+use crate::accel::{self, Accel};
 use crate::engines::{self, raytrace, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::plan::Plan;
@@ -27,10 +27,7 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     let engine = args.engine();
     let scene = load_scene(args, input, engine)?;
     let load_s = load_start.elapsed().as_secs_f64();
-    let kind = args
-        .common
-        .accel
-        .unwrap_or_else(AccelKind::default_available);
+    let kind = args.accel_kind();
     let plan = Plan::new(&scene, engine, kind, &settings);
     let unused = args.unused_flags();
     if args.common.plan {

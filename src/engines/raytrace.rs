@@ -44,6 +44,8 @@ struct Tracer<'a> {
     tree: Option<std::sync::Mutex<Vec<Segment>>>,
     /// The medium that fills the space where the camera is (`fog K`), if any.
     fog: Option<Medium>,
+    /// Where the directions towards the sky go (`-num_shadow_samples`, at least one).
+    sky_strata: Strata,
 }
 
 /// How a ray was chosen, for weighing the emitter it finds: from the camera or by a delta
@@ -84,6 +86,10 @@ impl<'a> Tracer<'a> {
             ),
             tree,
             fog: scene.fog.map(|k| scene.media[k]),
+            sky_strata: Strata::new(
+                crate::sampling::Pattern::Jittered,
+                settings.num_shadow_samples.max(1),
+            ),
         }
     }
 }
@@ -135,16 +141,20 @@ impl Tracer<'_> {
         rng: &mut Rng,
         counts: &mut Counts,
     ) -> Color {
-        let fog = self.fog.filter(|_| branch.in_fog);
-        let Some(fog) = fog else {
+        let Some(fog) = self.fog_on(branch) else {
             return self.leaving(ray, hit, branch, rng, counts);
         };
         let length = hit
             .as_ref()
             .map_or(f32::INFINITY, |s| s.point.distance(ray.origin));
-        let in_scattered = self.in_scattered(&fog, ray, length, rng, counts);
+        let in_scattered = self.in_scattered(fog, ray, length, rng, counts);
         let leaving = self.leaving(ray, hit, branch, rng, counts);
         fog.transmittance(length) * leaving + in_scattered
+    }
+
+    /// The fog `branch`'s ray travels through, if any.
+    fn fog_on(&self, branch: Branch) -> Option<&Medium> {
+        self.fog.as_ref().filter(|_| branch.in_fog)
     }
 
     /// Radiance leaving the closest hit `hit` back along `ray` (the background where there
@@ -172,9 +182,9 @@ impl Tracer<'_> {
         }
         let albedo = self.scene.albedo(&s);
         if albedo.max_element() > 0.0 {
-            let fog = self.fog.filter(|_| branch.in_fog);
-            let irradiance_over_pi = self.direct(&s, n, fog.as_ref(), rng, counts)
-                + self.sky_light(&s, n, fog.as_ref(), rng, counts);
+            let fog = self.fog_on(branch);
+            let irradiance_over_pi =
+                self.direct(&s, n, fog, rng, counts) + self.sky_light(&s, n, fog, rng, counts);
             let indirect = self
                 .indirect
                 .incident(self.scene, self.accel, &s, n, branch.depth, rng);
@@ -191,8 +201,7 @@ impl Tracer<'_> {
                     self.trace(&r, branch.child(Arrival::Delta, reflective), rng, counts)
                 }
                 Some(lobe) => {
-                    let fog = self.fog.filter(|_| branch.in_fog);
-                    let lit = self.glossy_direct(&s, n, &lobe, fog.as_ref(), rng, counts);
+                    let lit = self.glossy_direct(&s, n, &lobe, self.fog_on(branch), rng, counts);
                     let (dir, pdf) = lobe.sample(rng.next_f32(), rng.next_f32());
                     let arrival = match pdf {
                         Some(pdf) if self.samples_glossy_lights() => Arrival::Glossy {
@@ -322,9 +331,8 @@ impl Tracer<'_> {
         };
         let samples = self.settings.num_shadow_samples;
         let count = samples.max(1);
-        let strata = Strata::new(crate::sampling::Pattern::Jittered, count);
         let mut total = Vec3::ZERO;
-        for (u, v) in strata.samples(rng) {
+        for (u, v) in self.sky_strata.samples(rng) {
             let (dir, _) = diffuse_sample(n, u, v);
             if samples > 0 {
                 counts.shadow += 1;
@@ -357,14 +365,8 @@ impl Tracer<'_> {
             return Vec3::ZERO;
         }
         let travel = ray.direction / scale;
-        let sigma_t = fog.sigma_t();
-        let albedo = Color::new(
-            ratio(fog.sigma_s.x, sigma_t.x),
-            ratio(fog.sigma_s.y, sigma_t.y),
-            ratio(fog.sigma_s.z, sigma_t.z),
-        );
         let mut total =
-            albedo * (Vec3::ONE - fog.transmittance(length)) * self.settings.ambient_light;
+            fog.albedo() * (Vec3::ONE - fog.transmittance(length)) * self.settings.ambient_light;
         let samples = self.settings.num_shadow_samples;
         let count = samples.max(1);
         for light in &self.lights {
@@ -633,15 +635,6 @@ fn record_segment(
 #[inline]
 fn transmittance(fog: Option<&Medium>, distance: f32) -> Color {
     fog.map_or(Vec3::ONE, |m| m.transmittance(distance))
-}
-
-/// a / b, 0 where b is 0.
-fn ratio(a: f32, b: f32) -> f32 {
-    if b > 0.0 {
-        a / b
-    } else {
-        0.0
-    }
 }
 
 /// A distance t in [0, `length`) along the unit `travel` from `origin`, sampled with density

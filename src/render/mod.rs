@@ -328,7 +328,7 @@ fn take_samples(
     // Ctrl-C during what came before (a radiosity solve, photon tracing) stopped that, and
     // the pixels show what it made; Ctrl-C during the pixels stops them. A superseded
     // viewer job stops wherever it is: nobody will see its image.
-    let interrupted_before = crate::interrupt::requested() && !crate::interrupt::superseded();
+    let interrupted_before = crate::interrupt::ctrl_c();
     film.pixels
         .par_chunks_mut(w as usize)
         .enumerate()

@@ -45,6 +45,17 @@ impl Medium {
         self.sigma_a + self.sigma_s
     }
 
+    /// The single-scattering albedo σs/σt per channel (0 where σt is 0).
+    pub fn albedo(&self) -> Color {
+        let sigma_t = self.sigma_t();
+        let ratio = |s: f32, t: f32| if t > 0.0 { s / t } else { 0.0 };
+        Color::new(
+            ratio(self.sigma_s.x, sigma_t.x),
+            ratio(self.sigma_s.y, sigma_t.y),
+            ratio(self.sigma_s.z, sigma_t.z),
+        )
+    }
+
     /// The fraction of light that crosses `distance` of the medium: exp(−σt·d) per channel.
     pub fn transmittance(&self, distance: f32) -> Color {
         let sigma_t = self.sigma_t();

@@ -5,7 +5,6 @@
 use std::path::{Path, PathBuf};
 
 use super::worker::Job;
-use crate::accel::AccelKind;
 use crate::cli::{normalize_args, Cli, RenderArgs};
 use crate::engines::{EngineKind, RenderSettings};
 use crate::scene::{Camera, Projection, Scene};
@@ -108,7 +107,7 @@ impl Session {
         let scene = crate::cli::render::load_scene(&args, &input, engine)?;
         // As `render` plans: refused above --max-memory, and the hierarchical solver bounded
         // by what the limit leaves.
-        let plan = crate::plan::Plan::new(&scene, engine, accel_kind(&args), &settings);
+        let plan = crate::plan::Plan::new(&scene, engine, args.accel_kind(), &settings);
         settings.radiosity.memory_budget = crate::cli::render::check_memory(&plan, &args)?;
         let mut camera = scene.camera();
         let fov_degrees = match camera.projection {
@@ -177,13 +176,6 @@ impl Session {
         words.push(format!("-o {}", shell_word(&output.to_string_lossy())));
         words.join(" ")
     }
-}
-
-/// The Accel the flags ask for, or the best this build has.
-pub fn accel_kind(args: &RenderArgs) -> AccelKind {
-    args.common
-        .accel
-        .unwrap_or_else(AccelKind::default_available)
 }
 
 /// The flags without those named in `replaced` and their values (the viewer prints its

@@ -2,6 +2,7 @@
 //! framebuffer (softbuffer), keys and mouse turned into jobs for the render thread. Nothing
 //! here renders: the event loop never waits for an image.
 
+use std::borrow::Cow;
 use std::num::NonZeroU32;
 use std::rc::Rc;
 
@@ -210,7 +211,10 @@ impl App {
 
     /// Draws the image on screen, centred on black if the window is larger.
     fn draw(&mut self) -> Result<(), String> {
-        let image = self.on_screen();
+        // The pixels as 8-bit sRGB, with the image's size, before the surface is borrowed.
+        let image = self
+            .on_screen()
+            .map(|f| (f.to_srgb8(), f.width as usize, f.height as usize));
         let (Some(window), Some(surface)) = (&self.window, &mut self.surface) else {
             return Ok(());
         };
@@ -222,9 +226,7 @@ impl App {
         surface.resize(w, h).map_err(fail)?;
         let mut buffer = surface.buffer_mut().map_err(fail)?;
         buffer.fill(0);
-        if let Some(film) = image {
-            let rgb = film.to_srgb8();
-            let (fw, fh) = (film.width as usize, film.height as usize);
+        if let Some((rgb, fw, fh)) = image {
             let (ww, wh) = (size.width as usize, size.height as usize);
             let (x0, y0) = (ww.saturating_sub(fw) / 2, wh.saturating_sub(fh) / 2);
             for row in 0..fh.min(wh) {
@@ -238,12 +240,17 @@ impl App {
         buffer.present().map_err(fail)
     }
 
-    /// The image on screen: the shown frame, with the ray tree drawn over it.
-    fn on_screen(&self) -> Option<Film> {
+    /// The image on screen: the shown frame, with the ray tree drawn over it (a copy only
+    /// then).
+    fn on_screen(&self) -> Option<Cow<'_, Film>> {
         let frame = self.shown.as_ref()?;
         Some(match &self.ray_tree {
-            Some(tree) => ray_tree::overlay(&frame.film, &frame.job.camera, &tree.segments),
-            None => frame.film.clone(),
+            Some(tree) => Cow::Owned(ray_tree::overlay(
+                &frame.film,
+                &frame.job.camera,
+                &tree.segments,
+            )),
+            None => Cow::Borrowed(&frame.film),
         })
     }
 
