@@ -483,6 +483,10 @@ pub struct PhotonArgs {
     /// Largest radius of a photon density estimate, as a fraction of the scene's diagonal.
     #[arg(long, default_value_t = photon_defaults().max_radius, allow_negative_numbers = true)]
     pub photon_max_radius: f32,
+    /// Points per camera or mirror ray in the fog at which the volume photon map is looked
+    /// up (jittered, evenly spaced over the part of the ray among the volume photons).
+    #[arg(long, default_value_t = photon_defaults().volume_steps)]
+    pub volume_steps: u32,
     /// Hemisphere rays per final gather (-gather_indirect).
     #[arg(long, default_value_t = photon_defaults().final_gather_rays)]
     pub final_gather_rays: u32,
@@ -545,6 +549,7 @@ impl PhotonArgs {
             max_photon_depth: self.max_photon_depth,
             max_radius: self.photon_max_radius,
             gather_indirect: self.gather_indirect,
+            volume_steps: self.volume_steps,
             final_gather_rays: self.final_gather_rays,
             irradiance_cache_error: self.irradiance_cache_error,
             irradiance_cache_spacing: self.irradiance_cache_spacing,
@@ -873,6 +878,11 @@ impl RenderArgs {
             1..=u32::MAX,
         )?;
         check_count("final_gather_rays", p.final_gather_rays, 1..=u32::MAX)?;
+        check_count(
+            "volume_steps",
+            p.volume_steps,
+            1..=photon::settings::MAX_VOLUME_STEPS,
+        )?;
         check_number("sppm_radius", self.sppm.sppm_radius, 0.0, true)?;
         if let Some(n) = self.sppm.sppm_photons {
             check_count("sppm_photons", n, 1..=u64::MAX)?;

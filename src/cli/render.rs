@@ -192,29 +192,44 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
             input.display()
         ));
     }
-    // What an engine does not render yet is refused, not left out (issue #18): fog and skies
-    // are the path tracer's and the ray tracer's (not with radiosity as its indirect light,
-    // whose solution leaves them out).
+    refuse_unrendered_media(args, input, engine, &scene)?;
+    Ok(scene)
+}
+
+/// What an engine does not render yet is refused, not left out (issue #18): fog and skies
+/// are the path tracer's, the ray tracer's (not with radiosity as its indirect light, whose
+/// solution leaves them out) and the photon engine's (fog not with final gathering, whose
+/// gather rays leave it out); radiosity takes a sky, not fog (its form factors are one number
+/// for all channels, a coloured fog's transmittance is not).
+fn refuse_unrendered_media(
+    args: &RenderArgs,
+    input: &Path,
+    engine: EngineKind,
+    scene: &Scene,
+) -> Result<(), String> {
     let radiosity_indirect = args.ray_trace.indirect == engines::IndirectKind::Radiosity;
-    let renders_media = match engine {
-        EngineKind::Path | EngineKind::Raycast => true,
-        EngineKind::Raytrace => !radiosity_indirect,
-        _ => false,
-    };
-    let what = match (scene.fog.is_some(), scene.sky.is_some()) {
-        _ if renders_media => return Ok(scene),
-        (true, _) => "fog",
-        (_, true) => "a sky",
-        _ => return Ok(scene),
-    };
-    Err(format!(
-        "{}: the scene has {what}, which the path tracer and the ray tracer render so far (--engine path, or raytrace without --indirect radiosity); the {engine} engine{} would leave it out",
-        input.display(),
-        if engine == EngineKind::Raytrace && radiosity_indirect {
-            " with --indirect radiosity"
-        } else {
-            ""
+    let gathering = args.photon.gather_indirect;
+    let (fog, sky) = (scene.fog.is_some(), scene.sky.is_some());
+    let refused = match engine {
+        EngineKind::Path | EngineKind::Raycast => None,
+        EngineKind::Raytrace if radiosity_indirect && (fog || sky) => {
+            Some(" with --indirect radiosity")
         }
+        EngineKind::Raytrace => None,
+        EngineKind::Photon if gathering && fog => Some(" with -gather_indirect"),
+        EngineKind::Photon => None,
+        EngineKind::Radiosity if fog => Some(""),
+        EngineKind::Radiosity => None,
+        _ if fog || sky => Some(""),
+        _ => None,
+    };
+    let Some(how) = refused else {
+        return Ok(());
+    };
+    let what = if fog { "fog" } else { "a sky" };
+    Err(format!(
+        "{}: the scene has {what}, which the path tracer, the ray tracer and the photon engine render so far (--engine path, raytrace without --indirect radiosity, photon without -gather_indirect in fog; radiosity takes a sky, not fog); the {engine} engine{how} would leave it out",
+        input.display(),
     ))
 }
 

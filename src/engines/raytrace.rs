@@ -147,7 +147,8 @@ impl Tracer<'_> {
         let length = hit
             .as_ref()
             .map_or(f32::INFINITY, |s| s.point.distance(ray.origin));
-        let in_scattered = self.in_scattered(fog, ray, length, rng, counts);
+        let in_scattered = self.in_scattered(fog, ray, length, rng, counts)
+            + self.indirect.in_scattered(fog, ray, length, rng);
         let leaving = self.leaving(ray, hit, branch, rng, counts);
         fog.transmittance(length) * leaving + in_scattered
     }
@@ -350,8 +351,8 @@ impl Tracer<'_> {
     /// (the centre for 0 and 1, 0 leaving visibility out as at surfaces) with the distance
     /// along the ray sampled equiangularly about each point (Kulla & Fajardo 2012: the
     /// density follows the 1/r² of the light's falloff, so a small light's glow costs no
-    /// more samples than a surface's shadow); and the ambient term scattered in, which a
-    /// constant radiance gives in closed form: (σs/σt)·(1 − transmittance)·ambient.
+    /// more samples than a surface's shadow). The indirect light's share (the ambient term,
+    /// the volume photons) is `IndirectLight::in_scattered`'s.
     fn in_scattered(
         &self,
         fog: &Medium,
@@ -365,8 +366,7 @@ impl Tracer<'_> {
             return Vec3::ZERO;
         }
         let travel = ray.direction / scale;
-        let mut total =
-            fog.albedo() * (Vec3::ONE - fog.transmittance(length)) * self.settings.ambient_light;
+        let mut total = Vec3::ZERO;
         let samples = self.settings.num_shadow_samples;
         let count = samples.max(1);
         for light in &self.lights {
@@ -542,12 +542,19 @@ impl Tracer<'_> {
                 self.accel
                     .occluded_batch(&counts.shadow_rays[..n_rays], blocked);
                 counts.shadow += n_rays as u64;
-                let visible: f32 = counts.shadow_weights[..n_rays]
+                let unblocked = counts.shadow_weights[..n_rays]
                     .iter()
+                    .zip(&counts.shadow_rays[..n_rays])
                     .zip(blocked.iter())
                     .filter(|(_, &b)| !b)
-                    .map(|(w, _)| w)
-                    .sum();
+                    .map(|(wr, _)| wr);
+                let visible = match fog {
+                    // Each shadow ray spans the way to its light point: attenuated by that.
+                    Some(fog) => unblocked
+                        .map(|(w, ray)| fog.transmittance(ray.direction.length()) * *w)
+                        .sum(),
+                    None => Vec3::splat(unblocked.map(|(w, _)| w).sum()),
+                };
                 total += light.emitted * visible;
             }
         }

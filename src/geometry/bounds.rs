@@ -54,10 +54,62 @@ impl Bounds3 {
     pub fn centre(&self) -> Vec3 {
         (self.min + self.max) * 0.5
     }
+    /// Whether `p` lies in the box (boundary included).
+    #[inline]
+    pub fn contains(&self, p: Vec3) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+    /// The part of the ray `origin + t·direction`, 0 ≤ t ≤ `t_max`, inside the box, as its
+    /// (entry, exit) parameters; None if it misses the box.
+    pub fn clip(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<(f32, f32)> {
+        let (mut near, mut far) = (0.0f32, t_max);
+        for axis in 0..3 {
+            let inv = direction[axis].recip();
+            let a = (self.min[axis] - origin[axis]) * inv;
+            let b = (self.max[axis] - origin[axis]) * inv;
+            let (a, b) = if a <= b { (a, b) } else { (b, a) };
+            // NaN (0·∞ on a slab's plane) leaves the interval as it was.
+            near = if a > near { a } else { near };
+            far = if b < far { b } else { far };
+        }
+        (near <= far && !self.is_empty()).then_some((near, far))
+    }
     /// Surface area; 0 for an empty box.
     #[inline]
     pub fn area(&self) -> f32 {
         let e = self.extent();
         2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::vec3;
+
+    #[test]
+    fn clip_keeps_the_part_inside() {
+        let b = Bounds3 {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+        };
+        let (near, far) = b
+            .clip(vec3(-1.0, 0.5, 0.5), vec3(1.0, 0.0, 0.0), 10.0)
+            .unwrap();
+        assert_eq!((near, far), (1.0, 2.0));
+        // Starting inside, stopping inside.
+        let (near, far) = b
+            .clip(vec3(0.5, 0.5, 0.5), vec3(0.0, 1.0, 0.0), 0.25)
+            .unwrap();
+        assert_eq!((near, far), (0.0, 0.25));
+        assert!(b
+            .clip(vec3(-1.0, 2.0, 0.5), vec3(1.0, 0.0, 0.0), 10.0)
+            .is_none());
+        assert!(b
+            .clip(vec3(-1.0, 0.5, 0.5), vec3(-1.0, 0.0, 0.0), 10.0)
+            .is_none());
+        assert!(Bounds3::EMPTY
+            .clip(Vec3::ZERO, vec3(1.0, 0.0, 0.0), 1.0)
+            .is_none());
     }
 }

@@ -5,8 +5,9 @@
 
 use crate::accel::Accel;
 use crate::color::Color;
-use crate::geometry::Vec3;
+use crate::geometry::{Ray, Vec3};
 use crate::sampling::Rng;
+use crate::scene::medium::Medium;
 use crate::scene::{Scene, SurfaceHit};
 
 /// A source of diffuse indirect light for the ray tracer.
@@ -23,6 +24,13 @@ pub trait IndirectLight: Sync {
         depth: u32,
         rng: &mut Rng,
     ) -> Color;
+
+    /// Radiance `medium` scatters into `ray` over the first `length` of distance (∞:
+    /// the ray leaves the scene) besides the single scattering of the lights, which the ray
+    /// tracer computes itself: light that has scattered or bounced before. None by default.
+    fn in_scattered(&self, _medium: &Medium, _ray: &Ray, _length: f32, _rng: &mut Rng) -> Color {
+        Color::ZERO
+    }
 }
 
 /// A constant incident radiance everywhere (`-ambient_light`, the course's stand-in).
@@ -39,5 +47,10 @@ impl IndirectLight for Ambient {
         _: &mut Rng,
     ) -> Color {
         self.0
+    }
+
+    /// The constant radiance scattered in, in closed form: (σs/σt)·(1 − transmittance)·L.
+    fn in_scattered(&self, medium: &Medium, _: &Ray, length: f32, _: &mut Rng) -> Color {
+        medium.albedo() * (Color::ONE - medium.transmittance(length)) * self.0
     }
 }

@@ -283,6 +283,11 @@ impl Scene {
             "{:?}{:?}{:?}{:?}{}",
             self.materials, self.quads, self.triangles, self.shapes, self.two_sided_quads
         );
+        // Only scenes with media or a sky hash them: the other scenes keep the hash (and the
+        // saved solutions and photon maps) they had before there were either.
+        if self.fog.is_some() || self.sky.is_some() || !self.media.is_empty() {
+            let _ = write!(h, "{:?}{:?}{:?}", self.media, self.fog, self.sky);
+        }
         for t in &self.textures {
             let _ = write!(h, "texture {}x{}", t.width, t.height);
             for texel in &t.texels {

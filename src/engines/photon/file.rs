@@ -3,15 +3,16 @@
 //! made for another scene or other settings is refused with a clear error.
 //!
 //! Layout: magic `TRILUXPM`, version (u32), fingerprint (u64), photons emitted by the main and
-//! by the caustic pass, photon rays, photons cut by the depth limit, global and caustic counts
-//! (u64 each), then each photon: position, direction, power, normal (3 × f32 each) and its path
-//! kind (u8). Version 2 added the caustic pass; version 3 keys the file by the loaded scene
-//! (materials, textures, `--two-sided`), not the scene file's bytes.
+//! by the caustic pass, photon rays, photons cut by the depth limit, global, caustic and volume
+//! counts (u64 each), then each photon: position, direction, power, normal (3 × f32 each) and
+//! its path kind (u8). Version 2 added the caustic pass; version 3 keys the file by the loaded
+//! scene (materials, textures, `--two-sided`, media, sky), not the scene file's bytes; version
+//! 4 added the volume map.
 
 use std::io::{Read, Write};
 use std::path::Path;
 
-use super::{PathKind, Photon, PhotonMap, PhotonMaps};
+use super::{PathKind, Photon, PhotonMaps};
 use crate::engines::engine::RenderSettings;
 use crate::geometry::vec3;
 use crate::output::{write_atomically, OutputError};
@@ -19,8 +20,8 @@ use crate::sampling::mix64;
 use crate::scene::Scene;
 
 const MAGIC: &[u8; 8] = b"TRILUXPM";
-const VERSION: u32 = 3;
-const HEADER_BYTES: usize = 8 + 4 + 7 * 8;
+const VERSION: u32 = 4;
+const HEADER_BYTES: usize = 8 + 4 + 8 * 8;
 const PHOTON_BYTES: usize = 12 * 4 + 1;
 
 /// A hash of the loaded scene (materials with their `.mtl` file, textures, `--two-sided`:
@@ -59,10 +60,12 @@ impl PhotonMaps {
                 self.truncated,
                 self.global.len() as u64,
                 self.caustic.len() as u64,
+                self.volume.len() as u64,
             ] {
                 w.write_all(&v.to_le_bytes()).map_err(io)?;
             }
-            for p in self.global.photons.iter().chain(&self.caustic.photons) {
+            let maps = [&self.global, &self.caustic, &self.volume];
+            for p in maps.iter().flat_map(|m| &m.photons) {
                 for v in [p.position, p.direction, p.power, p.normal] {
                     for c in v.to_array() {
                         w.write_all(&c.to_le_bytes()).map_err(io)?;
@@ -105,13 +108,14 @@ impl PhotonMaps {
         }
         let (emitted, caustic_emitted) = (u64_at(20), u64_at(28));
         let (rays, truncated) = (u64_at(36), u64_at(44));
-        let (n_global, n_caustic) = (u64_at(52), u64_at(60));
+        let (n_global, n_caustic, n_volume) = (u64_at(52), u64_at(60), u64_at(68));
         let count = n_global
             .checked_add(n_caustic)
+            .and_then(|n| n.checked_add(n_volume))
             .and_then(|n| usize::try_from(n).ok())
             .filter(|&n| n.checked_mul(PHOTON_BYTES) == Some(data.len() - HEADER_BYTES))
             .ok_or_else(|| {
-                format!("{name}: the file is truncated or damaged ({n_global} + {n_caustic} photons announced, {} bytes of photons)", data.len() - HEADER_BYTES)
+                format!("{name}: the file is truncated or damaged ({n_global} + {n_caustic} + {n_volume} photons announced, {} bytes of photons)", data.len() - HEADER_BYTES)
             })?;
         let f32_at = |o: usize| f32::from_le_bytes(data[o..o + 4].try_into().unwrap_or_default());
         let vec_at = |o: usize| vec3(f32_at(o), f32_at(o + 4), f32_at(o + 8));
@@ -136,19 +140,13 @@ impl PhotonMaps {
             }
             photons.push(photon);
         }
+        let volume = photons.split_off((n_global + n_caustic) as usize);
         let caustic = photons.split_off(n_global as usize);
-        let p = &settings.photon;
-        Ok(PhotonMaps {
-            global: PhotonMap::new(photons),
-            caustic: PhotonMap::new(caustic),
-            emitted,
-            caustic_emitted,
-            rays,
-            truncated,
-            trace_seconds: 0.0,
-            build_seconds: 0.0,
-            collect: p.num_photons_to_collect.max(1) as usize,
-            max_radius: p.max_radius * scene.bounds().extent().length(),
-        })
+        let mut maps = PhotonMaps::from_photons(scene, settings, [photons, caustic, volume]);
+        maps.emitted = emitted;
+        maps.caustic_emitted = caustic_emitted;
+        maps.rays = rays;
+        maps.truncated = truncated;
+        Ok(maps)
     }
 }

@@ -9,6 +9,7 @@ use kiddo::SquaredEuclidean;
 
 use super::trace::Photon;
 use crate::geometry::Vec3;
+use crate::scene::medium::Medium;
 use crate::scene::Color;
 
 /// Cone filter constant k (Jensen): weights 1 − d/(k·r).
@@ -46,6 +47,61 @@ impl PhotonMap {
         self.photons.is_empty()
     }
 
+    /// The `k` nearest photons to `x` within `max_radius` (nearest first, as kiddo's
+    /// neighbours: squared distance and index) and the squared radius of the estimate: the
+    /// k-th photon's, or the whole reach when fewer are in it.
+    fn nearest(
+        &self,
+        x: Vec3,
+        k: NonZero<usize>,
+        max_radius: f32,
+    ) -> (Vec<kiddo::NearestNeighbour<f32, u32>>, f32) {
+        let found = self.tree.nearest_n_within::<SquaredEuclidean>(
+            &x.to_array(),
+            max_radius * max_radius,
+            k,
+            true,
+        );
+        let r2 = if found.len() == k.get() {
+            found.last().map_or(0.0, |f| f.distance)
+        } else {
+            max_radius * max_radius
+        };
+        (found, r2)
+    }
+
+    /// Radiance scattered in per unit length at `x` in the fog `medium`, leaving along the
+    /// unit direction `towards`, from the `k` nearest volume photons within `max_radius`:
+    /// Σ p(ω_p → towards)·Φ_p / (4/3·π·r³) (Jensen & Christensen 1998). The photons are
+    /// stored where they scattered with their power times σs over the density of the event,
+    /// so their density is σs times the fluence.
+    pub fn in_scattered(
+        &self,
+        x: Vec3,
+        towards: Vec3,
+        medium: &Medium,
+        k: usize,
+        max_radius: f32,
+    ) -> Color {
+        let Some(k) = NonZero::new(k) else {
+            return Vec3::ZERO;
+        };
+        if self.photons.is_empty() {
+            return Vec3::ZERO;
+        }
+        let (found, r2) = self.nearest(x, k, max_radius);
+        if r2 <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let mut sum = Vec3::ZERO;
+        for f in &found {
+            let p = &self.photons[f.item as usize];
+            sum += p.power * medium.phase(p.direction, towards);
+        }
+        let volume = 4.0 / 3.0 * std::f32::consts::PI * r2 * r2.sqrt();
+        sum * volume.recip()
+    }
+
     /// Irradiance over π (the incident radiance averaged over the hemisphere, what a
     /// Lambertian albedo multiplies) at `x` on a surface with unit normal `n` (turned to the
     /// side being lit), from the `k` nearest photons within `max_radius`: the cone-filtered
@@ -63,18 +119,7 @@ impl PhotonMap {
         if self.photons.is_empty() {
             return (Vec3::ZERO, Lookup::default());
         }
-        let found = self.tree.nearest_n_within::<SquaredEuclidean>(
-            &x.to_array(),
-            max_radius * max_radius,
-            k,
-            true,
-        );
-        // With fewer than k photons in reach, the estimate covers the whole reach.
-        let r2 = if found.len() == k.get() {
-            found.last().map_or(0.0, |f| f.distance)
-        } else {
-            max_radius * max_radius
-        };
+        let (found, r2) = self.nearest(x, k, max_radius);
         if r2 <= 0.0 {
             return (Vec3::ZERO, Lookup::default());
         }

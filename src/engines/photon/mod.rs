@@ -30,6 +30,12 @@ pub struct PhotonMaps {
     /// light at the surfaces they reach).
     pub global: PhotonMap,
     pub caustic: PhotonMap,
+    /// Where photons scattered in the fog after a bounce or an earlier scattering (the ray
+    /// tracer scatters the lights' own light itself), and the box around them.
+    pub volume: PhotonMap,
+    volume_bounds: Bounds3,
+    /// Lookups of the volume map along a ray (`--volume-steps`).
+    volume_steps: u32,
     /// Photons emitted by the main pass and by the caustic pass, and photon rays cast.
     pub emitted: u64,
     pub caustic_emitted: u64,
@@ -100,19 +106,84 @@ impl PhotonMaps {
             rays += aimed.rays;
             truncated += aimed.truncated;
         }
-        let (global, caustic) = (PhotonMap::new(global), PhotonMap::new(caustic));
+        let volume = main
+            .volume
+            .into_iter()
+            .filter(|ph| ph.kind != PathKind::Direct)
+            .collect();
+        let mut maps = PhotonMaps::from_photons(scene, settings, [global, caustic, volume]);
+        maps.trace_seconds = trace_seconds;
+        maps.build_seconds = clock.elapsed().as_secs_f64();
+        maps.emitted = p.num_photons_to_shoot;
+        maps.caustic_emitted = caustic_emitted;
+        maps.rays = rays;
+        maps.truncated = truncated;
+        maps
+    }
+
+    /// The maps of the global, caustic and volume photons, looked up as `settings` say, with
+    /// their counters zero.
+    pub(super) fn from_photons(
+        scene: &Scene,
+        settings: &RenderSettings,
+        [global, caustic, volume]: [Vec<Photon>; 3],
+    ) -> PhotonMaps {
+        let p = &settings.photon;
+        let positions: Vec<Vec3> = volume.iter().map(|ph| ph.position).collect();
         PhotonMaps {
-            global,
-            caustic,
-            trace_seconds,
-            build_seconds: clock.elapsed().as_secs_f64(),
-            emitted: p.num_photons_to_shoot,
-            caustic_emitted,
-            rays,
-            truncated,
+            global: PhotonMap::new(global),
+            caustic: PhotonMap::new(caustic),
+            volume_bounds: Bounds3::from_points(&positions),
+            volume: PhotonMap::new(volume),
+            volume_steps: p.volume_steps.max(1),
+            emitted: 0,
+            caustic_emitted: 0,
+            rays: 0,
+            truncated: 0,
+            trace_seconds: 0.0,
+            build_seconds: 0.0,
             collect: p.num_photons_to_collect.max(1) as usize,
             max_radius: p.max_radius * scene.bounds().extent().length(),
         }
+    }
+
+    /// Radiance the fog `medium` scatters into `ray` over its first `length` of distance
+    /// from the volume map: `volume_steps` lookups evenly spaced over the part of the ray in
+    /// the volume photons' box, jittered together, each weighed by the transmittance from
+    /// the ray's origin. A midpoint rule with a random offset: its mean is the integral of
+    /// the (smooth) estimate along the ray.
+    pub fn volume_in_scattered(
+        &self,
+        medium: &crate::scene::medium::Medium,
+        ray: &crate::geometry::Ray,
+        length: f32,
+        rng: &mut Rng,
+    ) -> Color {
+        let scale = ray.direction.length();
+        if self.volume.is_empty() || scale.is_nan() || scale <= 0.0 {
+            return Color::ZERO;
+        }
+        let travel = ray.direction / scale;
+        let reach = self.max_radius;
+        let bounds = Bounds3 {
+            min: self.volume_bounds.min - Vec3::splat(reach),
+            max: self.volume_bounds.max + Vec3::splat(reach),
+        };
+        let Some((near, far)) = bounds.clip(ray.origin, travel, length) else {
+            return Color::ZERO;
+        };
+        let step = (far - near) / self.volume_steps as f32;
+        let offset = rng.next_f32();
+        let mut total = Color::ZERO;
+        for k in 0..self.volume_steps {
+            let t = near + (k as f32 + offset) * step;
+            let x = ray.origin + travel * t;
+            total += medium.transmittance(t)
+                * self
+                    .volume
+                    .in_scattered(x, -travel, medium, self.collect, reach);
+        }
+        total * step
     }
 
     /// Irradiance / π at a surface point from the global map.
@@ -345,19 +416,34 @@ impl IndirectLight for PhotonIndirect<'_> {
         };
         global + self.maps.caustic_at(s.point, n)
     }
+
+    fn in_scattered(
+        &self,
+        medium: &crate::scene::medium::Medium,
+        ray: &crate::geometry::Ray,
+        length: f32,
+        rng: &mut Rng,
+    ) -> Color {
+        self.maps.volume_in_scattered(medium, ray, length, rng)
+    }
 }
 
 impl PhotonMaps {
     /// One line on the maps for the user.
     pub fn summary(&self) -> String {
         format!(
-            "photons: {} emitted, {} more aimed at mirrors and glass, {} photon rays in {:.3} s; global map {} photons, caustic map {} (kd-trees built in {:.3} s); {} per estimate within {:.3}",
+            "photons: {} emitted, {} more aimed at mirrors and glass, {} photon rays in {:.3} s; global map {} photons, caustic map {}{} (kd-trees built in {:.3} s); {} per estimate within {:.3}",
             self.emitted,
             self.caustic_emitted,
             self.rays,
             self.trace_seconds,
             self.global.len(),
             self.caustic.len(),
+            if self.volume.is_empty() {
+                String::new()
+            } else {
+                format!(", volume map {}", self.volume.len())
+            },
             self.build_seconds,
             self.collect,
             self.max_radius

@@ -23,6 +23,10 @@ pub const SAFETY_DEPTH: u32 = 10_000;
 /// photon paths end even between surfaces that reflect everything (as the path tracer's).
 pub const MAX_SURVIVAL: f32 = 0.999;
 
+/// The most lookups of the volume photon map along one ray (`--volume-steps`): a bound on the
+/// time a pixel can take.
+pub const MAX_VOLUME_STEPS: u32 = 4096;
+
 /// Settings only the photon engine reads.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PhotonSettings {
@@ -43,6 +47,9 @@ pub struct PhotonSettings {
     pub max_radius: f32,
     /// Final gathering for indirect light (`-gather_indirect`, default off: direct lookup).
     pub gather_indirect: bool,
+    /// Points per camera or mirror ray in the fog at which the volume photon map is looked up
+    /// (`--volume-steps`, default 16; at most `MAX_VOLUME_STEPS`).
+    pub volume_steps: u32,
     /// Hemisphere rays per final gather (`--final-gather-rays`, default 128).
     pub final_gather_rays: u32,
     /// Ward's irradiance cache error a (`--irradiance-cache-error`, default 0.15).
@@ -75,6 +82,7 @@ impl Default for PhotonSettings {
             max_photon_depth: SAFETY_DEPTH,
             max_radius: 0.1,
             gather_indirect: false,
+            volume_steps: 16,
             final_gather_rays: 128,
             irradiance_cache_error: 0.15,
             irradiance_cache_spacing: 1,

@@ -421,10 +421,11 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> Sp
                         &mut rng,
                         &mut |hit: &Hit| {
                             // The light straight from the emitters is the shadow rays'.
-                            if hit.kind == PathKind::Direct {
+                            // (SPPM refuses fog: no photon scatters in a medium.)
+                            if hit.kind == PathKind::Direct || hit.in_medium {
                                 return;
                             }
-                            let x = hit.surface.point;
+                            let x = hit.point;
                             for &v in grid.near(x) {
                                 let Some(vp) = &points[v as usize] else {
                                     continue;

@@ -14,10 +14,12 @@ use rayon::prelude::*;
 use super::settings::MAX_SURVIVAL;
 use crate::accel::{closest_surface, Accel};
 use crate::engines::scattering::{glossy_reflection, sample_cone, sample_lobe, Dielectric};
-use crate::geometry::{offset_ray_origin, point_error, Ray, Vec3};
+use crate::geometry::{offset_ray_origin, point_error, Bounds3, Ray, Vec3};
 use crate::render::lights::Light;
-use crate::sampling::Rng;
-use crate::scene::{Color, Scene, SurfaceHit};
+use crate::sampling::{orthonormal_basis, sample_disk, Rng};
+use crate::scene::medium::Flight;
+use crate::scene::sky::Sky;
+use crate::scene::{Color, Scene};
 
 /// How a stored photon got where it is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,22 +66,44 @@ fn mean(c: Color) -> f32 {
     (c.x + c.y + c.z) / 3.0
 }
 
-/// What tracing the photons gave: those stored, in a fixed order, and counters.
-pub struct Traced {
-    pub photons: Vec<Photon>,
-    pub rays: u64,
-    /// Photons still carrying power when `--max-photon-depth` stopped them: their light is
-    /// lost (a bias the furnace shows at high albedo), so it is reported.
-    pub truncated: u64,
+/// The sky as a photon source: photons from a disk the size of a sphere around the scene,
+/// facing the direction they come from, so every line through the sphere is as likely.
+struct SkySource {
+    sky: Sky,
+    centre: Vec3,
+    radius: f32,
 }
 
-/// The emitters as photon sources: each chosen in proportion to its flux.
+impl SkySource {
+    /// The flux the sky sends through a sphere of radius R: π·R²·∫ L dω.
+    fn flux(&self) -> Color {
+        self.sky.integral() * (std::f32::consts::PI * self.radius * self.radius)
+    }
+
+    /// A photon from the sky through the sphere (`centre`, `radius`): a direction uniform over
+    /// the sphere of directions, a point uniform on the disk across it. Returns its ray and
+    /// its power for a unit chance of being chosen: L(ω)·π·r²·4π (the density of the pair
+    /// is 1/(4π·π·r²)).
+    fn emit(&self, centre: Vec3, radius: f32, rng: &mut Rng) -> (Ray, Color) {
+        let towards = sample_cone(Vec3::Y, -1.0, rng.next_f32(), rng.next_f32());
+        let (dx, dy) = sample_disk(rng.next_f32(), rng.next_f32());
+        let (t, b) = orthonormal_basis(towards);
+        let origin = centre + (towards + t * dx + b * dy) * radius;
+        let area = std::f32::consts::PI * radius * radius;
+        let power = self.sky.radiance(towards) * (4.0 * std::f32::consts::PI * area);
+        (Ray::new(origin, -towards), power)
+    }
+}
+
+/// The emitters as photon sources: each light, and the sky, chosen in proportion to its flux.
 pub struct Emitters {
     lights: Vec<Light>,
+    /// The sky, unless there is none or the fog hides it (it is infinite).
+    sky: Option<SkySource>,
     /// Flux of each light: π·Le·A for a one-sided Lambertian emitter, twice that for two
-    /// sides.
+    /// sides; then the sky's.
     flux: Vec<Color>,
-    /// The probability of choosing each light, and their running sum.
+    /// The probability of choosing each source, and their running sum.
     probability: Vec<f32>,
     cdf: Vec<f64>,
 }
@@ -87,6 +111,16 @@ pub struct Emitters {
 impl Emitters {
     pub fn new(scene: &Scene) -> Emitters {
         let lights = Light::collect(scene);
+        let bounds = scene.bounds();
+        let sky = scene
+            .sky
+            .filter(|_| scene.fog.is_none())
+            .map(|sky| SkySource {
+                sky,
+                centre: bounds.centre(),
+                // A little beyond the bounds, so that no photon starts inside the scene.
+                radius: 0.5 * bounds.extent().length() * 1.01,
+            });
         let flux: Vec<Color> = lights
             .iter()
             .map(|l| {
@@ -97,6 +131,7 @@ impl Emitters {
                 };
                 l.emitted * (std::f32::consts::PI * l.area * sides)
             })
+            .chain(sky.as_ref().map(SkySource::flux))
             .collect();
         let weights: Vec<f64> = flux.iter().map(|f| mean(*f) as f64).collect();
         let total: f64 = weights.iter().sum();
@@ -113,6 +148,7 @@ impl Emitters {
             .collect();
         Emitters {
             lights,
+            sky,
             flux,
             probability,
             cdf,
@@ -126,7 +162,8 @@ impl Emitters {
 
     /// Photon `k` of `count` with the generator it draws from, aimed as `aim` says, followed
     /// until absorbed (or `max_depth` bounces); `visit` hears every diffuse surface it
-    /// reaches. Returns the rays it cast and whether the depth limit stopped it.
+    /// reaches and every point where it scatters in the fog. Returns the rays it cast and
+    /// whether the depth limit stopped it.
     #[allow(clippy::too_many_arguments)]
     pub fn trace(
         &self,
@@ -143,29 +180,61 @@ impl Emitters {
             .cdf
             .iter()
             .position(|&c| pick < c)
-            .unwrap_or(self.lights.len() - 1);
-        let power = self.flux[l] * (self.probability[l] * count as f32).recip();
-        trace_one(
+            .unwrap_or(self.flux.len() - 1);
+        let chosen = (self.probability[l] * count as f32).recip();
+        let emitted = match (self.lights.get(l), &self.sky) {
+            (Some(light), _) => emit_from_light(light, aim, rng)
+                .map(|(ray, factor)| (ray, self.flux[l] * factor * chosen)),
+            (None, Some(sky)) => {
+                // Caustic photons come through the sphere around the mirrors and glass.
+                let (centre, radius) = match aim {
+                    Aim::Caustics { centre, radius } => (centre, radius),
+                    Aim::Everywhere => (sky.centre, sky.radius),
+                };
+                let (ray, power) = sky.emit(centre, radius, rng);
+                Some((ray, power * chosen))
+            }
+            (None, None) => None,
+        };
+        let Some((ray, power)) = emitted else {
+            return (0, false);
+        };
+        let caustics_only = matches!(aim, Aim::Caustics { .. });
+        follow(
             scene,
             accel,
-            &self.lights[l],
+            ray,
             power,
             max_depth,
-            aim,
+            caustics_only,
             rng,
             visit,
         )
     }
 }
 
-/// A photon at a diffuse surface, as photon tracing reports it.
-pub struct Hit<'a> {
-    pub surface: &'a SurfaceHit,
-    /// The normal on the side the photon arrived from.
+/// A photon where it is stored: on a diffuse surface, or where it scattered in the fog.
+pub struct Hit {
+    pub point: Vec3,
+    /// The normal on the side the photon arrived from (zero in the fog).
     pub normal: Vec3,
     pub direction: Vec3,
     pub power: Color,
     pub kind: PathKind,
+    /// Whether it scattered in the fog (a volume photon) rather than met a surface.
+    pub in_medium: bool,
+}
+
+/// The photons traced: those stored on surfaces and in the fog, in a fixed order, and
+/// counters.
+pub struct Traced {
+    pub photons: Vec<Photon>,
+    /// Where photons scattered in the fog.
+    pub volume: Vec<Photon>,
+    pub rays: u64,
+    /// Photons still carrying power when `--max-photon-depth` stopped them: their light is
+    /// lost (a bias the furnace shows at high albedo), so it is reported.
+    pub truncated: u64,
 }
 
 /// Traces `count` photons aimed as `aim` says. Photon k draws from hash(seed, k): the result
@@ -183,15 +252,29 @@ pub fn trace_photons(
     if count == 0 || !emitters.any() {
         return Traced {
             photons: Vec::new(),
+            volume: Vec::new(),
             rays: 0,
             truncated: 0,
         };
     }
+    // Volume photons are kept only where camera and mirror rays can look them up: in the
+    // scene's bounds and the camera's, padded. Photons that wander into the fog beyond are
+    // still followed (they may come back), but not stored: in an open scene most of an
+    // infinite fog's scattering happens there (on the fog Cornell box, 10M of 1M photons'
+    // events), and its light reaches the image only along rays that leave the scene.
+    let region = {
+        let b = scene.bounds().union_point(scene.camera().position);
+        let pad = Vec3::splat(0.05 * b.extent().length());
+        Bounds3 {
+            min: b.min - pad,
+            max: b.max + pad,
+        }
+    };
     let blocks = count.div_ceil(BLOCK);
     let results: Vec<Traced> = (0..blocks)
         .into_par_iter()
         .map(|b| {
-            let mut stored = Vec::new();
+            let (mut stored, mut volume) = (Vec::new(), Vec::new());
             let (mut rays, mut truncated) = (0, 0);
             // After Ctrl-C the blocks not yet traced are skipped.
             let end = if crate::interrupt::requested() {
@@ -213,13 +296,20 @@ pub fn trace_photons(
                     aim,
                     &mut rng,
                     &mut |hit: &Hit| {
-                        stored.push(Photon {
-                            position: hit.surface.point,
+                        let photon = Photon {
+                            position: hit.point,
                             direction: hit.direction,
                             power: hit.power,
                             normal: hit.normal,
                             kind: hit.kind,
-                        })
+                        };
+                        if hit.in_medium {
+                            if region.contains(hit.point) {
+                                volume.push(photon);
+                            }
+                        } else {
+                            stored.push(photon);
+                        }
                     },
                 );
                 rays += r;
@@ -228,31 +318,29 @@ pub fn trace_photons(
             on_block();
             Traced {
                 photons: stored,
+                volume,
                 rays,
                 truncated,
             }
         })
         .collect();
-    Traced {
+    let mut traced = Traced {
+        photons: Vec::new(),
+        volume: Vec::new(),
         rays: results.iter().map(|r| r.rays).sum(),
         truncated: results.iter().map(|r| r.truncated).sum(),
-        photons: results.into_iter().flat_map(|r| r.photons).collect(),
+    };
+    for r in results {
+        traced.photons.extend(r.photons);
+        traced.volume.extend(r.volume);
     }
+    traced
 }
 
-/// Follows one photon from a light until it is absorbed; returns the rays it cast and whether
-/// the depth limit stopped it.
-#[allow(clippy::too_many_arguments)]
-fn trace_one(
-    scene: &Scene,
-    accel: &dyn Accel,
-    light: &Light,
-    mut power: Color,
-    max_depth: u32,
-    aim: Aim,
-    rng: &mut Rng,
-    visit: &mut dyn FnMut(&Hit),
-) -> (u64, bool) {
+/// A photon leaving `light`: its ray, and the factor its share of the light's flux is
+/// multiplied by (1 for the cosine-weighted hemisphere; see below for the cone towards the
+/// mirrors and glass); None when the chosen direction does not leave the light.
+fn emit_from_light(light: &Light, aim: Aim, rng: &mut Rng) -> Option<(Ray, f32)> {
     let p = light.sample(rng.next_f32(), rng.next_f32());
     let mut normal = p.normal;
     if !p.one_sided && rng.next_f32() < 0.5 {
@@ -269,7 +357,7 @@ fn trace_one(
         }
         Aim::Everywhere => None,
     };
-    let dir = match cone {
+    let (dir, factor) = match cone {
         Some((axis, sin_max)) => {
             // Uniform in the cone of solid angle Ω: the power becomes Le·cosθ·A·Ω per photon
             // instead of the cosine-weighted photon's π·Le·A (per side), a factor cosθ·Ω/π.
@@ -277,43 +365,106 @@ fn trace_one(
             let dir = sample_cone(axis, cos_max, u, v);
             let facing = p.normal.dot(dir);
             if facing == 0.0 || (p.one_sided && facing < 0.0) {
-                return (0, false);
+                return None;
             }
             normal = if facing > 0.0 { p.normal } else { -p.normal };
             let solid_angle = std::f32::consts::TAU * (1.0 - cos_max);
             let sides = if p.one_sided { 1.0 } else { 2.0 };
-            power *= facing.abs() * solid_angle / (std::f32::consts::PI * sides);
-            dir
+            (
+                dir,
+                facing.abs() * solid_angle / (std::f32::consts::PI * sides),
+            )
         }
-        None => sample_lobe(normal, 1.0, u, v),
+        None => (sample_lobe(normal, 1.0, u, v), 1.0),
     };
-    let caustics_only = matches!(aim, Aim::Caustics { .. });
     let origin = offset_ray_origin(p.point, normal, point_error(p.point.abs().max_element()));
-    let mut ray = Ray::new(origin, dir);
+    Some((Ray::new(origin, dir), factor))
+}
+
+/// Follows a photon from where it was emitted until it is absorbed; returns the rays it cast
+/// and whether the depth limit stopped it. In the fog each segment's free flight is sampled
+/// (`Medium::sample_flight`): where it scatters, the photon is stored and goes on in a
+/// direction of the phase function, after Russian roulette on the scattering's weight.
+/// Every surface bounce and every scattering counts towards `max_depth`.
+#[allow(clippy::too_many_arguments)]
+fn follow(
+    scene: &Scene,
+    accel: &dyn Accel,
+    mut ray: Ray,
+    mut power: Color,
+    max_depth: u32,
+    caustics_only: bool,
+    rng: &mut Rng,
+    visit: &mut dyn FnMut(&Hit),
+) -> (u64, bool) {
+    let fog = scene.fog.map(|k| &scene.media[k]);
+    // Lights and the camera are in the fog; glass carries a photon out of it and back.
+    let mut in_fog = fog.is_some();
+    // Whether a diffuse bounce or a scattering in the fog has happened.
     let mut any_diffuse = false;
     let mut rays = 0;
     for depth in 0..=max_depth {
         rays += 1;
-        let Some(s) = closest_surface(accel, scene, &ray) else {
+        let hit = closest_surface(accel, scene, &ray);
+        let kind = if depth == 0 {
+            PathKind::Direct
+        } else if any_diffuse {
+            PathKind::Indirect
+        } else {
+            PathKind::Caustic
+        };
+        if let Some(medium) = fog.filter(|_| in_fog) {
+            let t_surface = hit
+                .as_ref()
+                .map_or(f32::INFINITY, |s| s.point.distance(ray.origin));
+            match medium.sample_flight(t_surface, power, rng.next_f32(), rng.next_f32()) {
+                Flight::Scattered { t, weight } => {
+                    if caustics_only {
+                        // A scattered photon's later hits are not caustics.
+                        break;
+                    }
+                    power *= weight;
+                    let point = ray.origin + ray.direction * t;
+                    visit(&Hit {
+                        point,
+                        normal: Vec3::ZERO,
+                        direction: ray.direction,
+                        power,
+                        kind,
+                        in_medium: true,
+                    });
+                    if depth == max_depth {
+                        return (rays, true);
+                    }
+                    // Roulette on the scattering's weight (the medium's albedo in a grey fog).
+                    let survive = weight.max_element().min(MAX_SURVIVAL);
+                    if rng.next_f32() >= survive {
+                        break;
+                    }
+                    power *= survive.recip();
+                    any_diffuse = true;
+                    let (dir, _) =
+                        medium.sample_phase(ray.direction, rng.next_f32(), rng.next_f32());
+                    ray = Ray::new(point, dir);
+                    continue;
+                }
+                Flight::Passed { weight } => power *= weight,
+            }
+        }
+        let Some(s) = hit else {
             break;
         };
         let m = &scene.materials[s.material as usize];
         let (front, n) = s.facing(ray.direction);
         let albedo = scene.albedo(&s);
         if albedo.max_element() > 0.0 && !(caustics_only && depth == 0) {
-            let kind = if depth == 0 {
-                PathKind::Direct
-            } else if any_diffuse {
-                PathKind::Indirect
-            } else {
-                PathKind::Caustic
-            };
             visit(&Hit {
-                surface: &s,
+                point: s.point,
                 normal: n,
                 direction: ray.direction,
                 power,
                 kind,
+                in_medium: false,
             });
         }
         if depth == max_depth {
@@ -350,7 +501,12 @@ fn trace_one(
             )
         } else if xi < pd + pr + pt {
             power = power * m.transmitted * pt.recip();
-            Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng)
+            let dir = Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng);
+            if dir.dot(n) < 0.0 {
+                // Refracted: into an object (out of the fog), or out of one (into it).
+                in_fog = !front && fog.is_some();
+            }
+            dir
         } else {
             break;
         };

@@ -68,7 +68,10 @@ pub fn render_solution(
         "display",
         |ray, hit, _rng, _counts| {
             let Some(s) = hit else {
-                return scene.background;
+                return match &scene.sky {
+                    Some(sky) => sky.radiance(ray.direction.normalize_or_zero()),
+                    None => scene.background,
+                };
             };
             solution
                 .sample(scene, &s, -ray.direction, &field)

@@ -13,6 +13,7 @@ pub mod solver;
 
 mod display;
 mod export;
+mod sky;
 pub use settings::{Display, RadiositySettings, SolverKind};
 
 use std::sync::atomic::Ordering::Relaxed;
@@ -256,6 +257,15 @@ impl Solution {
                 p.area = 0.0;
             }
         }
+        // The sky's reflected light enters the solve as the patches' own emission.
+        let mut sky_rays = 0;
+        if let Some(s) = &scene.sky {
+            let (reflected, rays) = sky::reflected(scene, accel, s, &solved_patches, settings.seed);
+            for (p, r) in solved_patches.iter_mut().zip(reflected) {
+                p.emitted += r;
+            }
+            sky_rays = rays;
+        }
         let sampler = FormFactorSampler::new(
             scene,
             accel,
@@ -289,7 +299,7 @@ impl Solution {
             ambient,
             visibility,
             visibility_reason,
-            rays: sampler.rays.load(Relaxed),
+            rays: sampler.rays.load(Relaxed) + sky_rays,
             solver_report: solved.report,
             solver_counters: solved.counters,
             solver_warning: solved.warning,
