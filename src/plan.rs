@@ -23,6 +23,8 @@ pub struct Plan {
     pub emitters: usize,
     /// The fog the render traces through ("medium 0: σa …, σs …, g …"), None without one.
     pub fog: Option<String>,
+    /// The media inside glass objects ("material 6: medium 1"), one per material that has one.
+    pub interiors: Vec<String>,
     /// The sky that lights the render ("uniform …", "gradient …"), None without one.
     pub sky: Option<String>,
     /// What the engine builds beyond the image and the Accel, by name, and "no" for what
@@ -89,6 +91,12 @@ impl Plan {
                     m.g
                 )
             }),
+            interiors: scene
+                .materials
+                .iter()
+                .enumerate()
+                .filter_map(|(i, m)| m.interior_medium.map(|k| format!("material {i}: medium {k}")))
+                .collect(),
             sky: scene.sky.map(|sky| {
                 let v = |c: crate::geometry::Vec3| format!("{} {} {}", c.x, c.y, c.z);
                 match sky {
@@ -247,6 +255,9 @@ impl fmt::Display for Plan {
         writeln!(f, "emitters: {}", self.emitters)?;
         // Nothing of media or skies is built or traced for a scene without them.
         writeln!(f, "fog: {}", self.fog.as_deref().unwrap_or("none"))?;
+        if !self.interiors.is_empty() {
+            writeln!(f, "interior media: {}", self.interiors.join("; "))?;
+        }
         writeln!(f, "sky: {}", self.sky.as_deref().unwrap_or("none"))?;
         for (name, what) in &self.structures {
             writeln!(f, "{name}: {what}")?;

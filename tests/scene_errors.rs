@@ -47,10 +47,16 @@ fn bad_media() {
         3,
         &["fog 1: no such medium", "1 medium block)"],
     );
+    // An interior medium needs a refracting boundary and an existing medium.
     fails_at(
         "medium\nsigma_s 1 1 1\nmaterial\ndiffuse 1 1 1\ninterior_medium 0\n",
         5,
-        &["interior_medium is not read yet"],
+        &["interior_medium needs `transmitted`", "index-matched"],
+    );
+    fails_at(
+        "medium\nsigma_s 1 1 1\nmaterial\ndiffuse 0 0 0\ntransmitted 1 1 1\ninterior_medium 2\n",
+        6,
+        &["interior_medium 2: no such medium", "1 medium block)"],
     );
 }
 

@@ -209,7 +209,7 @@ fn refuse_unrendered_media(
 ) -> Result<(), String> {
     let radiosity_indirect = args.ray_trace.indirect == engines::IndirectKind::Radiosity;
     let gathering = args.photon.gather_indirect;
-    let (fog, sky) = (scene.fog.is_some(), scene.sky.is_some());
+    let (fog, sky) = (scene.has_media(), scene.sky.is_some());
     let refused = match engine {
         EngineKind::Path | EngineKind::Raycast => None,
         EngineKind::Raytrace if radiosity_indirect && (fog || sky) => {
@@ -226,7 +226,13 @@ fn refuse_unrendered_media(
     let Some(how) = refused else {
         return Ok(());
     };
-    let what = if fog { "fog" } else { "a sky" };
+    let what = if scene.fog.is_some() {
+        "fog"
+    } else if fog {
+        "a medium inside glass (interior_medium)"
+    } else {
+        "a sky"
+    };
     Err(format!(
         "{}: the scene has {what}, which the path tracer, the ray tracer and the photon engine render so far (--engine path, raytrace without --indirect radiosity, photon without -gather_indirect in fog; radiosity takes a sky, not fog); the {engine} engine{how} would leave it out",
         input.display(),

@@ -92,7 +92,7 @@ impl Engine for PhotonEngine {
     }
 
     fn structures(&self) -> &'static [&'static str] {
-        &["photon map", "caustic map"]
+        &["photon map", "caustic map", "volume photon map"]
     }
 
     fn unread_flags(&self) -> &'static [&'static str] {

@@ -250,7 +250,7 @@ impl PathTracer<'_> {
             in_medium: false,
         };
         // The medium the path is in: the fog (where the camera is) until it passes into a
-        // closed object through a glass boundary, none inside.
+        // closed object through a glass boundary, the object's `interior_medium` inside.
         let fog = self.scene.fog.map(|k| &self.scene.media[k]);
         let mut medium = fog;
         // The background is what a ray leaving the scene shows, seen directly or through
@@ -376,7 +376,11 @@ impl PathTracer<'_> {
                 // Through the boundary (n faces the side the ray came from): into a closed
                 // object from its front, out of it from its back.
                 if dir.dot(n) < 0.0 {
-                    medium = if front { None } else { fog };
+                    medium = if front {
+                        self.scene.interior_medium(m)
+                    } else {
+                        fog
+                    };
                 }
             }
             if !survives_roulette(vertex, &mut throughput, rng) {

@@ -42,8 +42,6 @@ struct Tracer<'a> {
     light_strata: Strata,
     /// The rays traced, when recording a ray tree (`--ray-tree`); None while rendering.
     tree: Option<std::sync::Mutex<Vec<Segment>>>,
-    /// The medium that fills the space where the camera is (`fog K`), if any.
-    fog: Option<Medium>,
     /// Where the directions towards the sky go (`-num_shadow_samples`, at least one).
     sky_strata: Strata,
 }
@@ -85,7 +83,6 @@ impl<'a> Tracer<'a> {
                 settings.num_shadow_samples,
             ),
             tree,
-            fog: scene.fog.map(|k| scene.media[k]),
             sky_strata: Strata::new(
                 crate::sampling::Pattern::Jittered,
                 settings.num_shadow_samples.max(1),
@@ -102,8 +99,9 @@ struct Branch {
     arrival: Arrival,
     depth: u32,
     weight: f32,
-    /// Whether the ray travels through the fog (outside the closed objects it passes into).
-    in_fog: bool,
+    /// The medium the ray travels through (index into the scene's media): the fog outside
+    /// closed objects, a material's `interior_medium` inside a glass one.
+    medium: Option<usize>,
 }
 
 impl Branch {
@@ -113,7 +111,7 @@ impl Branch {
             arrival: Arrival::Delta,
             depth: 0,
             weight: 1.0,
-            in_fog: scene.fog.is_some(),
+            medium: scene.fog,
         }
     }
 
@@ -124,7 +122,7 @@ impl Branch {
             arrival,
             depth: self.depth + 1,
             weight: self.weight * factor,
-            in_fog: self.in_fog,
+            medium: self.medium,
         }
     }
 }
@@ -141,7 +139,7 @@ impl Tracer<'_> {
         rng: &mut Rng,
         counts: &mut Counts,
     ) -> Color {
-        let Some(fog) = self.fog_on(branch) else {
+        let Some(fog) = self.medium_of(branch) else {
             return self.leaving(ray, hit, branch, rng, counts);
         };
         let length = hit
@@ -154,8 +152,8 @@ impl Tracer<'_> {
     }
 
     /// The fog `branch`'s ray travels through, if any.
-    fn fog_on(&self, branch: Branch) -> Option<&Medium> {
-        self.fog.as_ref().filter(|_| branch.in_fog)
+    fn medium_of(&self, branch: Branch) -> Option<&Medium> {
+        branch.medium.map(|k| &self.scene.media[k])
     }
 
     /// Radiance leaving the closest hit `hit` back along `ray` (the background where there
@@ -183,7 +181,7 @@ impl Tracer<'_> {
         }
         let albedo = self.scene.albedo(&s);
         if albedo.max_element() > 0.0 {
-            let fog = self.fog_on(branch);
+            let fog = self.medium_of(branch);
             let irradiance_over_pi =
                 self.direct(&s, n, fog, rng, counts) + self.sky_light(&s, n, fog, rng, counts);
             let indirect = self
@@ -202,7 +200,7 @@ impl Tracer<'_> {
                     self.trace(&r, branch.child(Arrival::Delta, reflective), rng, counts)
                 }
                 Some(lobe) => {
-                    let lit = self.glossy_direct(&s, n, &lobe, self.fog_on(branch), rng, counts);
+                    let lit = self.glossy_direct(&s, n, &lobe, self.medium_of(branch), rng, counts);
                     let (dir, pdf) = lobe.sample(rng.next_f32(), rng.next_f32());
                     let arrival = match pdf {
                         Some(pdf) if self.samples_glossy_lights() => Arrival::Glossy {
@@ -233,9 +231,13 @@ impl Tracer<'_> {
                 if let Some(t) = glass.refracted(ray.direction, n) {
                     let r = s.spawn_ray(t);
                     let mut child = branch.child(Arrival::Delta, transmitted * (1.0 - f));
-                    // Through glass the ray leaves the fog (entering an object) or comes
-                    // back into it (leaving one).
-                    child.in_fog = !front && self.fog.is_some();
+                    // Through glass the ray passes into the object's interior medium (none
+                    // without one) or comes back into the fog (leaving it).
+                    child.medium = if front {
+                        m.interior_medium
+                    } else {
+                        self.scene.fog
+                    };
                     through += self.trace(&r, child, rng, counts) * (1.0 - f);
                 }
             }

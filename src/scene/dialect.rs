@@ -108,7 +108,7 @@ struct Parser<'a> {
 
 const MEDIUM_KEYS: [&str; 3] = ["sigma_a", "sigma_s", "g"];
 
-const MATERIAL_KEYS: [&str; 7] = [
+const MATERIAL_KEYS: [&str; 8] = [
     "diffuse",
     "texture_file",
     "reflective",
@@ -116,6 +116,7 @@ const MATERIAL_KEYS: [&str; 7] = [
     "transmitted",
     "ior",
     "roughness",
+    "interior_medium",
 ];
 
 impl<'a> Parser<'a> {
@@ -224,6 +225,8 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
     // The line of the sky given, and `sky_scale` (applied at the end, wherever it stands).
     let mut sky_at: Option<u32> = None;
     let mut sky_scale = 1.0;
+    // (material, medium K, where) of each `interior_medium K`, checked once the media are known.
+    let mut interiors = Vec::new();
 
     while let Some(tok) = p.next() {
         match tok.text {
@@ -260,6 +263,10 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                             if m.ior <= 0.0 {
                                 return Err(p.invalid(key, "ior must be > 0".into()));
                             }
+                        }
+                        "interior_medium" => {
+                            let (k, at) = p.index("a medium index (interior_medium K)")?;
+                            interiors.push((scene.materials.len(), k, at));
                         }
                         _ => m.roughness = p.real("a real number (roughness a)")?.clamp(0.0, 1.0),
                     }
@@ -435,12 +442,6 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
             "PerspectiveCamera" | "OrthographicCamera" => {
                 scene.camera = Some(parse_camera(&mut p, tok)?);
             }
-            "interior_medium" => {
-                return Err(p.invalid(
-                    tok,
-                    "interior_medium is not read yet (issue #18): only `fog K` fills space with a medium".into(),
-                ))
-            }
             _ => {
                 return Err(p.syntax(
                     Some(tok),
@@ -463,6 +464,29 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
             ));
         }
         scene.fog = Some(k as usize);
+    }
+    for (material, k, at) in interiors {
+        if k < 0 || k as usize >= scene.media.len() {
+            return Err(p.invalid(
+                at,
+                format!(
+                    "interior_medium {k}: no such medium (the file defines {} medium block{})",
+                    scene.media.len(),
+                    if scene.media.len() == 1 { "" } else { "s" }
+                ),
+            ));
+        }
+        let m = &mut scene.materials[material];
+        // Only a refracting boundary delimits a medium so far: an index-matched one (no
+        // `transmitted`) would have to let shadow rays through, which the Accel's occlusion
+        // queries do not know of.
+        if m.transmitted.max_element() <= 0.0 {
+            return Err(p.invalid(
+                at,
+                "interior_medium needs `transmitted` in its material (a refracting boundary); index-matched boundaries are not read yet".into(),
+            ));
+        }
+        m.interior_medium = Some(k as usize);
     }
     for (k, at) in selections {
         if k as usize >= scene.materials.len() {

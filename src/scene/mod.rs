@@ -39,6 +39,9 @@ pub struct Material {
     pub ior: f32,
     /// Glossy lobe width for `reflective`; 0 is a perfect mirror.
     pub roughness: f32,
+    /// The medium that fills the inside of the closed objects of this material
+    /// (`interior_medium K`, default none): light refracted into them travels in it.
+    pub interior_medium: Option<usize>,
     /// Line of the file where the material starts (0 for materials not from a file).
     pub line: u32,
 }
@@ -54,6 +57,7 @@ impl Default for Material {
             transmitted: Vec3::ZERO,
             ior: 1.5,
             roughness: 0.0,
+            interior_medium: None,
             line: 0,
         }
     }
@@ -297,6 +301,16 @@ impl Scene {
             }
         }
         h.finish()
+    }
+
+    /// The medium inside the closed objects of material `m` (`interior_medium`), if any.
+    pub fn interior_medium(&self, m: &Material) -> Option<&medium::Medium> {
+        m.interior_medium.map(|k| &self.media[k])
+    }
+
+    /// Whether light travels through a medium anywhere: fog, or a material's interior.
+    pub fn has_media(&self) -> bool {
+        self.fog.is_some() || self.materials.iter().any(|m| m.interior_medium.is_some())
     }
 
     pub fn bounds(&self) -> Bounds3 {

@@ -72,7 +72,8 @@ impl PhotonMap {
 
     /// Radiance scattered in per unit length at `x` in the fog `medium`, leaving along the
     /// unit direction `towards`, from the `k` nearest volume photons within `max_radius`:
-    /// Σ p(ω_p → towards)·Φ_p / (4/3·π·r³) (Jensen & Christensen 1998). The photons are
+    /// Σ p(ω_p → towards)·Φ_p / (4/3·π·r³) over the k − 1 inside the k-th's sphere (Jensen &
+    /// Christensen 1998, made unbiased for a uniform density). The photons are
     /// stored where they scattered with their power times σs over the density of the event,
     /// so their density is σs times the fluence.
     pub fn in_scattered(
@@ -93,8 +94,17 @@ impl PhotonMap {
         if r2 <= 0.0 {
             return Vec3::ZERO;
         }
+        // The k-th photon lies on the sphere that defines it: counting it too would make the
+        // estimate k/(k−1) times the density (of Poisson points); the others, k − 1 over the
+        // sphere, are unbiased. With fewer than k in reach, the reach is the sphere and all
+        // count.
+        let inside = if found.len() == k.get() {
+            k.get() - 1
+        } else {
+            found.len()
+        };
         let mut sum = Vec3::ZERO;
-        for f in &found {
+        for f in &found[..inside] {
             let p = &self.photons[f.item as usize];
             sum += p.power * medium.phase(p.direction, towards);
         }

@@ -301,15 +301,34 @@ pub fn plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
         .min(p.max_photon_depth as f64 + 1.0)
         .max(1.0);
     let emitted = p.num_photons_to_shoot.saturating_add(p.caustic_photons());
-    let stored = (emitted as f64 * bounces).min(u64::MAX as f64 / PHOTON_BYTES as f64);
+    let volume = volume_events_per_photon(scene, bounces) * p.num_photons_to_shoot as f64;
+    let stored = (emitted as f64 * bounces + volume).min(u64::MAX as f64 / PHOTON_BYTES as f64);
     let yes_no = |b: bool| if b { "yes" } else { "no" }.to_string();
     EnginePlan {
         structures: vec![
             ("photon map", yes_no(traced)),
             ("caustic map", yes_no(traced && any_specular)),
+            ("volume photon map", yes_no(traced && volume > 0.0)),
         ],
         memory: vec![("photon maps", (stored * PHOTON_BYTES as f64) as u64)],
     }
+}
+
+/// Scatterings in the fog per photon emitted, for the plan: a photon crosses the scene's box
+/// along chords of mean length 4V/S (Cauchy), scattering on one with probability
+/// P = 1 − e^{−σt·chord} (σt's largest channel); its `bounces` surface hits then take
+/// bounces/(1 − P) segments, P of them ending in a scattering. 0 without fog. (On the fog
+/// Cornell box: 2.2 a photon, where 1.6 were kept.)
+fn volume_events_per_photon(scene: &Scene, bounces: f64) -> f64 {
+    let Some(fog) = scene.fog.map(|k| &scene.media[k]) else {
+        return 0.0;
+    };
+    let b = scene.bounds();
+    let e = b.extent();
+    let (volume, area) = ((e.x * e.y * e.z) as f64, b.area() as f64);
+    let chord = if area > 0.0 { 4.0 * volume / area } else { 0.0 };
+    let p = 1.0 - (-(fog.sigma_t().max_element() as f64) * chord).exp();
+    bounces / (1.0 - p).max(1e-3) * p
 }
 
 /// Area-weighted mean of the quads' albedos (mean channel; textures count as 0.5).

@@ -398,8 +398,15 @@ fn follow(
     visit: &mut dyn FnMut(&Hit),
 ) -> (u64, bool) {
     let fog = scene.fog.map(|k| &scene.media[k]);
-    // Lights and the camera are in the fog; glass carries a photon out of it and back.
-    let mut in_fog = fog.is_some();
+    // Lights and the camera are in the fog; glass carries a photon into an object's interior
+    // medium (or none) and back.
+    let mut medium = fog;
+    // Inside glass of index n the photons are stored with power/n²: the ray tracer carries
+    // radiance through refraction without the n² factors (as the path tracer does, whose
+    // factors cancel over a closed path), so its lookups inside must be in those units. The
+    // physical radiance inside is n² times larger (the same flux in a narrower cone); without
+    // this the glass sphere filled with a medium came out 2.0× the path tracer's inside.
+    let mut radiance_scale = 1.0f32;
     // Whether a diffuse bounce or a scattering in the fog has happened.
     let mut any_diffuse = false;
     let mut rays = 0;
@@ -413,7 +420,7 @@ fn follow(
         } else {
             PathKind::Caustic
         };
-        if let Some(medium) = fog.filter(|_| in_fog) {
+        if let Some(medium) = medium {
             let t_surface = hit
                 .as_ref()
                 .map_or(f32::INFINITY, |s| s.point.distance(ray.origin));
@@ -429,7 +436,7 @@ fn follow(
                         point,
                         normal: Vec3::ZERO,
                         direction: ray.direction,
-                        power,
+                        power: power * radiance_scale,
                         kind,
                         in_medium: true,
                     });
@@ -462,7 +469,7 @@ fn follow(
                 point: s.point,
                 normal: n,
                 direction: ray.direction,
-                power,
+                power: power * radiance_scale,
                 kind,
                 in_medium: false,
             });
@@ -503,8 +510,9 @@ fn follow(
             power = power * m.transmitted * pt.recip();
             let dir = Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng);
             if dir.dot(n) < 0.0 {
-                // Refracted: into an object (out of the fog), or out of one (into it).
-                in_fog = !front && fog.is_some();
+                // Refracted: into an object (its interior medium), or out of one (the fog).
+                medium = if front { scene.interior_medium(m) } else { fog };
+                radiance_scale = if front { (m.ior * m.ior).recip() } else { 1.0 };
             }
             dir
         } else {
