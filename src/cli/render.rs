@@ -196,11 +196,12 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
     Ok(scene)
 }
 
-/// What an engine does not render yet is refused, not left out (issue #18): fog and skies
-/// are the path tracer's, the ray tracer's (not with radiosity as its indirect light, whose
-/// solution leaves them out) and the photon engine's (fog not with final gathering, whose
-/// gather rays leave it out); radiosity takes a sky, not fog (its form factors are one number
-/// for all channels, a coloured fog's transmittance is not).
+/// What an engine does not render yet is refused, not left out (issue #18): media (fog, a
+/// material's `interior_medium`) and skies are the path tracer's, the ray tracer's (not with
+/// radiosity as its indirect light, whose solution leaves them out) and the photon engine's
+/// (media not with final gathering, whose gather rays leave them out); radiosity takes a sky,
+/// not media (its form factors are one number for all channels, a coloured medium's
+/// transmittance is not).
 fn refuse_unrendered_media(
     args: &RenderArgs,
     input: &Path,
@@ -209,18 +210,18 @@ fn refuse_unrendered_media(
 ) -> Result<(), String> {
     let radiosity_indirect = args.ray_trace.indirect == engines::IndirectKind::Radiosity;
     let gathering = args.photon.gather_indirect;
-    let (fog, sky) = (scene.has_media(), scene.sky.is_some());
+    let (media, sky) = (scene.has_media(), scene.sky.is_some());
     let refused = match engine {
         EngineKind::Path | EngineKind::Raycast => None,
-        EngineKind::Raytrace if radiosity_indirect && (fog || sky) => {
+        EngineKind::Raytrace if radiosity_indirect && (media || sky) => {
             Some(" with --indirect radiosity")
         }
         EngineKind::Raytrace => None,
-        EngineKind::Photon if gathering && fog => Some(" with -gather_indirect"),
+        EngineKind::Photon if gathering && media => Some(" with -gather_indirect"),
         EngineKind::Photon => None,
-        EngineKind::Radiosity if fog => Some(""),
+        EngineKind::Radiosity if media => Some(""),
         EngineKind::Radiosity => None,
-        _ if fog || sky => Some(""),
+        _ if media || sky => Some(""),
         _ => None,
     };
     let Some(how) = refused else {
@@ -228,7 +229,7 @@ fn refuse_unrendered_media(
     };
     let what = if scene.fog.is_some() {
         "fog"
-    } else if fog {
+    } else if media {
         "a medium inside glass (interior_medium)"
     } else {
         "a sky"

@@ -31,7 +31,8 @@ pub struct PhotonMaps {
     pub global: PhotonMap,
     pub caustic: PhotonMap,
     /// Where photons scattered in the fog after a bounce or an earlier scattering (the ray
-    /// tracer scatters the lights' own light itself), and the box around them.
+    /// tracer scatters the lights' own light itself), and the box their lookups reach (theirs
+    /// padded by `max_radius`).
     pub volume: PhotonMap,
     volume_bounds: Bounds3,
     /// Lookups of the volume map along a ray (`--volume-steps`).
@@ -130,10 +131,16 @@ impl PhotonMaps {
     ) -> PhotonMaps {
         let p = &settings.photon;
         let positions: Vec<Vec3> = volume.iter().map(|ph| ph.position).collect();
+        let max_radius = p.max_radius * scene.bounds().extent().length();
+        let photons_box = Bounds3::from_points(&positions);
         PhotonMaps {
             global: PhotonMap::new(global),
             caustic: PhotonMap::new(caustic),
-            volume_bounds: Bounds3::from_points(&positions),
+            // Lookups reach `max_radius` beyond the outermost photons.
+            volume_bounds: Bounds3 {
+                min: photons_box.min - Vec3::splat(max_radius),
+                max: photons_box.max + Vec3::splat(max_radius),
+            },
             volume: PhotonMap::new(volume),
             volume_steps: p.volume_steps.max(1),
             emitted: 0,
@@ -143,13 +150,13 @@ impl PhotonMaps {
             trace_seconds: 0.0,
             build_seconds: 0.0,
             collect: p.num_photons_to_collect.max(1) as usize,
-            max_radius: p.max_radius * scene.bounds().extent().length(),
+            max_radius,
         }
     }
 
     /// Radiance the fog `medium` scatters into `ray` over its first `length` of distance
     /// from the volume map: `volume_steps` lookups evenly spaced over the part of the ray in
-    /// the volume photons' box, jittered together, each weighed by the transmittance from
+    /// `volume_bounds`, jittered together, each weighed by the transmittance from
     /// the ray's origin. A midpoint rule with a random offset: its mean is the integral of
     /// the (smooth) estimate along the ray.
     pub fn volume_in_scattered(
@@ -165,11 +172,7 @@ impl PhotonMaps {
         }
         let travel = ray.direction / scale;
         let reach = self.max_radius;
-        let bounds = Bounds3 {
-            min: self.volume_bounds.min - Vec3::splat(reach),
-            max: self.volume_bounds.max + Vec3::splat(reach),
-        };
-        let Some((near, far)) = bounds.clip(ray.origin, travel, length) else {
+        let Some((near, far)) = self.volume_bounds.clip(ray.origin, travel, length) else {
             return Color::ZERO;
         };
         let step = (far - near) / self.volume_steps as f32;
