@@ -222,6 +222,9 @@ pub enum TextureKind {
     Wood,
     /// Irregular green tiles with dark grout.
     Mosaic,
+    /// A height map (for `bump_file`): a 4×4 grid of round domes, 1 at their tops and 0
+    /// between them.
+    Dimples,
 }
 
 fn hash01(a: u32, b: u32, c: u32) -> f32 {
@@ -243,6 +246,13 @@ pub fn texture(kind: TextureKind, size: u32) -> Vec<u8> {
                     let grain = 0.85 + 0.15 * hash01(x, y / 3, 7);
                     let t = ring.powf(3.0) * grain;
                     [0.55 + 0.25 * t, 0.33 + 0.17 * t, 0.16 + 0.08 * t]
+                }
+                TextureKind::Dimples => {
+                    let cells = 4.0;
+                    let (fx, fy) = ((u * cells).fract() - 0.5, (v * cells).fract() - 0.5);
+                    let r2 = (fx * fx + fy * fy) / (0.4 * 0.4);
+                    let h = (1.0 - r2).max(0.0).sqrt();
+                    [h, h, h]
                 }
                 TextureKind::Mosaic => {
                     let tiles = 12.0;

@@ -20,6 +20,11 @@ pub struct Plan {
     pub shapes: Vec<(&'static str, usize)>,
     /// Textures decoded: those of materials some primitive uses.
     pub textures: usize,
+    /// Height images of `bump_file`s decoded: those of materials some primitive uses.
+    pub height_maps: usize,
+    /// The procedural textures and bump maps of the materials some primitive uses
+    /// ("material 3: wood texture, scale 0.15"), one per material that has either.
+    pub patterns: Vec<String>,
     pub emitters: usize,
     /// The fog the render traces through ("medium 0: σa …, σs …, g …"), None without one.
     pub fog: Option<String>,
@@ -80,6 +85,8 @@ impl Plan {
             triangles: scene.triangles.len(),
             shapes: shape_counts(scene),
             textures: scene.textures.len(),
+            height_maps: scene.height_maps.len(),
+            patterns: patterns(scene),
             emitters,
             fog: scene.fog.map(|k| {
                 let m = &scene.media[k];
@@ -97,21 +104,60 @@ impl Plan {
                 .enumerate()
                 .filter_map(|(i, m)| m.interior_medium.map(|k| format!("material {i}: medium {k}")))
                 .collect(),
-            sky: scene.sky.map(|sky| {
+            sky: scene.sky.as_ref().map(|sky| {
                 let v = |c: crate::geometry::Vec3| format!("{} {} {}", c.x, c.y, c.z);
                 match sky {
-                    crate::scene::sky::Sky::Uniform(c) => format!("uniform {}: lights the scene", v(c)),
+                    crate::scene::sky::Sky::Uniform(c) => format!("uniform {}: lights the scene", v(*c)),
+                    crate::scene::sky::Sky::Map(map) => format!(
+                        "map {} ({}×{}, scale {}): lights the scene, sampled by its importance",
+                        map.file.display(),
+                        map.width,
+                        map.height,
+                        map.scale
+                    ),
                     crate::scene::sky::Sky::Gradient { zenith, horizon, nadir } => format!(
                         "gradient (zenith {}, horizon {}, nadir {}): lights the scene",
-                        v(zenith),
-                        v(horizon),
-                        v(nadir)
+                        v(*zenith),
+                        v(*horizon),
+                        v(*nadir)
                     ),
                 }
             }),
             structures,
         }
     }
+}
+
+/// What each used material with a procedural texture or a bump map evaluates at its hits.
+fn patterns(scene: &Scene) -> Vec<String> {
+    use crate::scene::procedural::BumpSource;
+    let used = scene.used_materials();
+    let mut lines = Vec::new();
+    for (i, m) in scene.materials.iter().enumerate() {
+        if !used[i] {
+            continue;
+        }
+        let mut parts = Vec::new();
+        if let Some(t) = &m.procedural {
+            parts.push(format!("{} texture, scale {}", t.pattern.name(), t.scale));
+        }
+        if let Some(b) = &m.bump {
+            parts.push(match &b.source {
+                BumpSource::Procedural { pattern, scale, .. } => format!(
+                    "{} bump, scale {scale}, amplitude {}",
+                    pattern.name(),
+                    b.amplitude
+                ),
+                BumpSource::File { file, .. } => {
+                    format!("bump image {}, amplitude {}", file.display(), b.amplitude)
+                }
+            });
+        }
+        if !parts.is_empty() {
+            lines.push(format!("material {i}: {}", parts.join(", ")));
+        }
+    }
+    lines
 }
 
 /// The memory every render needs, estimated before anything is allocated (so that a huge
@@ -252,6 +298,19 @@ impl fmt::Display for Plan {
             writeln!(f, "user geometry: {}", user.join(", "))?;
         }
         writeln!(f, "textures decoded: {}", self.textures)?;
+        if self.height_maps > 0 {
+            writeln!(f, "bump height images decoded: {}", self.height_maps)?;
+        }
+        // Nothing of procedural patterns is evaluated for a scene without them.
+        if self.patterns.is_empty() {
+            writeln!(f, "procedural textures and bumps: none")?;
+        } else {
+            writeln!(
+                f,
+                "procedural textures and bumps: {} (filtered over each pixel's footprint)",
+                self.patterns.join("; ")
+            )?;
+        }
         writeln!(f, "emitters: {}", self.emitters)?;
         // Nothing of media or skies is built or traced for a scene without them.
         writeln!(f, "fog: {}", self.fog.as_deref().unwrap_or("none"))?;

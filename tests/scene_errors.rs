@@ -72,7 +72,11 @@ fn bad_skies() {
         1,
         &["sky_color: radiance must be ≥ 0"],
     );
-    fails_at("sky_texture sky.exr\n", 1, &["sky_texture is not read yet"]);
+    fails_at(
+        "sky_texture\n",
+        1,
+        &["expected a file name (sky_texture f)"],
+    );
     fails_at(
         "sky_color 1 1 1\nsky_scale -2\n",
         2,
@@ -352,4 +356,65 @@ fn reflectance_outside_zero_one_is_clamped_with_a_warning() {
         scene.warnings
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Procedural textures and bump maps: unknown patterns, keys without the key they modify,
+/// and two sources of one thing are refused at the key's line.
+#[test]
+fn bad_procedural_textures_and_bumps() {
+    fails_at(
+        "material\ntexture_procedural plaid\n",
+        2,
+        &[
+            "expected a pattern",
+            "wood | marble | noise | crackle | checker",
+            "`plaid`",
+        ],
+    );
+    fails_at(
+        "material\ndiffuse 1 1 1\nbump_procedural checker\n",
+        3,
+        &["expected a pattern", "noise | crackle | wood", "`checker`"],
+    );
+    fails_at(
+        "material\ndiffuse 1 1 1\ntexture_scale 2\n",
+        3,
+        &["texture_scale needs texture_procedural"],
+    );
+    fails_at(
+        "material\ntexture_procedural wood\ntexture_scale 0\n",
+        3,
+        &["texture_scale must be > 0"],
+    );
+    fails_at(
+        "material\ntexture_procedural wood\ntexture_colors 1 1 1 0 2 0\n",
+        3,
+        &["texture_colors are albedos", "[0, 1]"],
+    );
+    fails_at(
+        "material\ntexture_file a.ppm\ntexture_procedural wood\n",
+        3,
+        &["texture_procedural or texture_file, not both"],
+    );
+    fails_at(
+        "material\ndiffuse 1 1 1\nbump_procedural noise\nbump_file h.png\n",
+        4,
+        &["bump_procedural or bump_file, not both"],
+    );
+    fails_at(
+        "material\ndiffuse 1 1 1\nbump_file h.png\nbump_scale 2\n",
+        4,
+        &["bump_scale needs bump_procedural"],
+    );
+    fails_at(
+        "material\ndiffuse 1 1 1\nbump_amplitude 0.1\n",
+        3,
+        &["bump_amplitude needs bump_procedural or bump_file"],
+    );
+    // A procedural texture is the material's albedo: no `diffuse` needed.
+    let scene = parse(&format!(
+        "material\ntexture_procedural checker\nbump_procedural wood\nm 0\n{QUAD}f 1 2 3 4\n"
+    ))
+    .expect("parses");
+    assert!(scene.materials[0].procedural.is_some() && scene.materials[0].bump.is_some());
 }

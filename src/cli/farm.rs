@@ -195,6 +195,7 @@ pub fn run(args: &FarmArgs) -> Result<(), String> {
     if render.camera.overrides() {
         scene.camera = Some(render.camera(scene.camera())?);
     }
+    scene.filter_textures_for(settings.width, settings.height);
     let engine = render.engine();
     let engine_impl = engines::engine(engine);
     if matches!(split, Split::SampleBatches(_)) && !engine_impl.samples_pixels(&settings) {

@@ -186,6 +186,7 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
     if args.camera.overrides() {
         scene.camera = Some(args.camera(scene.camera())?);
     }
+    scene.filter_textures_for(args.common.size[0], args.common.size[1]);
     if scene.primitive_count() == 0 {
         return Err(format!(
             "{}: the scene has no geometry (no quads, triangles, spheres or rings): nothing to render",

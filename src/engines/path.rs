@@ -23,6 +23,7 @@ use crate::render::lights::Light;
 use crate::render::{render_pixels, Counts, RenderStats};
 use crate::sampling::Rng;
 use crate::scene::medium::{Flight, Medium};
+use crate::scene::sky::Sky;
 use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
 
 /// Vertices after which Russian roulette may end a path.
@@ -206,13 +207,21 @@ impl PathTracer<'_> {
         rng: &mut Rng,
         counts: &mut Counts,
     ) -> Color {
-        let Some(sky) = self.scene.sky else {
+        let Some(sky) = &self.scene.sky else {
             return Vec3::ZERO;
         };
-        let (dir, pdf) = diffuse_sample(n, rng.next_f32(), rng.next_f32());
-        // Diffuse: (cos/π)/pdf = 1 per unit albedo; glossy: the lobe's density over this one.
+        let (u, v) = (rng.next_f32(), rng.next_f32());
+        let Some((dir, pdf)) = sky_sample(sky, n, u, v) else {
+            return Vec3::ZERO;
+        };
+        // Diffuse: (cos/π)/pdf per unit albedo (1 for the cosine's own samples); glossy: the
+        // lobe's density over this one.
         let (lobe_pdf, value) = match lobe {
-            None => (pdf, 1.0),
+            None if sky.map().is_none() => (pdf, 1.0),
+            None => {
+                let cos_pdf = n.dot(dir).max(0.0) / std::f32::consts::PI;
+                (cos_pdf, cos_pdf / pdf)
+            }
             Some(lobe) => lobe_against(lobe, dir, pdf),
         };
         if pdf <= 0.0 || lobe_pdf <= 0.0 {
@@ -291,12 +300,12 @@ impl PathTracer<'_> {
                 }
             }
             let Some(s) = hit else {
-                match self.scene.sky {
+                match &self.scene.sky {
                     Some(sky) => {
                         let towards = ray.direction.normalize();
                         let weight = match previous.bsdf_pdf {
                             Some(pdf) if !previous.in_medium => {
-                                power_heuristic(pdf, sky_pdf(previous.normal, towards))
+                                power_heuristic(pdf, sky_pdf(sky, previous.normal, towards))
                             }
                             _ => 1.0,
                         };
@@ -338,6 +347,9 @@ impl PathTracer<'_> {
                     * (self.sample_light(&s, n, None, medium, rng, counts)
                         + self.sample_sky(&s, n, None, medium, rng, counts));
                 let (sampled, pdf) = diffuse_sample(n, rng.next_f32(), rng.next_f32());
+                if m.bump.is_some() && !s.leaves_on_side_of(n, sampled) {
+                    break;
+                }
                 dir = sampled;
                 throughput *= lobe;
                 diffuse_bounce = true;
@@ -401,10 +413,23 @@ fn lobe_against(lobe: &GlossyLobe, dir: Vec3, pdf: f32) -> (f32, f32) {
     (lobe_pdf, lobe_pdf / pdf)
 }
 
+/// A direction `sample_sky` takes towards `sky` from a point of normal `n`, and its density:
+/// the map's importance for a map, the cosine about `n` for the smooth skies (exact for a
+/// uniform sky over a diffuse surface). None where a map is black.
+fn sky_sample(sky: &Sky, n: Vec3, u: f32, v: f32) -> Option<(Vec3, f32)> {
+    match sky.map() {
+        Some(map) => map.sample(u, v),
+        None => Some(diffuse_sample(n, u, v)),
+    }
+}
+
 /// The density with which `sample_sky` at a point of normal `n` picks the unit direction
-/// `towards`: the cosine about `n` over π.
-fn sky_pdf(n: Vec3, towards: Vec3) -> f32 {
-    n.dot(towards).max(0.0) / std::f32::consts::PI
+/// `towards` (see `sky_sample`).
+fn sky_pdf(sky: &Sky, n: Vec3, towards: Vec3) -> f32 {
+    match sky.map() {
+        Some(map) => map.pdf(towards),
+        None => n.dot(towards).max(0.0) / std::f32::consts::PI,
+    }
 }
 
 /// Russian roulette from the `ROULETTE_FROM`th vertex on: whether the path goes on, its

@@ -168,7 +168,7 @@ impl Tracer<'_> {
     ) -> Color {
         let Some(s) = hit else {
             // The sky where the scene has one, else the background.
-            return match self.scene.sky {
+            return match &self.scene.sky {
                 Some(sky) => sky.radiance(ray.direction.normalize_or_zero()),
                 None => self.scene.background,
             };
@@ -329,21 +329,31 @@ impl Tracer<'_> {
         rng: &mut Rng,
         counts: &mut Counts,
     ) -> Color {
-        let Some(sky) = self.scene.sky else {
+        let Some(sky) = &self.scene.sky else {
             return Vec3::ZERO;
         };
         let samples = self.settings.num_shadow_samples;
         let count = samples.max(1);
         let mut total = Vec3::ZERO;
         for (u, v) in self.sky_strata.samples(rng) {
-            let (dir, _) = diffuse_sample(n, u, v);
+            // A map's directions by its importance, each weighed by (cos/π)/density; the
+            // smooth skies' by the cosine, which weighs each by 1.
+            let (dir, weight) = match sky.map() {
+                Some(map) => match map.sample(u, v) {
+                    Some((dir, density)) if n.dot(dir) > 0.0 => {
+                        (dir, n.dot(dir) / (std::f32::consts::PI * density))
+                    }
+                    _ => continue,
+                },
+                None => (diffuse_sample(n, u, v).0, 1.0),
+            };
             if samples > 0 {
                 counts.shadow += 1;
                 if self.accel.occluded(&s.spawn_ray(dir)) {
                     continue;
                 }
             }
-            total += sky.radiance(dir);
+            total += sky.radiance(dir) * weight;
         }
         total * transmittance(fog, f32::INFINITY) / count as f32
     }

@@ -6,10 +6,12 @@ use std::path::{Path, PathBuf};
 use super::camera::{Camera, Projection};
 use super::error::SceneError;
 use super::medium::Medium;
-use super::sky::Sky;
+use super::procedural::{Bump, BumpSource, Pattern, ProceduralTexture, BUMP_PATTERNS};
+use super::sky::{Sky, SkyMap};
 use super::{Material, Quad, Scene, ShapePrim};
 use crate::color::srgb_to_linear;
 use crate::geometry::{quad_normal, vec2, vec3, RingShape, SphereShape, Vec2, Vec3};
+use std::sync::Arc;
 
 /// Whether `text` is in the course dialect: some line starts with one of the dialect's own
 /// tokens. `s` counts only with four numbers after it, since standard OBJ uses `s` for
@@ -108,7 +110,7 @@ struct Parser<'a> {
 
 const MEDIUM_KEYS: [&str; 3] = ["sigma_a", "sigma_s", "g"];
 
-const MATERIAL_KEYS: [&str; 8] = [
+const MATERIAL_KEYS: [&str; 15] = [
     "diffuse",
     "texture_file",
     "reflective",
@@ -117,7 +119,154 @@ const MATERIAL_KEYS: [&str; 8] = [
     "ior",
     "roughness",
     "interior_medium",
+    "texture_procedural",
+    "texture_scale",
+    "texture_colors",
+    "bump_procedural",
+    "bump_file",
+    "bump_amplitude",
+    "bump_scale",
 ];
+
+/// The keys of a material's procedural texture and bump map as read, checked together at
+/// the end of the material (the keys may come in any order).
+#[derive(Default)]
+struct PatternKeys<'a> {
+    texture: Option<(Pattern, Token<'a>)>,
+    texture_scale: Option<(f32, Token<'a>)>,
+    texture_colors: Option<([Vec3; 2], Token<'a>)>,
+    bump_pattern: Option<(Pattern, Token<'a>)>,
+    bump_file: Option<(PathBuf, Token<'a>)>,
+    bump_amplitude: Option<(f32, Token<'a>)>,
+    bump_scale: Option<(f32, Token<'a>)>,
+}
+
+impl<'a> PatternKeys<'a> {
+    /// Reads the value of one of the pattern keys (`key` already read).
+    fn read(&mut self, p: &mut Parser<'a>, key: Token<'a>) -> Result<(), SceneError> {
+        let positive = |p: &mut Parser<'a>, what: &str| -> Result<(f32, Token<'a>), SceneError> {
+            let x = p.real(what)?;
+            if x <= 0.0 {
+                return Err(p.invalid(key, format!("{} must be > 0, found {x}", key.text)));
+            }
+            Ok((x, key))
+        };
+        match key.text {
+            "texture_procedural" | "bump_procedural" => {
+                let allowed: Vec<Pattern> = if key.text == "bump_procedural" {
+                    BUMP_PATTERNS.to_vec()
+                } else {
+                    Pattern::NAMES.iter().map(|&(_, p)| p).collect()
+                };
+                let names = allowed
+                    .iter()
+                    .map(|p| p.name())
+                    .collect::<Vec<_>>()
+                    .join(" | ");
+                let t = p.next();
+                let pattern = t
+                    .and_then(|t| Pattern::from_name(t.text))
+                    .filter(|p| allowed.contains(p))
+                    .ok_or_else(|| p.syntax(t, &format!("a pattern ({} {names})", key.text)))?;
+                *(if key.text == "bump_procedural" {
+                    &mut self.bump_pattern
+                } else {
+                    &mut self.texture
+                }) = Some((pattern, key));
+            }
+            "texture_scale" => {
+                self.texture_scale = Some(positive(p, "a real number (texture_scale s)")?)
+            }
+            "bump_scale" => self.bump_scale = Some(positive(p, "a real number (bump_scale s)")?),
+            "bump_amplitude" => {
+                self.bump_amplitude = Some((p.real("a real number (bump_amplitude a)")?, key))
+            }
+            "texture_colors" => {
+                let what = "a real number (texture_colors r g b  r g b)";
+                let colors = [p.vec3(what)?, p.vec3(what)?];
+                if colors
+                    .iter()
+                    .any(|c| c.min_element() < 0.0 || c.max_element() > 1.0)
+                {
+                    return Err(p.invalid(
+                        key,
+                        "texture_colors are albedos: each channel must lie in [0, 1]".into(),
+                    ));
+                }
+                self.texture_colors = Some((colors, key));
+            }
+            _ => {
+                let name = p
+                    .next()
+                    .ok_or_else(|| p.syntax(None, "a file name (bump_file f)"))?;
+                self.bump_file = Some((PathBuf::from(name.text), key));
+            }
+        }
+        Ok(())
+    }
+
+    /// Puts the texture and bump map into `m`, or says which keys do not go together.
+    fn apply(self, p: &Parser, m: &mut Material) -> Result<(), SceneError> {
+        let needs = |given: Option<Token>, what: &str| match given {
+            Some(at) => {
+                Err(p.invalid(at, format!("{} needs {what} in the same material", at.text)))
+            }
+            None => Ok(()),
+        };
+        match self.texture {
+            Some((pattern, at)) => {
+                if m.texture_file.is_some() {
+                    return Err(p.invalid(
+                        at,
+                        "a material takes texture_procedural or texture_file, not both".into(),
+                    ));
+                }
+                let mut t = ProceduralTexture::new(pattern);
+                if let Some((scale, _)) = self.texture_scale {
+                    t.scale = scale;
+                }
+                if let Some((colors, _)) = self.texture_colors {
+                    t.colors = colors;
+                }
+                m.procedural = Some(t);
+            }
+            None => {
+                needs(self.texture_scale.map(|k| k.1), "texture_procedural")?;
+                needs(self.texture_colors.map(|k| k.1), "texture_procedural")?;
+            }
+        }
+        let source = match (self.bump_pattern, self.bump_file) {
+            (Some(_), Some((_, at))) => {
+                return Err(p.invalid(
+                    at,
+                    "a material takes bump_procedural or bump_file, not both".into(),
+                ))
+            }
+            (Some((pattern, _)), None) => Some(BumpSource::Procedural {
+                pattern,
+                scale: self.bump_scale.map_or(1.0, |k| k.0),
+                origin: Vec3::ZERO,
+            }),
+            (None, Some((file, _))) => {
+                needs(self.bump_scale.map(|k| k.1), "bump_procedural")?;
+                Some(BumpSource::File { file, map: None })
+            }
+            (None, None) => {
+                needs(self.bump_scale.map(|k| k.1), "bump_procedural")?;
+                needs(
+                    self.bump_amplitude.map(|k| k.1),
+                    "bump_procedural or bump_file",
+                )?;
+                None
+            }
+        };
+        m.bump = source.map(|source| Bump {
+            source,
+            amplitude: self.bump_amplitude.map_or(0.01, |k| k.0),
+        });
+        Ok(())
+    }
+}
 
 impl<'a> Parser<'a> {
     fn next(&mut self) -> Option<Token<'a>> {
@@ -236,8 +385,16 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                     ..Material::default()
                 };
                 let mut has_albedo = false;
+                let mut patterns = PatternKeys::default();
                 while let Some(key) = p.peek().filter(|k| MATERIAL_KEYS.contains(&k.text)) {
                     p.next();
+                    if key.text.starts_with("texture_") && key.text != "texture_file"
+                        || key.text.starts_with("bump_")
+                    {
+                        patterns.read(&mut p, key)?;
+                        has_albedo |= key.text == "texture_procedural";
+                        continue;
+                    }
                     match key.text {
                         "diffuse" => {
                             m.diffuse = p.vec3("a real number (diffuse r g b)")?;
@@ -274,9 +431,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 if !has_albedo {
                     return Err(p.invalid(
                         tok,
-                        "material has neither `diffuse` nor `texture_file`".into(),
+                        "material has neither `diffuse` nor `texture_file` nor `texture_procedural`"
+                            .into(),
                     ));
                 }
+                patterns.apply(&p, &mut m)?;
                 scene.materials.push(m);
             }
             "m" => {
@@ -417,10 +576,10 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                         }
                     }
                     _ => {
-                        return Err(p.invalid(
-                            tok,
-                            "sky_texture is not read yet (issue #18): use sky_color or sky_gradient".into(),
-                        ))
+                        let name = p
+                            .next()
+                            .ok_or_else(|| p.syntax(None, "a file name (sky_texture f)"))?;
+                        Sky::Map(Arc::new(SkyMap::named(PathBuf::from(name.text), tok.line)))
                     }
                 });
             }
@@ -445,7 +604,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
             _ => {
                 return Err(p.syntax(
                     Some(tok),
-                    "a scene token (material, m, v, vt, f, s, r, medium, fog, sky_color, sky_gradient, sky_scale, background_color, PerspectiveCamera, OrthographicCamera)",
+                    "a scene token (material, m, v, vt, f, s, r, medium, fog, sky_color, sky_gradient, sky_texture, sky_scale, background_color, PerspectiveCamera, OrthographicCamera)",
                 ))
             }
         }

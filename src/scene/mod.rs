@@ -7,6 +7,7 @@ mod error;
 pub mod medium;
 mod mgf;
 mod obj;
+pub mod procedural;
 pub mod sky;
 mod surface;
 pub mod texture;
@@ -42,6 +43,10 @@ pub struct Material {
     /// The medium that fills the inside of the closed objects of this material
     /// (`interior_medium K`, default none): light refracted into them travels in it.
     pub interior_medium: Option<usize>,
+    /// A pattern that gives the albedo in place of `diffuse` (`texture_procedural`).
+    pub procedural: Option<procedural::ProceduralTexture>,
+    /// A bump map that tilts the shading normal (`bump_procedural`, `bump_file`).
+    pub bump: Option<procedural::Bump>,
     /// Line of the file where the material starts (0 for materials not from a file).
     pub line: u32,
 }
@@ -58,6 +63,8 @@ impl Default for Material {
             ior: 1.5,
             roughness: 0.0,
             interior_medium: None,
+            procedural: None,
+            bump: None,
             line: 0,
         }
     }
@@ -162,6 +169,11 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Decoded textures, only those some primitive's material uses.
     pub textures: Vec<Texture>,
+    /// Decoded height images of `bump_file`s, only those some primitive's material uses.
+    pub height_maps: Vec<Texture>,
+    /// How wide a pixel is where (what procedural textures and bumps are averaged over):
+    /// zero until `filter_textures_for` is told the image's size.
+    pub footprint: procedural::Footprint,
     pub quads: Vec<Quad>,
     pub triangles: TriangleMesh,
     /// Spheres and rings, in the order of the scene file.
@@ -211,6 +223,7 @@ impl Scene {
         };
         scene.check_energy();
         scene.decode_used_textures()?;
+        scene.decode_sky()?;
         Ok(scene)
     }
 
@@ -249,6 +262,26 @@ impl Scene {
             m.sigma_a /= scale;
             m.sigma_s /= scale;
         }
+        // Patterns are laid out in scene units from their origin: both move with the scene.
+        for m in &mut s.materials {
+            if let Some(p) = &mut m.procedural {
+                p.origin = map(p.origin);
+                p.scale *= scale;
+            }
+            if let Some(b) = &mut m.bump {
+                b.amplitude *= scale;
+                if let procedural::BumpSource::Procedural {
+                    scale: size,
+                    origin,
+                    ..
+                } = &mut b.source
+                {
+                    *origin = map(*origin);
+                    *size *= scale;
+                }
+            }
+        }
+        s.footprint = self.footprint.transformed(scale, offset);
         s.quad_neighbours = Default::default();
         s
     }
@@ -292,7 +325,7 @@ impl Scene {
         if self.fog.is_some() || self.sky.is_some() || !self.media.is_empty() {
             let _ = write!(h, "{:?}{:?}{:?}", self.media, self.fog, self.sky);
         }
-        for t in &self.textures {
+        for t in self.textures.iter().chain(&self.height_maps) {
             let _ = write!(h, "texture {}x{}", t.width, t.height);
             for texel in &t.texels {
                 for c in texel.to_array() {
@@ -353,13 +386,24 @@ impl Scene {
         }
     }
 
-    /// The albedo at a hit: the material's texture when it has one, else its `diffuse`.
+    /// The albedo at a hit: the material's image or procedural texture when it has one (the
+    /// pattern averaged over the pixel's footprint there), else its `diffuse`.
     pub fn albedo(&self, hit: &SurfaceHit) -> Color {
         let m = &self.materials[hit.material as usize];
-        match m.texture {
-            Some(t) => self.textures[t].lookup(hit.tex_coords),
-            None => m.diffuse,
+        match (m.texture, &m.procedural) {
+            (Some(t), _) => self.textures[t].lookup(hit.tex_coords),
+            (None, Some(p)) => p.albedo(
+                hit.point,
+                self.footprint.half_widths(hit.point, hit.geometric_normal),
+            ),
+            (None, None) => m.diffuse,
         }
+    }
+
+    /// Sets the footprint procedural textures and bumps are averaged over to a pixel of a
+    /// `width`×`height` image through the scene's camera.
+    pub fn filter_textures_for(&mut self, width: u32, height: u32) {
+        self.footprint = procedural::Footprint::of_pixels(&self.camera(), width, height);
     }
 
     /// Indices of the materials some primitive uses.
@@ -415,6 +459,25 @@ impl Scene {
         }
     }
 
+    /// Decodes the sky's image, if the sky is one (`sky_texture`).
+    fn decode_sky(&mut self) -> Result<(), SceneError> {
+        let Some(sky::Sky::Map(map)) = &mut self.sky else {
+            return Ok(());
+        };
+        let dir = self
+            .path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        let map = std::sync::Arc::make_mut(map);
+        map.decode(&dir).map_err(|why| SceneError::Invalid {
+            file: self.path.clone(),
+            line: map.line,
+            column: 1,
+            message: format!("cannot read sky_texture: {why}"),
+        })
+    }
+
     /// Decodes the textures of the materials in use ("pay only for what the scene uses").
     fn decode_used_textures(&mut self) -> Result<(), SceneError> {
         let used = self.used_materials();
@@ -442,6 +505,30 @@ impl Scene {
             })?;
             m.texture = Some(self.textures.len());
             self.textures.push(texture);
+        }
+        for (i, m) in self.materials.iter_mut().enumerate() {
+            let Some(procedural::Bump {
+                source: procedural::BumpSource::File { file, map },
+                ..
+            }) = &mut m.bump
+            else {
+                continue;
+            };
+            if !used[i] {
+                continue;
+            }
+            let full = dir.join(&*file);
+            let heights = Texture::load_heights(&full).map_err(|why| SceneError::Invalid {
+                file: self.path.clone(),
+                line: m.line,
+                column: 1,
+                message: format!(
+                    "material {i}: cannot read bump_file {}: {why}",
+                    full.display()
+                ),
+            })?;
+            *map = Some(self.height_maps.len());
+            self.height_maps.push(heights);
         }
         Ok(())
     }

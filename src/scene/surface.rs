@@ -2,22 +2,42 @@
 //! primitive and t; the surface is then recomputed here with the shared exact routines, so the
 //! two backends give bit-identical surfaces whenever they agree on the primitive.
 
+use super::procedural::{bumped_normal, Bump, BumpSource};
 use super::{PrimKind, PrimRef, Scene};
 use crate::geometry::{
-    faces_ray, intersect_quad, point_error, spawn_ray, vec2, Ray, Shape, Vec2, Vec3,
+    faces_ray, intersect_quad, point_error, spawn_ray, vec2, Bounds3, Ray, Shape, Vec2, Vec3,
 };
+use crate::sampling::orthonormal_basis;
 
 impl SurfaceHit {
-    /// Whether a ray travelling along `dir` arrives at the front side, and the geometric
-    /// normal turned towards the side it arrives from.
+    /// Whether a ray travelling along `dir` arrives at the front side (by the geometric
+    /// normal), and the shading normal turned towards the side it arrives from.
     pub fn facing(&self, dir: Vec3) -> (bool, Vec3) {
         let front = self.geometric_normal.dot(dir) < 0.0;
         let n = if front {
+            self.shading_normal
+        } else {
+            -self.shading_normal
+        };
+        (front, n)
+    }
+
+    /// The geometric normal turned to the side of `n` (a shading normal from `facing`): what
+    /// photons are stored and looked up by, so that a bump map's tilts, which differ from
+    /// point to point, do not keep neighbouring photons apart.
+    pub fn geometric_side(&self, n: Vec3) -> Vec3 {
+        if self.geometric_normal.dot(n) >= 0.0 {
             self.geometric_normal
         } else {
             -self.geometric_normal
-        };
-        (front, n)
+        }
+    }
+
+    /// Whether `dir` leaves the surface on the side `n` (from `facing`) faces, by the
+    /// geometric normal: a bump map's tilted normal lets sampled directions dip below the
+    /// surface, and the light there is absorbed, not passed through it.
+    pub fn leaves_on_side_of(&self, n: Vec3, dir: Vec3) -> bool {
+        self.geometric_normal.dot(dir) * self.geometric_normal.dot(n) > 0.0
     }
 
     /// A ray leaving this surface point in direction `dir`, offset so it cannot hit the
@@ -52,7 +72,8 @@ pub struct SurfaceHit {
     /// Unit geometric normal: the front normal of quads and triangles, outward on closed
     /// surfaces. It does not depend on the side the ray came from.
     pub geometric_normal: Vec3,
-    /// Unit shading normal (interpolated where a mesh gives vertex normals).
+    /// Unit shading normal: the geometric normal tilted by the material's bump map, if any
+    /// (on the same side of the surface). A mesh's vertex normals are not interpolated.
     pub shading_normal: Vec3,
     /// Bound on the absolute error of `point` in each coordinate (see `offset_ray_origin`).
     pub error: f32,
@@ -75,8 +96,77 @@ impl Scene {
             && (closed || self.two_sided_quads || s.facing(dir).0)
     }
 
-    /// The surface at a backend's hit.
+    /// The surface at a backend's hit, its shading normal tilted by its material's bump map.
     pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> SurfaceHit {
+        let mut s = self.flat_surface(ray, hit);
+        if let Some(bump) = &self.materials[s.material as usize].bump {
+            s.shading_normal = self.bumped(&s, bump);
+        }
+        s
+    }
+
+    /// The shading normal of `s` under `bump`: heights differenced across two tangent
+    /// directions, a footprint apart where the footprint is known and larger than a
+    /// hundredth of the pattern (a thousandth of the primitive, for a height image). A
+    /// thousandth of the pattern made the bumped normals follow the rounding of the point:
+    /// the scene scaled by 1e-4 gave relMSE 2.2e-10 against the unscaled one, where the
+    /// geometry alone gives 3e-11.
+    fn bumped(&self, s: &SurfaceHit, bump: &Bump) -> Vec3 {
+        let n = s.geometric_normal;
+        let tangents = orthonormal_basis(n);
+        let w = self.footprint.half_widths(s.point, n).max_element();
+        let difference = |step: f32, height: &dyn Fn(Vec3) -> f32| {
+            let across = |t: Vec3| height(s.point + t * step) - height(s.point - t * step);
+            (across(tangents.0), across(tangents.1))
+        };
+        let (dh, step) = match &bump.source {
+            BumpSource::Procedural {
+                pattern,
+                scale,
+                origin,
+            } => {
+                let step = w.max(1e-2 * scale);
+                let height =
+                    |p: Vec3| pattern.value((p - *origin) / *scale, Vec3::splat(w / scale));
+                (difference(step, &height), step)
+            }
+            BumpSource::File { map: Some(k), .. } => {
+                let map = &self.height_maps[*k];
+                let step = w.max(1e-3 * self.primitive_extent(s.prim));
+                // The texture coordinates of a point beside the hit: where a ray along the
+                // normal meets the same primitive.
+                let height = |p: Vec3| {
+                    let probe = Ray::new(p + n * step, -n);
+                    let near = PrimHit {
+                        t: step,
+                        prim: s.prim,
+                        u: s.uv.0,
+                        v: s.uv.1,
+                    };
+                    let tc = self.flat_surface(&probe, &near).tex_coords;
+                    let h = map.lookup(tc);
+                    (h.x + h.y + h.z) / 3.0
+                };
+                (difference(step, &height), step)
+            }
+            BumpSource::File { map: None, .. } => return s.shading_normal,
+        };
+        bumped_normal(n, tangents, dh, bump.amplitude, 2.0 * step)
+    }
+
+    /// The size of a primitive: the longest side of its bounding box.
+    fn primitive_extent(&self, prim: PrimRef) -> f32 {
+        let i = prim.index as usize;
+        let bounds = match prim.kind {
+            PrimKind::Quad => Bounds3::from_points(&self.quads[i].vertices),
+            PrimKind::Triangle => Bounds3::from_points(&self.triangles.vertices(i)),
+            PrimKind::Shape => self.shapes[i].shape.bounds(),
+        };
+        bounds.extent().max_element()
+    }
+
+    /// The surface at a backend's hit, with the geometric normal for shading normal.
+    fn flat_surface(&self, ray: &Ray, hit: &PrimHit) -> SurfaceHit {
         let i = hit.prim.index as usize;
         let t_max = f32::INFINITY;
         match hit.prim.kind {
@@ -120,17 +210,6 @@ impl Scene {
                 let b0 = 1.0 - b1 - b2;
                 let point = p0 + (p1 - p0) * b1 + (p2 - p0) * b2;
                 let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-                let shading_normal = if mesh.normals.is_empty() {
-                    ng
-                } else {
-                    let n = mesh.normals[a] * b0 + mesh.normals[b] * b1 + mesh.normals[c] * b2;
-                    let n = n.normalize_or_zero();
-                    if n.length_squared() > 0.0 {
-                        n
-                    } else {
-                        ng
-                    }
-                };
                 let tex_coords = if mesh.tex_coords.is_empty() {
                     vec2(b1, b2)
                 } else {
@@ -145,7 +224,7 @@ impl Scene {
                     point,
                     error: point_error(max_abs(&[p0, p1, p2])),
                     geometric_normal: ng,
-                    shading_normal,
+                    shading_normal: ng,
                     uv: (b1, b2),
                     tex_coords,
                     prim: hit.prim,

@@ -21,6 +21,16 @@ pub struct Texture {
 impl Texture {
     /// Reads PPM (P3/P6) or PNG; 8-bit values are sRGB-encoded and converted to linear.
     pub fn load(path: &Path) -> Result<Texture, String> {
+        Self::load_with(path, srgb_to_linear)
+    }
+
+    /// Reads a height image (`bump_file`): 8-bit values v are heights v/255, not colours.
+    pub fn load_heights(path: &Path) -> Result<Texture, String> {
+        Self::load_with(path, |v| v)
+    }
+
+    /// Reads an image, mapping each channel's value in [0, 1] through `decode`.
+    fn load_with(path: &Path, decode: fn(f32) -> f32) -> Result<Texture, String> {
         let mut reader = image::ImageReader::open(path)
             .map_err(|e| e.to_string())?
             .with_guessed_format()
@@ -33,9 +43,9 @@ impl Texture {
         let texels = img
             .pixels()
             .map(|p| Vec3 {
-                x: srgb_to_linear(p[0] as f32 / 255.0),
-                y: srgb_to_linear(p[1] as f32 / 255.0),
-                z: srgb_to_linear(p[2] as f32 / 255.0),
+                x: decode(p[0] as f32 / 255.0),
+                y: decode(p[1] as f32 / 255.0),
+                z: decode(p[2] as f32 / 255.0),
             })
             .collect();
         Ok(Texture {

@@ -207,6 +207,9 @@ impl Renderer {
         {
             let mut world = self.world.write().map_err(|_| POISONED)?;
             world.scene.camera = Some(job.camera);
+            world
+                .scene
+                .filter_textures_for(settings.width, settings.height);
             if world.scene.two_sided_quads != job.two_sided {
                 world.scene.two_sided_quads = job.two_sided;
                 let scene = &world.scene;

@@ -434,9 +434,9 @@ impl IndirectLight for PhotonIndirect<'_> {
             // bright (relMSE 2.1e-2 against Mitsuba's reference, against 4.7e-4 without
             // final gathering).
             Some(c) => c.irradiance_over_pi(scene, accel, self.maps, (s.point, n, s.error), rng),
-            None => self.maps.global_at(s.point, n),
+            None => self.maps.global_at(s.point, s.geometric_side(n)),
         };
-        global + self.maps.caustic_at(s.point, n)
+        global + self.maps.caustic_at(s.point, s.geometric_side(n))
     }
 
     fn in_scattered(

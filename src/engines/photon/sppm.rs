@@ -281,7 +281,7 @@ fn visible_point(
             add(lobe * lights.sample(&s, n, accel, &mut rng, &mut counts[1]));
             return Some(VisiblePoint {
                 point: s.point,
-                normal: n,
+                normal: s.geometric_side(n),
                 weight: lobe * std::f32::consts::FRAC_1_PI,
             });
         }

@@ -81,17 +81,27 @@ impl SkySource {
     }
 
     /// A photon from the sky through the sphere (`centre`, `radius`): a direction uniform over
-    /// the sphere of directions, a point uniform on the disk across it. Returns its ray and
-    /// its power for a unit chance of being chosen: L(ω)·π·r²·4π (the density of the pair
-    /// is 1/(4π·π·r²)).
-    fn emit(&self, centre: Vec3, radius: f32, rng: &mut Rng) -> (Ray, Color) {
-        let towards = sample_cone(Vec3::Y, -1.0, rng.next_f32(), rng.next_f32());
+    /// the sphere of directions (by the map's importance for a map), a point uniform on the
+    /// disk across it. Returns its ray and its power for a unit chance of being chosen:
+    /// L(ω)·π·r²/p(ω) (uniform directions: p = 1/(4π)), or None for a black map.
+    fn emit(&self, centre: Vec3, radius: f32, rng: &mut Rng) -> Option<(Ray, Color)> {
+        let (u, v) = (rng.next_f32(), rng.next_f32());
+        let (towards, density) = match self.sky.map() {
+            Some(map) => map.sample(u, v)?,
+            None => (
+                sample_cone(Vec3::Y, -1.0, u, v),
+                (4.0 * std::f32::consts::PI).recip(),
+            ),
+        };
         let (dx, dy) = sample_disk(rng.next_f32(), rng.next_f32());
         let (t, b) = orthonormal_basis(towards);
         let origin = centre + (towards + t * dx + b * dy) * radius;
         let area = std::f32::consts::PI * radius * radius;
-        let power = self.sky.radiance(towards) * (4.0 * std::f32::consts::PI * area);
-        (Ray::new(origin, -towards), power)
+        let power = match self.sky.map() {
+            Some(_) => self.sky.radiance(towards) * (area / density),
+            None => self.sky.radiance(towards) * (4.0 * std::f32::consts::PI * area),
+        };
+        Some((Ray::new(origin, -towards), power))
     }
 }
 
@@ -114,9 +124,10 @@ impl Emitters {
         let bounds = scene.bounds();
         let sky = scene
             .sky
+            .as_ref()
             .filter(|_| scene.fog.is_none())
             .map(|sky| SkySource {
-                sky,
+                sky: sky.clone(),
                 centre: bounds.centre(),
                 // A little beyond the bounds, so that no photon starts inside the scene.
                 radius: 0.5 * bounds.extent().length() * 1.01,
@@ -191,8 +202,8 @@ impl Emitters {
                     Aim::Caustics { centre, radius } => (centre, radius),
                     Aim::Everywhere => (sky.centre, sky.radius),
                 };
-                let (ray, power) = sky.emit(centre, radius, rng);
-                Some((ray, power * chosen))
+                sky.emit(centre, radius, rng)
+                    .map(|(ray, power)| (ray, power * chosen))
             }
             (None, None) => None,
         };
@@ -467,7 +478,7 @@ fn follow(
         if albedo.max_element() > 0.0 && !(caustics_only && depth == 0) {
             visit(&Hit {
                 point: s.point,
-                normal: n,
+                normal: s.geometric_side(n),
                 direction: ray.direction,
                 power: power * radiance_scale,
                 kind,
@@ -496,7 +507,11 @@ fn follow(
             }
             power = power * albedo * pd.recip();
             any_diffuse = true;
-            sample_lobe(n, 1.0, rng.next_f32(), rng.next_f32())
+            let dir = sample_lobe(n, 1.0, rng.next_f32(), rng.next_f32());
+            if m.bump.is_some() && !s.leaves_on_side_of(n, dir) {
+                break;
+            }
+            dir
         } else if xi < pd + pr {
             power = power * m.reflective * pr.recip();
             glossy_reflection(

@@ -4,6 +4,7 @@
 
 use crate::engines::radiosity::mesh::{QuadMesh, NONE};
 use crate::geometry::{offset_ray_origin, point_error, Shape, Vec3};
+use crate::scene::procedural::disc_half_widths;
 use crate::scene::{Color, PrimKind, PrimRef, Scene};
 
 #[derive(Clone, Debug)]
@@ -44,7 +45,7 @@ impl Patch {
 }
 
 /// The leaves of `mesh` as patches. Albedo is the material's (a texture's colour at the
-/// patch centre when it has one).
+/// patch centre when it has one, a procedural texture's averaged over the patch).
 pub fn patches(scene: &Scene, mesh: &QuadMesh) -> Vec<Patch> {
     mesh.leaves
         .iter()
@@ -80,7 +81,14 @@ pub fn patches(scene: &Scene, mesh: &QuadMesh) -> Vec<Patch> {
                     };
                     scene.textures[t].lookup(tc)
                 }
-                None => m.diffuse,
+                // A pattern is averaged over the patch (a disc of the patch's area).
+                None => match &m.procedural {
+                    Some(p) => p.albedo(
+                        centre,
+                        disc_half_widths(normal, (area / std::f32::consts::PI).sqrt()),
+                    ),
+                    None => m.diffuse,
+                },
             };
             Patch {
                 face,

@@ -1,6 +1,6 @@
 //! The sky as radiosity's light: each patch gathers the sky it sees before the solve — points
 //! stratified over the patch, each with a direction stratified in the cosine about its normal
-//! and an occlusion ray through the Accel — and reflects it as if it emitted it. The solvers
+//! (by the map's importance for a `sky_texture`) and an occlusion ray through the Accel — and reflects it as if it emitted it. The solvers
 //! then carry that light on between the patches like any emitter's.
 
 use rayon::prelude::*;
@@ -39,24 +39,41 @@ pub fn reflected(
             let shift = (rng.next_u64() % SKY_RAYS_PER_PATCH as u64) as u32;
             let (t, b) = orthonormal_basis(p.normal);
             let mut rays = Vec::with_capacity(SKY_RAYS_PER_PATCH as usize);
+            // Each ray's weight: 1 for the cosine's directions, (cos/π)/density for a map's.
+            let mut weights = Vec::with_capacity(SKY_RAYS_PER_PATCH as usize);
             for i in 0..SKY_RAYS_PER_PATCH {
                 let (s, q) = strata.sample(i, &mut rng);
                 let (u, v) = strata.sample((i + shift) % SKY_RAYS_PER_PATCH, &mut rng);
-                // Cosine-weighted: uniform on the disk, lifted.
-                let (r, phi) = (u.sqrt(), std::f32::consts::TAU * v);
-                let dir = t * (r * phi.cos())
-                    + b * (r * phi.sin())
-                    + p.normal * (1.0 - u).max(0.0).sqrt();
+                let (dir, weight) = match sky.map() {
+                    // A map by its importance (a bright sun would rarely be met by the
+                    // cosine's directions).
+                    Some(map) => match map.sample(u, v) {
+                        Some((dir, density)) if dir.dot(p.normal) > 0.0 => {
+                            (dir, dir.dot(p.normal) / (std::f32::consts::PI * density))
+                        }
+                        _ => continue,
+                    },
+                    None => {
+                        // Cosine-weighted: uniform on the disk, lifted.
+                        let (r, phi) = (u.sqrt(), std::f32::consts::TAU * v);
+                        let dir = t * (r * phi.cos())
+                            + b * (r * phi.sin())
+                            + p.normal * (1.0 - u).max(0.0).sqrt();
+                        (dir, 1.0)
+                    }
+                };
                 let origin = on_primitive(scene, p, p.point(s, q), dir);
                 rays.push(Ray::new(origin, dir));
+                weights.push(weight);
             }
             let mut blocked = vec![false; rays.len()];
             accel.occluded_batch(&rays, &mut blocked);
             let seen: Vec3 = rays
                 .iter()
                 .zip(&blocked)
-                .filter(|(_, &b)| !b)
-                .map(|(ray, _)| sky.radiance(ray.direction.normalize_or_zero()))
+                .zip(&weights)
+                .filter(|((_, &b), _)| !b)
+                .map(|((ray, _), &w)| sky.radiance(ray.direction.normalize_or_zero()) * w)
                 .sum();
             (
                 p.albedo * seen / SKY_RAYS_PER_PATCH as f32,
