@@ -629,9 +629,10 @@ fn the_path_tracer_scatters_a_small_light_into_a_passing_ray_as_the_integral_say
     single_scattering_within_2_percent("path tracer", path::render, (0.495, 0.005), settings);
 }
 
-/// `--plan` says which fog and sky a render traces, and "none" for a scene without them.
+/// `--plan` says which fog, sky, procedural textures and bumps a render uses, and "none" for a
+/// scene without them.
 #[test]
-fn the_plan_says_which_fog_and_sky_a_render_traces() {
+fn the_plan_says_which_fog_sky_and_patterns_a_render_uses() {
     let plan_with = |scene: &str, more: &[&str]| {
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
             .args(["-input", scene, "--plan"])
@@ -672,7 +673,24 @@ fn the_plan_says_which_fog_and_sky_a_render_traces() {
     );
     let plain = plan(scenes.join("cornell_box.obj").to_str().unwrap());
     assert!(
-        plain.contains("fog: none") && plain.contains("sky: none"),
+        plain.contains("fog: none")
+            && plain.contains("sky: none")
+            && plain.contains("procedural textures and bumps: none"),
         "{plain}"
+    );
+    // Procedural textures and bumps, each material's, and the height image decoded.
+    let patterns = plan(scenes.join("procedural_textures.obj").to_str().unwrap());
+    for line in [
+        "bump height images decoded: 1",
+        "material 1: checker texture, scale 1;",
+        "material 6: crackle texture, scale 0.4, crackle bump, scale 0.4, amplitude 0.004;",
+        "material 8: bump image dimples.ppm, amplitude 0.05 (filtered over each pixel's footprint)",
+    ] {
+        assert!(patterns.contains(line), "{line} missing from {patterns}");
+    }
+    let outdoor = plan(scenes.join("outdoor_sky.obj").to_str().unwrap());
+    assert!(
+        outdoor.contains("sky: gradient (zenith 0.12 0.3 0.85, horizon 0.75 0.82 0.9, nadir 0.1 0.1 0.1): lights the scene"),
+        "{outdoor}"
     );
 }

@@ -207,6 +207,23 @@ fn unreadable_texture() {
     let err = Scene::load(&path).expect_err("missing texture must be rejected");
     assert_eq!(err.line(), Some(3), "{err}");
     assert!(err.to_string().contains("cannot read texture"), "{err}");
+    // A height image and a sky map likewise, at the material's and the key's line.
+    std::fs::write(
+        &path,
+        format!("\nmaterial\ndiffuse 1 1 1\nbump_file missing.png\nm 0\n{QUAD}f 1 2 3 4\n"),
+    )
+    .expect("write");
+    let err = Scene::load(&path).expect_err("missing height image must be rejected");
+    assert_eq!(err.line(), Some(2), "{err}");
+    assert!(err.to_string().contains("cannot read bump_file"), "{err}");
+    std::fs::write(
+        &path,
+        format!("{MATERIAL}m 0\n{QUAD}f 1 2 3 4\n\nsky_texture missing.exr\n"),
+    )
+    .expect("write");
+    let err = Scene::load(&path).expect_err("missing sky map must be rejected");
+    assert_eq!(err.line(), Some(12), "{err}");
+    assert!(err.to_string().contains("cannot read sky_texture"), "{err}");
     // A texture no primitive uses is not decoded, so it cannot fail the load.
     std::fs::write(
         &path,
