@@ -199,31 +199,29 @@ fn unreadable_texture() {
     let dir = std::env::temp_dir().join(format!("trilux-texture-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("scene.obj");
-    std::fs::write(
-        &path,
+    // The scene `text` fails to load at `line`, saying `why`.
+    let fails_to_load = |text: String, line: u32, why: &str| {
+        std::fs::write(&path, text).expect("write");
+        let err = Scene::load(&path).expect_err("an unreadable image must be rejected");
+        assert_eq!(err.line(), Some(line), "{err}");
+        assert!(err.to_string().contains(why), "{err}");
+    };
+    fails_to_load(
         format!("\n\nmaterial\ntexture_file missing.ppm\n\nm 0\n{QUAD}f 1 2 3 4\n"),
-    )
-    .expect("write");
-    let err = Scene::load(&path).expect_err("missing texture must be rejected");
-    assert_eq!(err.line(), Some(3), "{err}");
-    assert!(err.to_string().contains("cannot read texture"), "{err}");
+        3,
+        "cannot read texture",
+    );
     // A height image and a sky map likewise, at the material's and the key's line.
-    std::fs::write(
-        &path,
+    fails_to_load(
         format!("\nmaterial\ndiffuse 1 1 1\nbump_file missing.png\nm 0\n{QUAD}f 1 2 3 4\n"),
-    )
-    .expect("write");
-    let err = Scene::load(&path).expect_err("missing height image must be rejected");
-    assert_eq!(err.line(), Some(2), "{err}");
-    assert!(err.to_string().contains("cannot read bump_file"), "{err}");
-    std::fs::write(
-        &path,
+        2,
+        "cannot read bump_file",
+    );
+    fails_to_load(
         format!("{MATERIAL}m 0\n{QUAD}f 1 2 3 4\n\nsky_texture missing.exr\n"),
-    )
-    .expect("write");
-    let err = Scene::load(&path).expect_err("missing sky map must be rejected");
-    assert_eq!(err.line(), Some(12), "{err}");
-    assert!(err.to_string().contains("cannot read sky_texture"), "{err}");
+        12,
+        "cannot read sky_texture",
+    );
     // A texture no primitive uses is not decoded, so it cannot fail the load.
     std::fs::write(
         &path,

@@ -194,7 +194,8 @@ const REFERENCE_SEED: u64 = 0x5eed_f00d;
 /// into the output directory.
 pub fn run(scene_path: &Path, settings: &ReportSettings) -> Result<Report, String> {
     let clock = Instant::now();
-    let scene = Scene::load(scene_path).map_err(|e| e.to_string())?;
+    let mut scene = Scene::load(scene_path).map_err(|e| e.to_string())?;
+    scene.filter_textures_for(settings.width, settings.height);
     std::fs::create_dir_all(&settings.output)
         .map_err(|e| format!("{}: {e}", settings.output.display()))?;
     let base = RenderSettings {

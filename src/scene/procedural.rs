@@ -182,7 +182,7 @@ fn fractal_noise(q: Vec3, w: f32) -> f32 {
 
 /// Perlin's improved gradient noise (2002): 0 on the integer lattice, smooth (C²), in about
 /// [−1, 1], mean 0.
-pub fn gradient_noise(p: Vec3) -> f32 {
+fn gradient_noise(p: Vec3) -> f32 {
     let (fx, fy, fz) = (p.x.floor(), p.y.floor(), p.z.floor());
     let (x, y, z) = (p.x - fx, p.y - fy, p.z - fz);
     // Lattice coordinates modulo 256 (casts saturate, and NaN gives 0).
