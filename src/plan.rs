@@ -91,8 +91,13 @@ impl Plan {
             fog: scene.fog.map(|k| {
                 let m = &scene.media[k];
                 let v = |c: crate::geometry::Vec3| format!("{} {} {}", c.x, c.y, c.z);
+                let what = if engine == EngineKind::Radiosity {
+                    "transmittance on form factors and camera rays; the light it scatters in is left to the other engines (path, raytrace, photon)"
+                } else {
+                    "transmittance on every segment, scattering traced"
+                };
                 format!(
-                    "medium {k} (sigma_a {}, sigma_s {}, g {}): transmittance on every segment, scattering traced",
+                    "medium {k} (sigma_a {}, sigma_s {}, g {}): {what}",
                     v(m.sigma_a),
                     v(m.sigma_s),
                     m.g

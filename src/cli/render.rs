@@ -200,9 +200,9 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
 /// What an engine does not render yet is refused, not left out (issue #18): media (fog, a
 /// material's `interior_medium`) and skies are the path tracer's, the ray tracer's (not with
 /// radiosity as its indirect light, whose solution leaves them out) and the photon engine's
-/// (media not with final gathering, whose gather rays leave them out); radiosity takes a sky,
-/// not media (its form factors are one number for all channels, a coloured medium's
-/// transmittance is not).
+/// (media not with final gathering, whose gather rays leave them out); radiosity takes a sky
+/// and a grey fog, not a coloured one nor a medium inside glass (its form factors are one
+/// number for all channels, a coloured medium's transmittance is not).
 fn refuse_unrendered_media(
     args: &RenderArgs,
     input: &Path,
@@ -220,7 +220,7 @@ fn refuse_unrendered_media(
         EngineKind::Raytrace => None,
         EngineKind::Photon if gathering && media => Some(" with -gather_indirect"),
         EngineKind::Photon => None,
-        EngineKind::Radiosity if media => Some(""),
+        EngineKind::Radiosity if media && !grey_fog_only(scene) => Some(""),
         EngineKind::Radiosity => None,
         _ if media || sky => Some(""),
         _ => None,
@@ -236,9 +236,20 @@ fn refuse_unrendered_media(
         "a sky"
     };
     Err(format!(
-        "{}: the scene has {what}, which the path tracer, the ray tracer and the photon engine render so far (--engine path, raytrace without --indirect radiosity, photon without -gather_indirect in fog; radiosity takes a sky, not fog); the {engine} engine{how} would leave it out",
+        "{}: the scene has {what}, which the path tracer, the ray tracer and the photon engine render so far (--engine path, raytrace without --indirect radiosity, photon without -gather_indirect in fog; radiosity takes a sky and a grey fog, whose sigma_a + sigma_s is the same in every channel); the {engine} engine{how} would leave it out",
         input.display(),
     ))
+}
+
+/// Whether the scene's only medium is a fog whose extinction σt is the same in every channel:
+/// what radiosity takes (its form factors are one number for all channels).
+fn grey_fog_only(scene: &Scene) -> bool {
+    let interior = scene.materials.iter().any(|m| m.interior_medium.is_some());
+    let grey = scene.fog.is_some_and(|k| {
+        let t = scene.media[k].sigma_t();
+        t.max_element() - t.min_element() <= 1e-6 * t.max_element()
+    });
+    grey && !interior
 }
 
 /// `--max-memory` in bytes (default: 80% of this machine's), and as the messages name it.

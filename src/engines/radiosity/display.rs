@@ -67,15 +67,26 @@ pub fn render_solution(
         &settings.image(),
         "display",
         |ray, hit, _rng, _counts| {
+            // Through a fog, what the camera sees is attenuated over the ray's length (and
+            // nothing beyond the scene gets through); the light the fog scatters in is the
+            // other engines' (`--plan` says so).
+            let fog = scene.fog.map(|k| &scene.media[k]);
             let Some(s) = hit else {
+                if fog.is_some() {
+                    return Vec3::ZERO;
+                }
                 return match &scene.sky {
                     Some(sky) => sky.radiance(ray.direction.normalize_or_zero()),
                     None => scene.background,
                 };
             };
-            solution
+            let seen = solution
                 .sample(scene, &s, -ray.direction, &field)
-                .unwrap_or(Vec3::ZERO)
+                .unwrap_or(Vec3::ZERO);
+            match fog {
+                Some(m) => seen * m.transmittance(s.t * ray.direction.length()),
+                None => seen,
+            }
         },
     );
     let outline_source = settings.radiosity.display == Display::FormFactors;

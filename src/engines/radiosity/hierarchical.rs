@@ -206,8 +206,10 @@ struct Link {
     /// How much the form factor varies over the receiver (what the oracle weighs), as the
     /// top half of an f32's bits: the oracle needs no more than its first digits.
     spread: u16,
-    /// Point pairs found unblocked, of `PAIRS`.
-    open: u16,
+    /// The share of the form factor that reaches the receiver: the fraction of point pairs
+    /// found unblocked, times their mean transmittance through a fog (1 without), as
+    /// `half_bits` (exact for the fractions k/PAIRS).
+    reach: u16,
 }
 
 const _: () = assert!(std::mem::size_of::<Link>() == 16);
@@ -217,7 +219,7 @@ impl Link {
         f32::from_bits((self.spread as u32) << 16)
     }
     fn visible(&self) -> f32 {
-        self.open as f32 / PAIRS as f32
+        f32::from_bits((self.reach as u32) << 16)
     }
 }
 
@@ -746,11 +748,12 @@ impl Hierarchical {
                 source,
                 form_factor: 0.0,
                 spread: 0,
-                open: PAIRS as u16,
+                reach: half_bits(1.0),
             })
             .collect();
         out.par_chunks_mut(LINK_CHUNK).for_each(|out| {
             let mut rays: Vec<Ray> = Vec::new();
+            let mut lengths: Vec<f32> = Vec::new();
             let mut owners: Vec<usize> = Vec::new();
             for (o, link) in out.iter_mut().enumerate() {
                 let (r, s) = (link.receiver, link.source);
@@ -771,6 +774,12 @@ impl Hierarchical {
                     link.spread = half_bits(h.corner_form_factor(r, s));
                 }
                 if link.form_factor <= 0.0 || !sampler.visibility() {
+                    // No pairs traced: through a fog, the centres' transmittance.
+                    if sampler.in_fog() {
+                        let t = sampler.transmittance(h.node(r).centre.distance(h.node(s).centre));
+                        link.form_factor *= t;
+                        link.reach = half_bits(t);
+                    }
                     continue;
                 }
                 // Pair receiver point k with a source point whose index is shifted per link,
@@ -780,7 +789,9 @@ impl Hierarchical {
                     let (y, sp) = h.sample(s, (k + shift) % PAIRS, seed, x);
                     let (rp, sp) = (&h.patches[rp as usize], &h.patches[sp as usize]);
                     let from = on_primitive(scene, rp, x, y - x);
-                    rays.push(shadow_ray(from, on_primitive(scene, sp, y, x - y)));
+                    let to = on_primitive(scene, sp, y, x - y);
+                    rays.push(shadow_ray(from, to));
+                    lengths.push(from.distance(to));
                     owners.push(o);
                 }
             }
@@ -790,20 +801,29 @@ impl Hierarchical {
             let mut blocked = vec![false; rays.len()];
             sampler.accel().occluded_batch(&rays, &mut blocked);
             sampler.rays.fetch_add(rays.len() as u64, Relaxed);
-            for &o in owners.iter().step_by(PAIRS) {
-                out[o].open = 0;
-            }
-            for (&o, b) in owners.iter().zip(&blocked) {
-                out[o].open += u16::from(!b);
+            // Each link's unblocked pairs, and their transmittances summed.
+            let mut open = vec![0u16; out.len()];
+            let mut through = vec![0.0f32; out.len()];
+            for ((&o, b), &length) in owners.iter().zip(&blocked).zip(&lengths) {
+                if !b {
+                    open[o] += 1;
+                    through[o] += sampler.transmittance(length);
+                }
             }
             for &o in owners.iter().step_by(PAIRS) {
                 let l = &mut out[o];
                 // Some pairs blocked, or all of them: the rest of the receiver may see more
                 // (or less) than its four points did, so the whole form factor is at stake.
-                if l.open < PAIRS as u16 {
+                if open[o] < PAIRS as u16 {
                     l.spread = half_bits(l.form_factor.max(l.spread()));
                 }
-                l.form_factor *= l.visible();
+                let reach = if sampler.in_fog() {
+                    through[o] / PAIRS as f32
+                } else {
+                    open[o] as f32 / PAIRS as f32
+                };
+                l.form_factor *= reach;
+                l.reach = half_bits(reach);
             }
         });
         out

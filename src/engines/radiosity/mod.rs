@@ -257,9 +257,10 @@ impl Solution {
                 p.area = 0.0;
             }
         }
-        // The sky's reflected light enters the solve as the patches' own emission.
+        // The sky's reflected light enters the solve as the patches' own emission (none
+        // through a fog, which is infinite and hides it).
         let mut sky_rays = 0;
-        if let Some(s) = &scene.sky {
+        if let Some(s) = scene.sky.as_ref().filter(|_| scene.fog.is_none()) {
             let (reflected, rays) = sky::reflected(scene, accel, s, &solved_patches, settings.seed);
             for (p, r) in solved_patches.iter_mut().zip(reflected) {
                 p.emitted += r;

@@ -35,6 +35,10 @@ pub struct FormFactorSampler<'a> {
     seed: u64,
     /// With one sample per form factor: where each patch's visibility rays start and end.
     anchors: Vec<Vec3>,
+    /// The fog's extinction σt (its channels' mean; 0 without fog): form factors are one
+    /// number for all channels, so radiosity takes a grey fog only (the command line refuses
+    /// another), and every form factor is attenuated by exp(−σt·d) along its point pairs.
+    extinction: f32,
     /// Visibility rays cast so far.
     pub rays: AtomicU64,
 }
@@ -58,6 +62,9 @@ impl<'a> FormFactorSampler<'a> {
         } else {
             Vec::new()
         };
+        let extinction = scene
+            .fog
+            .map_or(0.0, |k| scene.media[k].sigma_t().element_sum() / 3.0);
         FormFactorSampler {
             scene,
             accel,
@@ -66,6 +73,7 @@ impl<'a> FormFactorSampler<'a> {
             visibility,
             seed,
             anchors,
+            extinction,
             rays: AtomicU64::new(0),
         }
     }
@@ -87,6 +95,20 @@ impl<'a> FormFactorSampler<'a> {
     /// Whether form factors are tested for occlusion.
     pub fn visibility(&self) -> bool {
         self.visibility
+    }
+
+    /// Whether form factors are attenuated by a fog.
+    pub fn in_fog(&self) -> bool {
+        self.extinction > 0.0
+    }
+
+    /// The fog's transmittance over `length` (1 without fog).
+    pub fn transmittance(&self, length: f32) -> f32 {
+        if self.extinction > 0.0 {
+            (-self.extinction * length).exp()
+        } else {
+            1.0
+        }
     }
 
     /// The seed of every sample point.
@@ -153,7 +175,7 @@ impl<'a> FormFactorSampler<'a> {
                             continue;
                         }
                         if !self.visibility {
-                            *slot += f;
+                            *slot += f * self.transmittance(x.distance(shooter.centre));
                             continue;
                         }
                         let (from, to) = if self.samples == 1 {
@@ -164,7 +186,7 @@ impl<'a> FormFactorSampler<'a> {
                             (from, on_primitive(self.scene, shooter, y, x - y))
                         };
                         rays.push(shadow_ray(from, to));
-                        owners.push((o, f));
+                        owners.push((o, f * self.transmittance(from.distance(to))));
                     }
                 }
                 if !rays.is_empty() {
