@@ -84,6 +84,18 @@ fn base_settings() -> RenderSettings {
     }
 }
 
+/// The photon engine's settings of the agreement tests: 16 samples a pixel, `shadow` rays a
+/// light, `photons` photons shot.
+fn photon_settings(shadow: u32, photons: u64) -> RenderSettings {
+    let mut settings = RenderSettings {
+        num_shadow_samples: shadow,
+        num_antialias_samples: 16,
+        ..base_settings()
+    };
+    settings.photon.num_photons_to_shoot = photons;
+    settings
+}
+
 /// The path tracer's image at `spp` paths a pixel: the reference.
 fn path_traced(scene: &Scene, accel: &dyn Accel, spp: u32) -> Film {
     let clock = std::time::Instant::now();
@@ -254,12 +266,7 @@ fn radiosity_photon_and_path_images_agree_on_flat_regions() {
 /// lighting fog no photon can reach; with `--two-sided` the two agreed within 1.4%.)
 #[test]
 fn photon_and_path_images_agree_on_flat_regions_in_fog() {
-    let mut photon = RenderSettings {
-        num_shadow_samples: 64,
-        num_antialias_samples: 16,
-        ..base_settings()
-    };
-    photon.photon.num_photons_to_shoot = 1_000_000;
+    let photon = photon_settings(64, 1_000_000);
     photon_agrees_with_path_on_region_means(
         "cornell_box_fog.obj",
         4096,
@@ -281,13 +288,10 @@ fn photon_and_path_images_agree_on_flat_regions_in_fog() {
 /// factors); without that the sphere came out 2.0× the path tracer's.
 #[test]
 fn photon_and_path_images_agree_through_a_glass_sphere_filled_with_a_medium() {
-    let mut photon = RenderSettings {
-        num_shadow_samples: 16,
-        num_antialias_samples: 16,
+    let photon = RenderSettings {
         num_bounces: 6,
-        ..base_settings()
+        ..photon_settings(16, 1_000_000)
     };
-    photon.photon.num_photons_to_shoot = 1_000_000;
     let sphere = PrimRef {
         kind: PrimKind::Shape,
         index: 0,
@@ -315,12 +319,7 @@ fn photon_and_path_images_agree_through_a_glass_sphere_filled_with_a_medium() {
 /// out 4.3% dark.
 #[test]
 fn photon_and_path_images_agree_on_procedural_textures_and_bumps() {
-    let mut photon = RenderSettings {
-        num_shadow_samples: 16,
-        num_antialias_samples: 16,
-        ..base_settings()
-    };
-    photon.photon.num_photons_to_shoot = 200_000;
+    let photon = photon_settings(16, 200_000);
     photon_agrees_with_path_on_region_means(
         "procedural_textures.obj",
         1024,
