@@ -545,6 +545,20 @@ fn a_floor_under_a_sky_map_reflects_its_cosine_weighted_integral() {
         .expect("a sky")
         .radiance(trilux::geometry::vec3(0.0, 1.0, 0.0));
     assert_eq!(zenith.to_array(), texel(0, 0));
+    // The same map as OpenEXR (rows from the top) is the same sky.
+    let exr = image::Rgb32FImage::from_fn(w as u32, h as u32, |c, r| {
+        image::Rgb(texel(c as usize, r as usize))
+    });
+    exr.save(dir.join("sky.exr")).expect("writes");
+    let text = std::fs::read_to_string(dir.join("floor.obj")).expect("reads");
+    std::fs::write(
+        dir.join("floor_exr.obj"),
+        text.replace("sky.pfm", "sky.exr"),
+    )
+    .expect("writes");
+    let from_exr = Scene::load(&dir.join("floor_exr.obj")).expect("loads");
+    let integral = |s: &Scene| s.sky.as_ref().expect("a sky").integral();
+    assert_eq!(integral(&from_exr), integral(&up));
 }
 
 /// Radiosity in a grey absorbing fog: two unit squares facing each other one unit apart, the

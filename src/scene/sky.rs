@@ -129,19 +129,34 @@ impl SkyMap {
     }
 
     /// Reads the image (relative to directory `dir`): .exr and .pfm as linear radiance, .png
-    /// and .ppm decoded from sRGB.
+    /// and .ppm (any other format the texture reader knows) decoded from sRGB.
     pub fn decode(&mut self, dir: &Path) -> Result<(), String> {
         let path = dir.join(&self.file);
         let is = |ext: &str| {
             path.extension()
                 .is_some_and(|e| e.eq_ignore_ascii_case(ext))
         };
-        let (width, height, texels) = if is("ppm") || is("pgm") {
+        // Every decoder is bounded: PFM by the file's own bytes, the others by the textures'
+        // allocation limit (a hostile header cannot make it allocate without bound).
+        let (width, height, texels) = if is("pfm") {
+            let film = crate::film::read_pfm(&path)?;
+            (film.width, film.height, film.pixels)
+        } else if is("exr") {
+            let mut reader =
+                image::ImageReader::open(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+            let mut limits = image::Limits::default();
+            limits.max_alloc = Some(super::texture::MAX_TEXTURE_BYTES);
+            reader.limits(limits);
+            let image = reader
+                .decode()
+                .map_err(|e| format!("{}: {e}", path.display()))?
+                .to_rgb32f();
+            let (width, height) = image.dimensions();
+            let texels = image.pixels().map(|p| vec3(p[0], p[1], p[2])).collect();
+            (width, height, texels)
+        } else {
             let t = super::Texture::load(&path)?;
             (t.width, t.height, t.texels)
-        } else {
-            let film = crate::film::metrics::read_image(&path)?;
-            (film.width, film.height, film.pixels)
         };
         if width == 0 || height == 0 {
             return Err(format!("{}: an empty image", path.display()));

@@ -276,7 +276,10 @@ pub fn final_gather(
                 if albedo.max_element() <= 0.0 {
                     return (Vec3::ZERO, distance);
                 }
+                // Photons are looked up by the geometric normal (a bump's tilt would keep
+                // them out; see `SurfaceHit::geometric_side`).
                 let (_, ny) = s.facing(ray.direction);
+                let ny = s.geometric_side(ny);
                 (albedo * estimates.at(maps, s.point, ny), distance)
             })
             .collect()
