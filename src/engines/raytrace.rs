@@ -339,11 +339,9 @@ impl Tracer<'_> {
             // A map's directions by its importance, each weighed by (cos/π)/density; the
             // smooth skies' by the cosine, which weighs each by 1.
             let (dir, weight) = match sky.map() {
-                Some(map) => match map.sample(u, v) {
-                    Some((dir, density)) if n.dot(dir) > 0.0 => {
-                        (dir, n.dot(dir) / (std::f32::consts::PI * density))
-                    }
-                    _ => continue,
+                Some(map) => match map.sample_above(n, u, v) {
+                    Some(sample) => sample,
+                    None => continue,
                 },
                 None => (diffuse_sample(n, u, v).0, 1.0),
             };

@@ -611,30 +611,25 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
     }
 
     scene.sky = scene.sky.map(|sky| sky.scaled(sky_scale));
-    if let Some((k, at)) = fog {
-        if k < 0 || k as usize >= scene.media.len() {
+    // A medium index given by `key` must name one of the file's medium blocks.
+    let count = scene.media.len();
+    let medium = |key: &str, k: i64, at: Token| -> Result<usize, SceneError> {
+        if k < 0 || k as usize >= count {
             return Err(p.invalid(
                 at,
                 format!(
-                    "fog {k}: no such medium (the file defines {} medium block{})",
-                    scene.media.len(),
-                    if scene.media.len() == 1 { "" } else { "s" }
+                    "{key} {k}: no such medium (the file defines {count} medium block{})",
+                    if count == 1 { "" } else { "s" }
                 ),
             ));
         }
-        scene.fog = Some(k as usize);
+        Ok(k as usize)
+    };
+    if let Some((k, at)) = fog {
+        scene.fog = Some(medium("fog", k, at)?);
     }
     for (material, k, at) in interiors {
-        if k < 0 || k as usize >= scene.media.len() {
-            return Err(p.invalid(
-                at,
-                format!(
-                    "interior_medium {k}: no such medium (the file defines {} medium block{})",
-                    scene.media.len(),
-                    if scene.media.len() == 1 { "" } else { "s" }
-                ),
-            ));
-        }
+        let k = medium("interior_medium", k, at)?;
         let m = &mut scene.materials[material];
         // Only a refracting boundary delimits a medium so far: an index-matched one (no
         // `transmitted`) would have to let shadow rays through, which the Accel's occlusion
@@ -645,7 +640,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 "interior_medium needs `transmitted` in its material (a refracting boundary); index-matched boundaries are not read yet".into(),
             ));
         }
-        m.interior_medium = Some(k as usize);
+        m.interior_medium = Some(k);
     }
     for (k, at) in selections {
         if k as usize >= scene.materials.len() {

@@ -266,6 +266,15 @@ impl SkyMap {
         (pdf > 0.0).then_some((d, pdf))
     }
 
+    /// A direction drawn by `sample` for lighting a surface of unit normal `n`, with what its
+    /// radiance is weighed by in the surface's irradiance over π, (cos/π)/density; None for a
+    /// direction below the surface (it brings nothing) or a black map.
+    pub fn sample_above(&self, n: Vec3, u: f32, v: f32) -> Option<(Vec3, f32)> {
+        let (d, density) = self.sample(u, v)?;
+        let cos = n.dot(d);
+        (cos > 0.0).then(|| (d, cos / (std::f32::consts::PI * density)))
+    }
+
     /// The density in solid angle with which `sample` draws the unit direction `d`.
     pub fn pdf(&self, d: Vec3) -> f32 {
         if self.rows.last().is_none_or(|&t| t <= 0.0) {

@@ -86,21 +86,19 @@ impl SkySource {
     /// L(ω)·π·r²/p(ω) (uniform directions: p = 1/(4π)), or None for a black map.
     fn emit(&self, centre: Vec3, radius: f32, rng: &mut Rng) -> Option<(Ray, Color)> {
         let (u, v) = (rng.next_f32(), rng.next_f32());
-        let (towards, density) = match self.sky.map() {
-            Some(map) => map.sample(u, v)?,
-            None => (
-                sample_cone(Vec3::Y, -1.0, u, v),
-                (4.0 * std::f32::consts::PI).recip(),
-            ),
+        // The direction, and 1/density (the uniform sphere's: 4π).
+        let (towards, per_density) = match self.sky.map() {
+            Some(map) => {
+                let (d, density) = map.sample(u, v)?;
+                (d, density.recip())
+            }
+            None => (sample_cone(Vec3::Y, -1.0, u, v), 4.0 * std::f32::consts::PI),
         };
         let (dx, dy) = sample_disk(rng.next_f32(), rng.next_f32());
         let (t, b) = orthonormal_basis(towards);
         let origin = centre + (towards + t * dx + b * dy) * radius;
         let area = std::f32::consts::PI * radius * radius;
-        let power = match self.sky.map() {
-            Some(_) => self.sky.radiance(towards) * (area / density),
-            None => self.sky.radiance(towards) * (4.0 * std::f32::consts::PI * area),
-        };
+        let power = self.sky.radiance(towards) * (per_density * area);
         Some((Ray::new(origin, -towards), power))
     }
 }

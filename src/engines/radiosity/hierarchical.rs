@@ -753,7 +753,8 @@ impl Hierarchical {
             .collect();
         out.par_chunks_mut(LINK_CHUNK).for_each(|out| {
             let mut rays: Vec<Ray> = Vec::new();
-            let mut lengths: Vec<f32> = Vec::new();
+            // Each pair's transmittance through a fog (1 without).
+            let mut transmitted: Vec<f32> = Vec::new();
             let mut owners: Vec<usize> = Vec::new();
             for (o, link) in out.iter_mut().enumerate() {
                 let (r, s) = (link.receiver, link.source);
@@ -776,7 +777,7 @@ impl Hierarchical {
                 if link.form_factor <= 0.0 || !sampler.visibility() {
                     // No pairs traced: through a fog, the centres' transmittance.
                     if sampler.in_fog() {
-                        let t = sampler.transmittance(h.node(r).centre.distance(h.node(s).centre));
+                        let t = sampler.transmittance(h.node(r).centre, h.node(s).centre);
                         link.form_factor *= t;
                         link.reach = half_bits(t);
                     }
@@ -791,7 +792,7 @@ impl Hierarchical {
                     let from = on_primitive(scene, rp, x, y - x);
                     let to = on_primitive(scene, sp, y, x - y);
                     rays.push(shadow_ray(from, to));
-                    lengths.push(from.distance(to));
+                    transmitted.push(sampler.transmittance(from, to));
                     owners.push(o);
                 }
             }
@@ -804,10 +805,10 @@ impl Hierarchical {
             // Each link's unblocked pairs, and their transmittances summed.
             let mut open = vec![0u16; out.len()];
             let mut through = vec![0.0f32; out.len()];
-            for ((&o, b), &length) in owners.iter().zip(&blocked).zip(&lengths) {
+            for ((&o, b), &t) in owners.iter().zip(&blocked).zip(&transmitted) {
                 if !b {
                     open[o] += 1;
-                    through[o] += sampler.transmittance(length);
+                    through[o] += t;
                 }
             }
             for &o in owners.iter().step_by(PAIRS) {

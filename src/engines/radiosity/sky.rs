@@ -1,7 +1,8 @@
 //! The sky as radiosity's light: each patch gathers the sky it sees before the solve — points
 //! stratified over the patch, each with a direction stratified in the cosine about its normal
-//! (by the map's importance for a `sky_texture`) and an occlusion ray through the Accel — and reflects it as if it emitted it. The solvers
-//! then carry that light on between the patches like any emitter's.
+//! (by the map's importance for a `sky_texture`) and an occlusion ray through the Accel — and
+//! reflects it as if it emitted it. The solvers then carry that light on between the patches
+//! like any emitter's.
 
 use rayon::prelude::*;
 
@@ -47,11 +48,9 @@ pub fn reflected(
                 let (dir, weight) = match sky.map() {
                     // A map by its importance (a bright sun would rarely be met by the
                     // cosine's directions).
-                    Some(map) => match map.sample(u, v) {
-                        Some((dir, density)) if dir.dot(p.normal) > 0.0 => {
-                            (dir, dir.dot(p.normal) / (std::f32::consts::PI * density))
-                        }
-                        _ => continue,
+                    Some(map) => match map.sample_above(p.normal, u, v) {
+                        Some(sample) => sample,
+                        None => continue,
                     },
                     None => {
                         // Cosine-weighted: uniform on the disk, lifted.

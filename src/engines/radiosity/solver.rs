@@ -102,10 +102,11 @@ impl<'a> FormFactorSampler<'a> {
         self.extinction > 0.0
     }
 
-    /// The fog's transmittance over `length` (1 without fog).
-    pub fn transmittance(&self, length: f32) -> f32 {
+    /// The fog's transmittance between points `a` and `b` (1 without fog, the distance then
+    /// not even computed: this runs for every point pair).
+    pub fn transmittance(&self, a: Vec3, b: Vec3) -> f32 {
         if self.extinction > 0.0 {
-            (-self.extinction * length).exp()
+            (-self.extinction * a.distance(b)).exp()
         } else {
             1.0
         }
@@ -175,7 +176,7 @@ impl<'a> FormFactorSampler<'a> {
                             continue;
                         }
                         if !self.visibility {
-                            *slot += f * self.transmittance(x.distance(shooter.centre));
+                            *slot += f * self.transmittance(x, shooter.centre);
                             continue;
                         }
                         let (from, to) = if self.samples == 1 {
@@ -186,7 +187,7 @@ impl<'a> FormFactorSampler<'a> {
                             (from, on_primitive(self.scene, shooter, y, x - y))
                         };
                         rays.push(shadow_ray(from, to));
-                        owners.push((o, f * self.transmittance(from.distance(to))));
+                        owners.push((o, f * self.transmittance(from, to)));
                     }
                 }
                 if !rays.is_empty() {
