@@ -200,7 +200,7 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
 /// What an engine does not render yet is refused, not left out (issue #18): media (fog, a
 /// material's `interior_medium`) and skies are the path tracer's, the ray tracer's (not with
 /// radiosity as its indirect light, whose solution leaves them out) and the photon engine's
-/// (media not with final gathering, whose gather rays leave them out); radiosity takes a sky
+/// (final gathering included: its gather rays cross the media); radiosity takes a sky
 /// and a grey fog, not a coloured one nor a medium inside glass (its form factors are one
 /// number for all channels, a coloured medium's transmittance is not).
 fn refuse_unrendered_media(
@@ -210,7 +210,6 @@ fn refuse_unrendered_media(
     scene: &Scene,
 ) -> Result<(), String> {
     let radiosity_indirect = args.ray_trace.indirect == engines::IndirectKind::Radiosity;
-    let gathering = args.photon.gather_indirect;
     let (media, sky) = (scene.has_media(), scene.sky.is_some());
     let refused = match engine {
         EngineKind::Path | EngineKind::Raycast => None,
@@ -218,7 +217,6 @@ fn refuse_unrendered_media(
             Some(" with --indirect radiosity")
         }
         EngineKind::Raytrace => None,
-        EngineKind::Photon if gathering && media => Some(" with -gather_indirect"),
         EngineKind::Photon => None,
         EngineKind::Radiosity if media && !grey_fog_only(scene) => Some(""),
         EngineKind::Radiosity => None,
@@ -236,7 +234,7 @@ fn refuse_unrendered_media(
         "a sky"
     };
     Err(format!(
-        "{}: the scene has {what}, which the path tracer, the ray tracer and the photon engine render so far (--engine path, raytrace without --indirect radiosity, photon without -gather_indirect in fog; radiosity takes a sky and a grey fog, whose sigma_a + sigma_s is the same in every channel); the {engine} engine{how} would leave it out",
+        "{}: the scene has {what}, which the path tracer, the ray tracer and the photon engine render so far (--engine path, raytrace without --indirect radiosity, photon; radiosity takes a sky and a grey fog, whose sigma_a + sigma_s is the same in every channel); the {engine} engine{how} would leave it out",
         input.display(),
     ))
 }

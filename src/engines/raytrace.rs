@@ -184,9 +184,9 @@ impl Tracer<'_> {
             let fog = self.medium_of(branch);
             let irradiance_over_pi =
                 self.direct(&s, n, fog, rng, counts) + self.sky_light(&s, n, fog, rng, counts);
-            let indirect = self
-                .indirect
-                .incident(self.scene, self.accel, &s, n, branch.depth, rng);
+            let indirect =
+                self.indirect
+                    .incident(self.scene, self.accel, &s, (n, fog), branch.depth, rng);
             radiance += albedo * (irradiance_over_pi + indirect);
         }
         if branch.depth >= self.settings.num_bounces {

@@ -13,14 +13,14 @@ use crate::scene::{Scene, SurfaceHit};
 /// A source of diffuse indirect light for the ray tracer.
 pub trait IndirectLight: Sync {
     /// Incident radiance averaged over the hemisphere at `s` (unit normal `n` on the lit
-    /// side), `depth` specular bounces from the camera: what the surface's albedo multiplies
-    /// besides the direct light.
+    /// side, in `medium`: the fog, an object's interior medium or none), `depth` specular
+    /// bounces from the camera: what the surface's albedo multiplies besides the direct light.
     fn incident(
         &self,
         scene: &Scene,
         accel: &dyn Accel,
         s: &SurfaceHit,
-        n: Vec3,
+        n_medium: (Vec3, Option<&Medium>),
         depth: u32,
         rng: &mut Rng,
     ) -> Color;
@@ -42,7 +42,7 @@ impl IndirectLight for Ambient {
         _: &Scene,
         _: &dyn Accel,
         _: &SurfaceHit,
-        _: Vec3,
+        _: (Vec3, Option<&Medium>),
         _: u32,
         _: &mut Rng,
     ) -> Color {

@@ -33,6 +33,7 @@ use crate::accel::Accel;
 use crate::engines::engine::RenderSettings;
 use crate::geometry::{spawn_ray, Ray, Vec3};
 use crate::sampling::{orthonormal_basis, Rng};
+use crate::scene::medium::Medium;
 use crate::scene::{Camera, Color, Scene};
 
 /// Records consulted per lookup.
@@ -54,6 +55,8 @@ const IN_FRONT: f32 = 0.05;
 /// Cornell box) does not put records exactly on the edges where two walls meet — there a gather ray's hit at distance zero is a matter of
 /// rounding, which the two Accels settle differently.
 const FIRST_PASS_OFFSET: (f32, f32) = (0.3, 0.45);
+/// The stream of a gather's fog lookups (`Rng::new`'s second key).
+const FOG_STREAM: u64 = 0xf09;
 /// Hit distances are taken as at least this in the gradients (a gather from a point on an
 /// edge sees the other wall at distance zero).
 const NEAREST_HIT: f32 = 1e-6;
@@ -251,15 +254,19 @@ pub fn gather_hemisphere(
 }
 
 /// Irradiance over π at `x` (unit normal `n` on the lit side, point error `error`) by a final
-/// gather of `rays` rays through the Accel, with its gradients.
+/// gather of `rays` rays through the Accel, with its gradients. In a `medium` each gather ray
+/// brings what its hit reflects times the transmittance, plus what the medium scatters into
+/// it (the volume map, every scattering counted).
 pub fn final_gather(
-    scene: &Scene,
-    accel: &dyn Accel,
-    (maps, estimates): (&PhotonMaps, &RadianceEstimates),
+    (scene, accel, maps): (&Scene, &dyn Accel, &PhotonMaps),
+    estimates: &RadianceEstimates,
     point: (Vec3, Vec3, f32),
-    rays: u32,
+    (rays, medium): (u32, Option<&Medium>),
     rng: &mut Rng,
 ) -> Gathered {
+    // The fog's lookups draw from their own stream: without fog the gathers' draws, and so
+    // the images, stay what they were.
+    let mut fog_rng = medium.map(|_| Rng::new(rng.next_u64(), FOG_STREAM, 0));
     gather_hemisphere(point, rays, rng, |batch| {
         let mut hits = vec![None; batch.len()];
         accel.intersect_batch(batch, &mut hits);
@@ -267,20 +274,35 @@ pub fn final_gather(
             .iter()
             .zip(&hits)
             .map(|(ray, hit)| {
-                let Some(h) = hit else {
-                    return (Vec3::ZERO, f32::INFINITY);
+                let (reflected, distance) = match hit {
+                    None => (Vec3::ZERO, f32::INFINITY),
+                    Some(h) => {
+                        let s = scene.surface(ray, h);
+                        let distance = s.t * ray.direction.length();
+                        let albedo = scene.albedo(&s);
+                        if albedo.max_element() <= 0.0 {
+                            (Vec3::ZERO, distance)
+                        } else {
+                            // Photons are looked up by the geometric normal (a bump's tilt
+                            // would keep them out; see `SurfaceHit::geometric_side`).
+                            let (_, ny) = s.facing(ray.direction);
+                            let ny = s.geometric_side(ny);
+                            (albedo * estimates.at(maps, s.point, ny), distance)
+                        }
+                    }
                 };
-                let s = scene.surface(ray, h);
-                let distance = s.t * ray.direction.length();
-                let albedo = scene.albedo(&s);
-                if albedo.max_element() <= 0.0 {
-                    return (Vec3::ZERO, distance);
+                match (medium, fog_rng.as_mut()) {
+                    (Some(m), Some(fog_rng)) => {
+                        let through = if hit.is_some() {
+                            m.transmittance(distance) * reflected
+                        } else {
+                            Vec3::ZERO
+                        };
+                        let scattered = maps.volume_gathered(m, ray, distance, fog_rng);
+                        (through + scattered, distance)
+                    }
+                    _ => (reflected, distance),
                 }
-                // Photons are looked up by the geometric normal (a bump's tilt would keep
-                // them out; see `SurfaceHit::geometric_side`).
-                let (_, ny) = s.facing(ray.direction);
-                let ny = s.geometric_side(ny);
-                (albedo * estimates.at(maps, s.point, ny), distance)
             })
             .collect()
     })
@@ -375,6 +397,7 @@ impl IrradianceCache {
         let (w, h) = (settings.width, settings.height);
         let view = scene.camera().view();
         let extent = scene.bounds().extent().length();
+        let fog = scene.fog.map(|k| &scene.media[k]);
         let mut cache = IrradianceCache {
             records: Vec::new(),
             tree: tree_of(&[]),
@@ -433,12 +456,12 @@ impl IrradianceCache {
                         return None;
                     }
                     let mut rng = Rng::new(settings.seed ^ 0xcace, (j * w + i) as u64, 0);
+                    // The camera is in the fog, and so is what it sees first.
                     let gathered = final_gather(
-                        scene,
-                        accel,
-                        (maps, &cache.estimates),
+                        (scene, accel, maps),
+                        &cache.estimates,
                         (s.point, n, s.error),
-                        p.final_gather_rays,
+                        (p.final_gather_rays, fog),
                         &mut rng,
                     );
                     cache.rays.fetch_add(p.final_gather_rays as u64, Relaxed);
@@ -524,15 +547,14 @@ impl IrradianceCache {
         (weights > 0.0).then(|| sum * weights.recip())
     }
 
-    /// Irradiance over π at a surface point: interpolated from the records that cover it, else
-    /// (the first pass complete) a fresh gather, or (cut short) the nearest records whatever
-    /// their error.
+    /// Irradiance over π at a surface point in `medium`: interpolated from the records that
+    /// cover it, else (the first pass complete) a fresh gather, or (cut short) the nearest
+    /// records whatever their error.
     pub fn irradiance_over_pi(
         &self,
-        scene: &Scene,
-        accel: &dyn Accel,
-        maps: &PhotonMaps,
+        (scene, accel, maps): (&Scene, &dyn Accel, &PhotonMaps),
         (x, n, error): (Vec3, Vec3, f32),
+        medium: Option<&Medium>,
         rng: &mut Rng,
     ) -> Color {
         let limit = if self.complete {
@@ -547,11 +569,10 @@ impl IrradianceCache {
         self.fresh.fetch_add(1, Relaxed);
         self.rays.fetch_add(self.gather_rays as u64, Relaxed);
         final_gather(
-            scene,
-            accel,
-            (maps, &self.estimates),
+            (scene, accel, maps),
+            &self.estimates,
             (x, n, error),
-            self.gather_rays,
+            (self.gather_rays, medium),
             rng,
         )
         .value

@@ -7,7 +7,7 @@ use std::num::NonZero;
 use kiddo::immutable::float::kdtree::ImmutableKdTree;
 use kiddo::SquaredEuclidean;
 
-use super::trace::Photon;
+use super::trace::{PathKind, Photon};
 use crate::geometry::Vec3;
 use crate::scene::medium::Medium;
 use crate::scene::Color;
@@ -75,14 +75,16 @@ impl PhotonMap {
     /// Σ p(ω_p → towards)·Φ_p / (4/3·π·r³) over the k − 1 inside the k-th's sphere (Jensen &
     /// Christensen 1998, made unbiased for a uniform density). The photons are
     /// stored where they scattered with their power times σs over the density of the event,
-    /// so their density is σs times the fluence.
+    /// so their density is σs times the fluence. `first_scatterings`: whether photons
+    /// scattered straight from the light (`PathKind::Direct`) count; skipped, they still
+    /// take their place among the k, so the estimate is that of the others' density.
     pub fn in_scattered(
         &self,
-        x: Vec3,
-        towards: Vec3,
+        (x, towards): (Vec3, Vec3),
         medium: &Medium,
         k: usize,
         max_radius: f32,
+        first_scatterings: bool,
     ) -> Color {
         let Some(k) = NonZero::new(k) else {
             return Vec3::ZERO;
@@ -106,7 +108,9 @@ impl PhotonMap {
         let mut sum = Vec3::ZERO;
         for f in &found[..inside] {
             let p = &self.photons[f.item as usize];
-            sum += p.power * medium.phase(p.direction, towards);
+            if first_scatterings || p.kind != PathKind::Direct {
+                sum += p.power * medium.phase(p.direction, towards);
+            }
         }
         let volume = 4.0 / 3.0 * std::f32::consts::PI * r2 * r2.sqrt();
         sum * volume.recip()

@@ -592,7 +592,7 @@ impl IndirectLight for RadiosityIndirect<'_> {
         scene: &Scene,
         _: &dyn Accel,
         s: &SurfaceHit,
-        n: Vec3,
+        (n, _): (Vec3, Option<&crate::scene::medium::Medium>),
         _: u32,
         _: &mut Rng,
     ) -> Color {
