@@ -200,9 +200,8 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
 /// What an engine does not render yet is refused, not left out (issue #18): media (fog, a
 /// material's `interior_medium`) and skies are the path tracer's, the ray tracer's (not with
 /// radiosity as its indirect light, whose solution leaves them out) and the photon engine's
-/// (final gathering included: its gather rays cross the media); radiosity takes a sky
-/// and a grey fog, not a coloured one nor a medium inside glass (its form factors are one
-/// number for all channels, a coloured medium's transmittance is not).
+/// (final gathering included: its gather rays cross the media); radiosity takes a sky and a
+/// fog, not a medium inside glass (behind a specular boundary its form factors do not cross).
 fn refuse_unrendered_media(
     args: &RenderArgs,
     input: &Path,
@@ -218,7 +217,7 @@ fn refuse_unrendered_media(
         }
         EngineKind::Raytrace => None,
         EngineKind::Photon => None,
-        EngineKind::Radiosity if media && !grey_fog_only(scene) => Some(""),
+        EngineKind::Radiosity if media && !fog_only(scene) => Some(""),
         EngineKind::Radiosity => None,
         _ if media || sky => Some(""),
         _ => None,
@@ -226,7 +225,9 @@ fn refuse_unrendered_media(
     let Some(how) = refused else {
         return Ok(());
     };
-    let what = if scene.fog.is_some() {
+    let what = if engine == EngineKind::Radiosity {
+        "a medium inside glass (interior_medium)"
+    } else if scene.fog.is_some() {
         "fog"
     } else if media {
         "a medium inside glass (interior_medium)"
@@ -234,20 +235,15 @@ fn refuse_unrendered_media(
         "a sky"
     };
     Err(format!(
-        "{}: the scene has {what}, which the path tracer, the ray tracer and the photon engine render so far (--engine path, raytrace without --indirect radiosity, photon; radiosity takes a sky and a grey fog, whose sigma_a + sigma_s is the same in every channel); the {engine} engine{how} would leave it out",
+        "{}: the scene has {what}, which the path tracer, the ray tracer and the photon engine render so far (--engine path, raytrace without --indirect radiosity, photon; radiosity takes a sky and a fog, not a medium inside glass); the {engine} engine{how} would leave it out",
         input.display(),
     ))
 }
 
-/// Whether the scene's only medium is a fog whose extinction σt is the same in every channel:
-/// what radiosity takes (its form factors are one number for all channels).
-fn grey_fog_only(scene: &Scene) -> bool {
-    let interior = scene.materials.iter().any(|m| m.interior_medium.is_some());
-    let grey = scene.fog.is_some_and(|k| {
-        let t = scene.media[k].sigma_t();
-        t.max_element() - t.min_element() <= 1e-6 * t.max_element()
-    });
-    grey && !interior
+/// Whether the scene's only medium is its fog: what radiosity takes (a medium inside a glass
+/// object is behind a specular boundary, which radiosity's form factors do not cross).
+fn fog_only(scene: &Scene) -> bool {
+    !scene.materials.iter().any(|m| m.interior_medium.is_some())
 }
 
 /// `--max-memory` in bytes (default: 80% of this machine's), and as the messages name it.

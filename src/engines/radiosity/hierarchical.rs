@@ -935,9 +935,23 @@ fn split_pair(h: &mut Hierarchy, r: u32, s: u32, n: u32, out: &mut Vec<(u32, u32
     }
 }
 
-/// Per node: what its own links gather of `sources` (F × the source's value, summed).
-fn gather(h: &Hierarchy, links: &[Link], sources: &[Color]) -> Vec<Color> {
+/// Per node: what its own links gather of `sources` (F × the source's value, summed; in a
+/// coloured fog, F per channel by `FormFactorSampler::tint`).
+fn gather(
+    h: &Hierarchy,
+    sampler: &FormFactorSampler,
+    links: &[Link],
+    sources: &[Color],
+) -> Vec<Color> {
     let mut gathered = vec![Vec3::ZERO; h.nodes.len()];
+    if sampler.tinted() {
+        for l in links {
+            let (r, s) = (l.receiver as usize, l.source as usize);
+            let tint = sampler.tint(h.nodes[r].centre, h.nodes[s].centre);
+            gathered[r] += sources[s] * tint * l.form_factor;
+        }
+        return gathered;
+    }
     for l in links {
         gathered[l.receiver as usize] += sources[l.source as usize] * l.form_factor;
     }
@@ -1076,7 +1090,7 @@ impl RadiositySolver for Hierarchical {
         let mut capped = self.refine(&mut h, sampler, initial, threshold, min_area, &mut links);
         let mut emission = h.emission();
         // What the links gather of the emission changes only with the links.
-        let mut direct = gather(&h, &links, &emission);
+        let mut direct = gather(&h, sampler, &links, &emission);
         let mut scales = Vec::new();
         update_leaf_scales(&h, &links, &emission, false, &mut scales);
 
@@ -1100,7 +1114,7 @@ impl RadiositySolver for Hierarchical {
                     .collect();
                 let gathered = Gathered {
                     direct: &direct,
-                    reflected: &gather(&h, &links, &reflected),
+                    reflected: &gather(&h, sampler, &links, &reflected),
                 };
                 let (inc, radiance) = sweep(&h, &scales, &gathered);
                 let before = power(&h.radiance[..patches.len()]);
@@ -1163,7 +1177,7 @@ impl RadiositySolver for Hierarchical {
                 let candidates = again.iter().map(|l| (l.receiver, l.source)).collect();
                 capped |= self.refine(&mut h, sampler, candidates, threshold, min_area, &mut links);
                 emission = h.emission();
-                direct = gather(&h, &links, &emission);
+                direct = gather(&h, sampler, &links, &emission);
             }
             // Whether or not links were refined, the leaf scales now weigh the links by the
             // radiosities just solved for; the next round's first sweep says how much that

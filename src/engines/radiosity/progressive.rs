@@ -132,10 +132,16 @@ impl Progressive {
             let shot_emission = unshot_emission[best] * omega;
             s.undistributed[best] -= shot;
             unshot_emission[best] *= 1.0 - omega;
+            let tinted = sampler.tinted();
             for (j, &f) in row.iter().enumerate() {
                 if f <= 0.0 {
                     continue;
                 }
+                let f = if tinted {
+                    sampler.tint(patches[j].centre, patches[best].centre) * f
+                } else {
+                    Vec3::splat(f)
+                };
                 let arriving = shot * f;
                 s.incident[j] += arriving;
                 s.incident_direct[j] += shot_emission * f;

@@ -20,6 +20,8 @@ use crate::geometry::{shadow_ray, Ray, Vec3};
 use crate::sampling::{Pattern, Rng, Strata};
 use crate::scene::{Color, Scene};
 
+/// A fog whose channels' σt differ from their mean by at most this share of it is grey.
+const GREY_FOG: f32 = 1e-6;
 /// Receivers handled by one parallel task (their visibility rays go to the Accel as a batch).
 const RECEIVER_CHUNK: usize = 64;
 
@@ -35,10 +37,14 @@ pub struct FormFactorSampler<'a> {
     seed: u64,
     /// With one sample per form factor: where each patch's visibility rays start and end.
     anchors: Vec<Vec3>,
-    /// The fog's extinction σt (its channels' mean; 0 without fog): form factors are one
-    /// number for all channels, so radiosity takes a grey fog only (the command line refuses
-    /// another), and every form factor is attenuated by exp(−σt·d) along its point pairs.
+    /// The fog's extinction σt (its channels' mean; 0 without fog): every form factor is
+    /// attenuated by exp(−σt·d) along its point pairs.
     extinction: f32,
+    /// A coloured fog's σt per channel less `extinction` (None for a grey fog or none): form
+    /// factors are one number for all channels, so each channel's own share,
+    /// exp(−Δσt·d), is applied where light is carried, at the distance between the two
+    /// patches' centres (`tint`).
+    tint_extinction: Option<Vec3>,
     /// Visibility rays cast so far.
     pub rays: AtomicU64,
 }
@@ -62,9 +68,10 @@ impl<'a> FormFactorSampler<'a> {
         } else {
             Vec::new()
         };
-        let extinction = scene
-            .fog
-            .map_or(0.0, |k| scene.media[k].sigma_t().element_sum() / 3.0);
+        let sigma_t = scene.fog.map_or(Vec3::ZERO, |k| scene.media[k].sigma_t());
+        let extinction = sigma_t.element_sum() / 3.0;
+        let tint_extinction = Some(sigma_t - Vec3::splat(extinction))
+            .filter(|d| d.abs().max_element() > GREY_FOG * extinction);
         FormFactorSampler {
             scene,
             accel,
@@ -74,6 +81,7 @@ impl<'a> FormFactorSampler<'a> {
             seed,
             anchors,
             extinction,
+            tint_extinction,
             rays: AtomicU64::new(0),
         }
     }
@@ -109,6 +117,29 @@ impl<'a> FormFactorSampler<'a> {
             (-self.extinction * a.distance(b)).exp()
         } else {
             1.0
+        }
+    }
+
+    /// Whether the fog is coloured: form factors then carry each channel by `tint`.
+    pub fn tinted(&self) -> bool {
+        self.tint_extinction.is_some()
+    }
+
+    /// Each channel's transmittance between the centres `a` and `b` relative to the mean
+    /// channel's, which the form factors hold: exp(−(σt,c − σ̄t)·d), 1 in a grey fog. Taken at
+    /// the centres rather than per point pair, it is exact where the pairs' distances agree —
+    /// as they come to as patches shrink against their distance.
+    pub fn tint(&self, a: Vec3, b: Vec3) -> Color {
+        match self.tint_extinction {
+            Some(d) => {
+                let distance = a.distance(b);
+                Vec3::new(
+                    (-d.x * distance).exp(),
+                    (-d.y * distance).exp(),
+                    (-d.z * distance).exp(),
+                )
+            }
+            None => Vec3::ONE,
         }
     }
 
