@@ -43,6 +43,38 @@ fn furnace_radiance_is_le_over_one_minus_rho() {
     }
 }
 
+/// Paths cut after N scatterings (`--max-depth N`) in the furnace: each scattering adds one
+/// term of the series, Le·(1 + ρ + … + ρ^N), exactly (the light sample and the bounce that
+/// finds an emitting wall split the last term by MIS). Over seeds 0–3 at 256 paths a pixel
+/// every depth came out within ±0.11% (depth 0 exactly 1); the bound is 0.3%.
+#[test]
+fn furnace_paths_cut_at_depth_n_sum_n_terms_of_the_series() {
+    let rho = 0.5f32;
+    let scene = furnace(rho);
+    let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
+    for depth in [0u32, 1, 2, 5] {
+        let truth: f64 = (0..=depth).map(|k| (rho as f64).powi(k as i32)).sum();
+        let settings = RenderSettings {
+            width: 16,
+            height: 16,
+            num_antialias_samples: 256,
+            max_depth: Some(depth),
+            quiet: true,
+            ..RenderSettings::default()
+        };
+        let (film, _) = path::render(&scene, accel.as_ref(), &settings);
+        let mean = film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64;
+        println!(
+            "furnace cut at depth {depth}: {mean:.5} against {truth:.5} ({:+.3}%)",
+            100.0 * (mean / truth - 1.0)
+        );
+        assert!(
+            (mean / truth - 1.0).abs() < 3e-3,
+            "depth {depth}: {mean} against {truth}"
+        );
+    }
+}
+
 #[test]
 fn square_light_matches_the_closed_form() {
     let (le, rho) = (10.0f32, 0.6f32);

@@ -47,6 +47,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub sppm: SppmArgs,
     #[command(flatten)]
+    pub path: PathArgs,
+    #[command(flatten)]
     pub part: PartArgs,
     /// The argument ids given on the command line (filled from clap's value sources after
     /// parsing), by group.
@@ -117,6 +119,17 @@ pub struct CommonArgs {
     /// cracks along quad diagonals and shared edges for a little speed.
     #[arg(long, default_value_t = AccelOptions::default().embree_robust, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
     pub embree_robust: bool,
+}
+
+/// The path tracer's flags.
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Path tracer (--engine path)")]
+pub struct PathArgs {
+    /// Scatterings a path may take, surface bounces of every kind and scatterings in a medium
+    /// (pbrt's maxdepth): 0 shows what emits, 1 direct light and single scattering
+    /// [default: no limit; Russian roulette ends paths without bias].
+    #[arg(long, value_name = "N")]
+    pub max_depth: Option<u32>,
 }
 
 /// The SPPM engine's flags (its passes are -num_antialias_samples).
@@ -564,10 +577,11 @@ impl PhotonArgs {
 }
 
 /// The clap group of each engine's own flags, and the engine it implies.
-pub const ENGINE_GROUPS: [(&str, EngineKind); 3] = [
+pub const ENGINE_GROUPS: [(&str, EngineKind); 4] = [
     ("PhotonArgs", EngineKind::Photon),
     ("RadiosityArgs", EngineKind::Radiosity),
     ("SppmArgs", EngineKind::Sppm),
+    ("PathArgs", EngineKind::Path),
 ];
 
 impl RenderArgs {
@@ -580,6 +594,7 @@ impl RenderArgs {
             num_bounces: self.ray_trace.num_bounces,
             num_shadow_samples: self.ray_trace.num_shadow_samples,
             num_antialias_samples: self.camera.num_antialias_samples,
+            max_depth: self.path.max_depth,
             ambient_light: self
                 .ray_trace
                 .ambient_light

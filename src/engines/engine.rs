@@ -218,6 +218,9 @@ pub struct RenderSettings {
     pub num_shadow_samples: u32,
     /// Samples per pixel (`-num_antialias_samples`, default 1).
     pub num_antialias_samples: u32,
+    /// Scatterings a path-traced path may take (`--max-depth`, default None: Russian roulette
+    /// alone ends paths).
+    pub max_depth: Option<u32>,
     /// Constant ambient radiance for diffuse indirect light (`-ambient_light`, default 0.1).
     pub ambient_light: Vec3,
     /// What the radiosity engine reads (mesh, form factors, solver, display).
@@ -258,6 +261,7 @@ impl Default for RenderSettings {
             num_bounces: 0,
             num_shadow_samples: 0,
             num_antialias_samples: 1,
+            max_depth: None,
             ambient_light: Vec3::splat(0.1),
             radiosity: Default::default(),
             indirect: IndirectKind::Ambient,

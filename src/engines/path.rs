@@ -47,6 +47,9 @@ pub struct PathTracer<'a> {
     /// Cumulative light-selection probabilities (∝ emitted power: max(Le) × area).
     cdf: Vec<f32>,
     light_of: HashMap<PrimRef, usize>,
+    /// Scatterings a path may take (`--max-depth`; default `MAX_VERTICES`, which roulette
+    /// never lets a path reach).
+    max_depth: u32,
 }
 
 /// What the previous vertex of a path tells the next: where it was and with what density the
@@ -80,6 +83,17 @@ impl PathTracer<'_> {
             lights,
             cdf,
             light_of,
+            max_depth: MAX_VERTICES,
+        }
+    }
+
+    /// The same tracer with paths cut after `max_depth` scatterings (surface bounces of every
+    /// kind and scatterings in a medium; pbrt's `maxdepth`): 0 shows what emits, 1 direct
+    /// light and single scattering. None: no limit but roulette's.
+    pub fn with_max_depth(self, max_depth: Option<u32>) -> Self {
+        PathTracer {
+            max_depth: max_depth.map_or(MAX_VERTICES, |d| d.min(MAX_VERTICES)),
+            ..self
         }
     }
 
@@ -273,6 +287,9 @@ impl PathTracer<'_> {
                     .as_ref()
                     .map_or(f32::INFINITY, |s| s.point.distance(ray.origin));
                 match m.sample_flight(t_surface, throughput, rng.next_f32(), rng.next_f32()) {
+                    // A path at its depth limit takes no more scatterings (those that pass are
+                    // weighed for the ones that would not have).
+                    Flight::Scattered { .. } if vertex >= self.max_depth => break,
                     Flight::Scattered { t, weight } => {
                         throughput *= weight;
                         let x = ray.origin + travel * t;
@@ -327,6 +344,9 @@ impl PathTracer<'_> {
                     _ => 1.0,
                 };
                 radiance += throughput * m.emitted * weight;
+            }
+            if vertex >= self.max_depth {
+                break;
             }
             let albedo = self.scene.albedo(&s);
             let (d, r, t) = (
@@ -448,7 +468,7 @@ fn survives_roulette(vertex: u32, throughput: &mut Color, rng: &mut Rng) -> bool
 
 /// Renders the scene by path tracing; returns the film and the counters of the render.
 pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (Film, RenderStats) {
-    let tracer = PathTracer::new(scene, accel);
+    let tracer = PathTracer::new(scene, accel).with_max_depth(settings.max_depth);
     render_pixels(
         scene,
         accel,
