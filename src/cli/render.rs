@@ -201,7 +201,8 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
 /// material's `interior_medium`) and skies are the path tracer's, the ray tracer's (not with
 /// radiosity as its indirect light, whose solution leaves them out) and the photon engine's
 /// (final gathering included: its gather rays cross the media); radiosity takes a sky and a
-/// fog, not a medium inside glass (behind a specular boundary its form factors do not cross).
+/// fog, not a medium inside glass (behind a specular boundary its form factors do not cross);
+/// SPPM takes a sky, not media (its visible points are on surfaces only).
 fn refuse_unrendered_media(
     args: &RenderArgs,
     input: &Path,
@@ -219,8 +220,8 @@ fn refuse_unrendered_media(
         EngineKind::Photon => None,
         EngineKind::Radiosity if media && !fog_only(scene) => Some(""),
         EngineKind::Radiosity => None,
-        _ if media || sky => Some(""),
-        _ => None,
+        EngineKind::Sppm if media => Some(""),
+        EngineKind::Sppm => None,
     };
     let Some(how) = refused else {
         return Ok(());
@@ -235,7 +236,7 @@ fn refuse_unrendered_media(
         "a sky"
     };
     Err(format!(
-        "{}: the scene has {what}, which the path tracer, the ray tracer and the photon engine render so far (--engine path, raytrace without --indirect radiosity, photon; radiosity takes a sky and a fog, not a medium inside glass); the {engine} engine{how} would leave it out",
+        "{}: the scene has {what}, which the path tracer, the ray tracer and the photon engine render so far (--engine path, raytrace without --indirect radiosity, photon; radiosity takes a sky and a fog, not a medium inside glass; sppm a sky); the {engine} engine{how} would leave it out",
         input.display(),
     ))
 }

@@ -12,13 +12,15 @@
 //! radiosity`).
 
 use super::engine::RenderSettings;
-use super::scattering::{diffuse_sample, power_heuristic, reflect, Dielectric, GlossyLobe};
+use super::scattering::{power_heuristic, reflect, Dielectric, GlossyLobe};
 use crate::accel::Accel;
 use crate::film::ray_tree::{Segment, SegmentKind};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, vec3, Ray, Vec3};
 use crate::render::adaptive::visible_form_factor;
-use crate::render::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
+use crate::render::lights::{
+    sky_lighting_sample, Light, LightPoint, LightShape, PointBlock, LANES,
+};
 use crate::render::{render_pixels, Ambient, CameraSampler, Counts, IndirectLight, RenderStats};
 use crate::sampling::{LightSampling, Rng, Strata};
 use crate::scene::medium::Medium;
@@ -167,11 +169,7 @@ impl Tracer<'_> {
         counts: &mut Counts,
     ) -> Color {
         let Some(s) = hit else {
-            // The sky where the scene has one, else the background.
-            return match &self.scene.sky {
-                Some(sky) => sky.radiance(ray.direction.normalize_or_zero()),
-                None => self.scene.background,
-            };
+            return self.scene.sky_or_background(ray.direction);
         };
         let m = &self.scene.materials[s.material as usize];
         let (front, n) = s.facing(ray.direction);
@@ -336,14 +334,8 @@ impl Tracer<'_> {
         let count = samples.max(1);
         let mut total = Vec3::ZERO;
         for (u, v) in self.sky_strata.samples(rng) {
-            // A map's directions by its importance, each weighed by (cos/π)/density; the
-            // smooth skies' by the cosine, which weighs each by 1.
-            let (dir, weight) = match sky.map() {
-                Some(map) => match map.sample_above(n, u, v) {
-                    Some(sample) => sample,
-                    None => continue,
-                },
-                None => (diffuse_sample(n, u, v).0, 1.0),
+            let Some((dir, weight)) = sky_lighting_sample(sky, n, u, v) else {
+                continue;
             };
             if samples > 0 {
                 counts.shadow += 1;

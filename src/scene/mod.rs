@@ -341,6 +341,15 @@ impl Scene {
         m.interior_medium.map(|k| &self.media[k])
     }
 
+    /// What a ray leaving the scene along `direction` shows: the sky where the scene has one,
+    /// else the background colour.
+    pub fn sky_or_background(&self, direction: Vec3) -> Color {
+        match &self.sky {
+            Some(sky) => sky.radiance(direction.normalize_or_zero()),
+            None => self.background,
+        }
+    }
+
     /// Whether light travels through a medium anywhere: fog, or a material's interior.
     pub fn has_media(&self) -> bool {
         self.fog.is_some() || self.materials.iter().any(|m| m.interior_medium.is_some())

@@ -32,7 +32,7 @@ use crate::engines::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSetti
 use crate::engines::scattering::{glossy_reflection, Dielectric};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Vec3};
-use crate::render::lights::Light;
+use crate::render::lights::{sky_lighting_sample, Light};
 use crate::render::{CameraSampler, RenderStats};
 use crate::sampling::Rng;
 use crate::scene::{Color, Scene, SurfaceHit};
@@ -232,6 +232,30 @@ impl DirectLight {
     }
 }
 
+/// What reaches `s` (normal `n`) from the sky, per unit albedo, as irradiance / π: one
+/// direction by `sky_lighting_sample` and its shadow ray, which `rays` counts (no draw without
+/// a sky). The sky's photons are skipped where they first land, as the lights' are.
+fn sky_light(
+    scene: &Scene,
+    accel: &dyn Accel,
+    (s, n): (&SurfaceHit, Vec3),
+    rng: &mut Rng,
+    rays: &mut u64,
+) -> Color {
+    let Some(sky) = &scene.sky else {
+        return Vec3::ZERO;
+    };
+    let (u, v) = (rng.next_f32(), rng.next_f32());
+    let Some((dir, weight)) = sky_lighting_sample(sky, n, u, v) else {
+        return Vec3::ZERO;
+    };
+    *rays += 1;
+    if accel.occluded(&s.spawn_ray(dir)) {
+        return Vec3::ZERO;
+    }
+    sky.radiance(dir) * weight
+}
+
 /// Follows camera sample `pass` of pixel (i, j) to its visible point; adds the light seen on
 /// the way and the direct light at the visible point to `direct`.
 #[allow(clippy::too_many_arguments)]
@@ -256,7 +280,7 @@ fn visible_point(
     let mut hit = closest_surface(accel, scene, &ray);
     for bounce in 0..=MAX_SPECULAR {
         let Some(s) = hit else {
-            add(throughput * scene.background);
+            add(throughput * scene.sky_or_background(ray.direction));
             return None;
         };
         let m = &scene.materials[s.material as usize];
@@ -279,6 +303,7 @@ fn visible_point(
         if choice < d {
             let lobe = throughput * albedo * (total / d);
             add(lobe * lights.sample(&s, n, accel, &mut rng, &mut counts[1]));
+            add(lobe * sky_light(scene, accel, (&s, n), &mut rng, &mut counts[1]));
             return Some(VisiblePoint {
                 point: s.point,
                 normal: s.geometric_side(n),

@@ -75,10 +75,7 @@ pub fn render_solution(
                 if fog.is_some() {
                     return Vec3::ZERO;
                 }
-                return match &scene.sky {
-                    Some(sky) => sky.radiance(ray.direction.normalize_or_zero()),
-                    None => scene.background,
-                };
+                return scene.sky_or_background(ray.direction);
             };
             let seen = solution
                 .sample(scene, &s, -ray.direction, &field)
