@@ -14,6 +14,23 @@ use trilux::scene::Scene;
 
 const QUERIES: usize = 1000;
 
+/// `QUERIES` points on a grid over the floor (y = −1, normal up) and the back wall (z = −1).
+fn query_points() -> Vec<(Vec3, Vec3)> {
+    (0..QUERIES)
+        .map(|k| {
+            let (u, v) = (
+                (k % 25) as f32 / 25.0 * 1.8 - 0.9,
+                (k / 25 % 20) as f32 / 20.0 * 1.8 - 0.9,
+            );
+            if k % 2 == 0 {
+                (vec3(u, -1.0, v), vec3(0.0, 1.0, 0.0))
+            } else {
+                (vec3(u, v, -1.0), vec3(0.0, 0.0, 1.0))
+            }
+        })
+        .collect()
+}
+
 fn lookups(c: &mut Criterion) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_box_diffuse_sphere.obj");
     let scene = Scene::load(&path).expect("scene loads");
@@ -28,20 +45,7 @@ fn lookups(c: &mut Criterion) {
         ..RenderSettings::default()
     };
     let maps = PhotonMaps::build(&scene, accel.as_ref(), &settings);
-    // Points on a grid over the floor (y = −1, normal up) and the back wall (z = −1).
-    let points: Vec<(Vec3, Vec3)> = (0..QUERIES)
-        .map(|k| {
-            let (u, v) = (
-                (k % 25) as f32 / 25.0 * 1.8 - 0.9,
-                (k / 25 % 20) as f32 / 20.0 * 1.8 - 0.9,
-            );
-            if k % 2 == 0 {
-                (vec3(u, -1.0, v), vec3(0.0, 1.0, 0.0))
-            } else {
-                (vec3(u, v, -1.0), vec3(0.0, 0.0, 1.0))
-            }
-        })
-        .collect();
+    let points = query_points();
     let mut group = c.benchmark_group("photon_lookup");
     group.throughput(Throughput::Elements(QUERIES as u64));
     group.sample_size(10);
@@ -66,5 +70,92 @@ fn lookups(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, lookups);
+/// Issue #16's k-nearest figure: k = 50 queries on the global map of 2M photons shot into the
+/// Cornell box with the diffuse sphere, one thread, at the `lookups` points: our kd-tree
+/// (`kdtree::KdTree`, what the maps use) against kiddo's `ImmutableKdTree` (what they used
+/// before), sorted as the estimates need and unsorted.
+fn nearest_50_of_2m(c: &mut Criterion) {
+    use kiddo::immutable::float::kdtree::ImmutableKdTree;
+    use kiddo::SquaredEuclidean;
+    use std::num::NonZero;
+    use trilux::engines::photon::kdtree::KdTree;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_box_diffuse_sphere.obj");
+    let scene = Scene::load(&path).expect("scene loads");
+    let accel = accel::build(&scene, AccelKind::Bvh, &AccelOptions::default()).expect("builds");
+    let settings = RenderSettings {
+        photon: PhotonSettings {
+            num_photons_to_shoot: 2_000_000,
+            ..Default::default()
+        },
+        quiet: true,
+        ..RenderSettings::default()
+    };
+    let maps = PhotonMaps::build(&scene, accel.as_ref(), &settings);
+    let positions: Vec<[f32; 3]> = maps
+        .global
+        .photons
+        .iter()
+        .map(|p| p.position.to_array())
+        .collect();
+    println!("global map: {} photons", positions.len());
+    let queries: Vec<[f32; 3]> = query_points().iter().map(|p| p.0.to_array()).collect();
+    let r2 = maps.max_radius * maps.max_radius;
+    let k = NonZero::new(50).expect("k");
+    let ours = KdTree::new(&positions);
+    let kiddo: ImmutableKdTree<f32, u32, 3, 32> = ImmutableKdTree::new_from_slice(&positions);
+    let mut group = c.benchmark_group("nearest_50_of_2m");
+    group.throughput(Throughput::Elements(QUERIES as u64));
+    group.sample_size(10);
+    group.bench_function("ours", |b| {
+        b.iter(|| {
+            queries
+                .iter()
+                .map(|q| ours.nearest(*q, 50, r2).len())
+                .sum::<usize>()
+        })
+    });
+    for sorted in [true, false] {
+        let name = if sorted {
+            "kiddo_sorted"
+        } else {
+            "kiddo_unsorted"
+        };
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                queries
+                    .iter()
+                    .map(|q| {
+                        kiddo
+                            .nearest_n_within::<SquaredEuclidean>(q, r2, k, sorted)
+                            .len()
+                    })
+                    .sum::<usize>()
+            })
+        });
+    }
+    let points = query_points();
+    group.bench_function("estimate", |b| {
+        b.iter(|| {
+            points
+                .iter()
+                .map(|&(x, n)| {
+                    maps.global
+                        .irradiance_over_pi(x, n, 50, maps.max_radius)
+                        .0
+                        .x
+                })
+                .sum::<f32>()
+        })
+    });
+    group.finish();
+    let mut group = c.benchmark_group("build_2m");
+    group.sample_size(10);
+    group.bench_function("ours", |b| b.iter(|| KdTree::new(&positions).len()));
+    group.bench_function("kiddo", |b| {
+        b.iter(|| ImmutableKdTree::<f32, u32, 3, 32>::new_from_slice(&positions).size())
+    });
+    group.finish();
+}
+
+criterion_group!(benches, lookups, nearest_50_of_2m);
 criterion_main!(benches);

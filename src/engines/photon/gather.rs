@@ -19,14 +19,12 @@
 //! (after its coarsest level), and the pixels then take the nearest records facing their way,
 //! covered or not.
 
-use std::num::NonZero;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::time::Instant;
 
-use kiddo::immutable::float::kdtree::ImmutableKdTree;
-use kiddo::SquaredEuclidean;
 use rayon::prelude::*;
 
+use super::kdtree::KdTree;
 use super::map::NORMAL_COS;
 use super::PhotonMaps;
 use crate::accel::Accel;
@@ -74,7 +72,7 @@ const CACHE_SHARE_OF_TIME: f64 = 0.5;
 /// photon's normal turned to the side its light came from.
 pub struct RadianceEstimates {
     points: Vec<(Vec3, Vec3, Color)>,
-    tree: ImmutableKdTree<f32, u32, 3, 32>,
+    tree: KdTree,
     /// Wall time of computing them.
     pub seconds: f64,
 }
@@ -94,7 +92,7 @@ impl RadianceEstimates {
             .collect();
         let positions: Vec<[f32; 3]> = points.iter().map(|p| p.0.to_array()).collect();
         RadianceEstimates {
-            tree: ImmutableKdTree::new_from_slice(&positions),
+            tree: KdTree::new(&positions),
             points,
             seconds: clock.elapsed().as_secs_f64(),
         }
@@ -111,12 +109,13 @@ impl RadianceEstimates {
     /// Irradiance over π at `x` on a surface with normal `n` (turned to the side being lit):
     /// the nearest estimate made on a surface facing the same way, else the map's own estimate.
     pub fn at(&self, maps: &PhotonMaps, x: Vec3, n: Vec3) -> Color {
-        if let Some(k) = NonZero::new(ESTIMATE_CANDIDATES.min(self.points.len())) {
-            for f in self.tree.nearest_n::<SquaredEuclidean>(&x.to_array(), k) {
-                let (_, normal, value) = self.points[f.item as usize];
-                if normal.dot(n) >= NORMAL_COS {
-                    return value;
-                }
+        for f in self
+            .tree
+            .nearest(x.to_array(), ESTIMATE_CANDIDATES, f32::INFINITY)
+        {
+            let (_, normal, value) = self.points[f.item as usize];
+            if normal.dot(n) >= NORMAL_COS {
+                return value;
             }
         }
         maps.global_at(x, n)
@@ -349,7 +348,7 @@ impl Record {
 
 pub struct IrradianceCache {
     pub records: Vec<Record>,
-    tree: ImmutableKdTree<f32, u32, 3, 32>,
+    tree: KdTree,
     estimates: RadianceEstimates,
     error: f32,
     gather_rays: u32,
@@ -378,9 +377,9 @@ fn levels(width: u32, height: u32, finest: u32) -> Vec<u32> {
     out
 }
 
-fn tree_of(records: &[Record]) -> ImmutableKdTree<f32, u32, 3, 32> {
+fn tree_of(records: &[Record]) -> KdTree {
     let points: Vec<[f32; 3]> = records.iter().map(|r| r.position.to_array()).collect();
-    ImmutableKdTree::new_from_slice(&points)
+    KdTree::new(&points)
 }
 
 impl IrradianceCache {
@@ -496,14 +495,11 @@ impl IrradianceCache {
     /// spill over a neighbour that saw something close. Computed from a snapshot of the radii,
     /// so the result does not depend on the order; `self.tree` must hold every record.
     fn clamp_to_neighbours(&mut self) {
-        let Some(k) = NonZero::new(NEIGHBOURS.min(self.records.len())) else {
-            return;
-        };
         let (tree, records) = (&self.tree, &self.records);
         let radii: Vec<f32> = records
             .par_iter()
             .map(|r| {
-                tree.nearest_n::<SquaredEuclidean>(&r.position.to_array(), k)
+                tree.nearest(r.position.to_array(), NEIGHBOURS, f32::INFINITY)
                     .iter()
                     .map(|f| records[f.item as usize].radius + f.distance.sqrt())
                     .fold(r.radius, f32::min)
@@ -523,10 +519,8 @@ impl IrradianceCache {
     /// The records among the `NEIGHBOURS` nearest to `x` that may be used at `x`, `n` with
     /// Ward's error below `limit`, each with its error.
     fn within(&self, x: Vec3, n: Vec3, limit: f32) -> impl Iterator<Item = (&Record, f32)> {
-        let k = NEIGHBOURS.min(self.records.len());
-        NonZero::new(k)
-            .map(|k| self.tree.nearest_n::<SquaredEuclidean>(&x.to_array(), k))
-            .unwrap_or_default()
+        self.tree
+            .nearest(x.to_array(), NEIGHBOURS, f32::INFINITY)
             .into_iter()
             .filter_map(move |f| {
                 let r = &self.records[f.item as usize];

@@ -1,12 +1,9 @@
-//! A photon map: photons in a kd-tree (kiddo's `ImmutableKdTree`, which — unlike its mutable
-//! `KdTree` — accepts any number of photons sharing a coordinate, as all photons on an
-//! axis-aligned wall do) and the k-nearest radiance estimate with a cone filter.
+//! A photon map: photons in a kd-tree (`kdtree::KdTree`) and the k-nearest radiance estimate
+//! with a cone filter.
 
 use std::num::NonZero;
 
-use kiddo::immutable::float::kdtree::ImmutableKdTree;
-use kiddo::SquaredEuclidean;
-
+use super::kdtree::{KdTree, Neighbour};
 use super::trace::{PathKind, Photon};
 use crate::geometry::Vec3;
 use crate::scene::medium::Medium;
@@ -20,7 +17,7 @@ pub const NORMAL_COS: f32 = 0.9;
 
 pub struct PhotonMap {
     pub photons: Vec<Photon>,
-    tree: ImmutableKdTree<f32, u32, 3, 32>,
+    tree: KdTree,
 }
 
 /// Counters of the lookups of one map.
@@ -33,9 +30,14 @@ pub struct Lookup {
 }
 
 impl PhotonMap {
-    pub fn new(photons: Vec<Photon>) -> PhotonMap {
+    /// The map of `photons`, which it keeps in the tree's leaf order: an estimate's photons
+    /// then lie side by side in memory (on the 2M-photon Cornell box map, reading them in
+    /// their traced order took more time than finding them).
+    pub fn new(mut photons: Vec<Photon>) -> PhotonMap {
         let points: Vec<[f32; 3]> = photons.iter().map(|p| p.position.to_array()).collect();
-        let tree = ImmutableKdTree::new_from_slice(&points);
+        let mut tree = KdTree::new(&points);
+        drop(points);
+        permute(&mut photons, &tree.renumber_in_leaf_order());
         PhotonMap { photons, tree }
     }
 
@@ -47,21 +49,13 @@ impl PhotonMap {
         self.photons.is_empty()
     }
 
-    /// The `k` nearest photons to `x` within `max_radius` (nearest first, as kiddo's
-    /// neighbours: squared distance and index) and the squared radius of the estimate: the
-    /// k-th photon's, or the whole reach when fewer are in it.
-    fn nearest(
-        &self,
-        x: Vec3,
-        k: NonZero<usize>,
-        max_radius: f32,
-    ) -> (Vec<kiddo::NearestNeighbour<f32, u32>>, f32) {
-        let found = self.tree.nearest_n_within::<SquaredEuclidean>(
-            &x.to_array(),
-            max_radius * max_radius,
-            k,
-            true,
-        );
+    /// The `k` nearest photons to `x` within `max_radius` (nearest first: squared distance
+    /// and index) and the squared radius of the estimate: the k-th photon's, or the whole
+    /// reach when fewer are in it.
+    fn nearest(&self, x: Vec3, k: NonZero<usize>, max_radius: f32) -> (Vec<Neighbour>, f32) {
+        let found = self
+            .tree
+            .nearest(x.to_array(), k.get(), max_radius * max_radius);
         let r2 = if found.len() == k.get() {
             found.last().map_or(0.0, |f| f.distance)
         } else {
@@ -154,5 +148,50 @@ impl PhotonMap {
             sum * (norm * std::f32::consts::PI).recip(),
             Lookup { used, radius: r },
         )
+    }
+}
+
+/// Reorders `items` in place so that item i becomes the one at `order[i]` (a permutation),
+/// following its cycles: no second copy of the photons.
+fn permute<T: Copy>(items: &mut [T], order: &[u32]) {
+    let mut done = vec![false; items.len()];
+    for start in 0..items.len() {
+        if done[start] {
+            continue;
+        }
+        let first = items[start];
+        let mut i = start;
+        loop {
+            done[i] = true;
+            let from = order[i] as usize;
+            if from == start {
+                items[i] = first;
+                break;
+            }
+            items[i] = items[from];
+            i = from;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// In place, as a second copy would place them: cycles of every length, fixed points.
+    #[test]
+    fn permute_follows_the_order() {
+        let mut rng = crate::sampling::Rng::new(3, 0, 0);
+        for n in [0usize, 1, 2, 7, 100] {
+            let mut order: Vec<u32> = (0..n as u32).collect();
+            for i in (1..n).rev() {
+                order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+            }
+            let items: Vec<u64> = (0..n as u64).map(|i| i * 10).collect();
+            let want: Vec<u64> = order.iter().map(|&i| items[i as usize]).collect();
+            let mut got = items.clone();
+            permute(&mut got, &order);
+            assert_eq!(got, want);
+        }
     }
 }

@@ -6,6 +6,7 @@
 
 pub mod file;
 pub mod gather;
+pub mod kdtree;
 pub mod map;
 pub mod settings;
 pub mod sppm;
@@ -263,8 +264,8 @@ pub fn visualize(scene: &Scene, maps: &PhotonMaps, settings: &RenderSettings) ->
 const KD_VIEW_DEPTH: u32 = 6;
 
 /// The cells of a balanced kd-tree over all photons, `depth` levels deep: each cell split at
-/// the median photon along its longest axis, as kiddo's `ImmutableKdTree` balances its own
-/// (whose nodes it does not expose). Cells are the photons' bounding boxes.
+/// the median photon along its longest axis, as `kdtree::KdTree` splits each map's (here
+/// over both maps' photons at once). Cells are the photons' bounding boxes.
 fn kd_cells(maps: &PhotonMaps, depth: u32) -> Vec<Bounds3> {
     fn split(points: &mut [Vec3], depth: u32, out: &mut Vec<Bounds3>) {
         let bounds = Bounds3::from_points(points);
