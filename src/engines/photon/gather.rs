@@ -26,7 +26,7 @@ use rayon::prelude::*;
 
 use super::kdtree::KdTree;
 use super::map::NORMAL_COS;
-use super::PhotonMaps;
+use super::{Along, PhotonMaps};
 use crate::accel::Accel;
 use crate::engines::engine::RenderSettings;
 use crate::geometry::{spawn_ray, Ray, Vec3};
@@ -297,7 +297,8 @@ pub fn final_gather(
                         } else {
                             Vec3::ZERO
                         };
-                        let scattered = maps.volume_gathered(m, ray, distance, fog_rng);
+                        let scattered =
+                            maps.volume_in_scattered(m, ray, distance, Along::GatherRay, fog_rng);
                         (through + scattered, distance)
                     }
                     _ => (reflected, distance),

@@ -26,6 +26,18 @@ use crate::sampling::Rng;
 use crate::scene::medium::Medium;
 use crate::scene::{Color, Scene, SurfaceHit};
 
+/// The rays the volume map is looked up along.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Along {
+    /// Camera, mirror and glass rays: the light scattered in besides the lights' single
+    /// scattering (the ray tracer's), at `--volume-steps` points.
+    CameraRay,
+    /// Final-gather rays: all the light scattered in, single scattering included (the map
+    /// holds every scattering when gathering), at one point, as a gather averages hundreds of
+    /// rays.
+    GatherRay,
+}
+
 /// The two photon maps of a scene and what the lookups need.
 pub struct PhotonMaps {
     /// Indirect photons (all photons when final gathering: gather rays look up the full
@@ -157,46 +169,24 @@ impl PhotonMaps {
         }
     }
 
-    /// Radiance the fog `medium` scatters into a camera or specular `ray` over its first
-    /// `length` of distance from the volume map, besides the lights' single scattering (the
-    /// ray tracer's): `--volume-steps` lookups.
+    /// Radiance the fog `medium` scatters into `ray` over its first `length` of distance
+    /// from the volume map: lookups evenly spaced over the part of the ray in
+    /// `volume_bounds`, jittered together, each weighed by the transmittance from the ray's
+    /// origin (a midpoint rule with a random offset: its mean is the integral of the smooth
+    /// estimate along the ray). What is counted, and how many lookups, depends on the ray:
+    /// see `Along`.
     pub fn volume_in_scattered(
         &self,
-        medium: &crate::scene::medium::Medium,
+        medium: &Medium,
         ray: &crate::geometry::Ray,
         length: f32,
+        along: Along,
         rng: &mut Rng,
     ) -> Color {
-        self.march_volume(medium, ray, length, (self.volume_steps, false), rng)
-    }
-
-    /// All the radiance the fog `medium` scatters into a final-gather ray over its first
-    /// `length`, single scattering included (the map holds every scattering when gathering):
-    /// one jittered lookup, as a gather averages hundreds of rays.
-    pub fn volume_gathered(
-        &self,
-        medium: &crate::scene::medium::Medium,
-        ray: &crate::geometry::Ray,
-        length: f32,
-        rng: &mut Rng,
-    ) -> Color {
-        self.march_volume(medium, ray, length, (1, true), rng)
-    }
-
-    /// Radiance the fog `medium` scatters into `ray` over its first `length` of distance
-    /// from the volume map: `steps` lookups evenly spaced over the part of the ray in
-    /// `volume_bounds`, jittered together, each weighed by the transmittance from
-    /// the ray's origin, counting the first scatterings or not (`PhotonMap::in_scattered`).
-    /// A midpoint rule with a random offset: its mean is the integral of the (smooth)
-    /// estimate along the ray.
-    fn march_volume(
-        &self,
-        medium: &crate::scene::medium::Medium,
-        ray: &crate::geometry::Ray,
-        length: f32,
-        (steps, first_scatterings): (u32, bool),
-        rng: &mut Rng,
-    ) -> Color {
+        let (steps, first_scatterings) = match along {
+            Along::CameraRay => (self.volume_steps, false),
+            Along::GatherRay => (1, true),
+        };
         let scale = ray.direction.length();
         if self.volume.is_empty() || scale.is_nan() || scale <= 0.0 {
             return Color::ZERO;
@@ -486,7 +476,8 @@ impl IndirectLight for PhotonIndirect<'_> {
         length: f32,
         rng: &mut Rng,
     ) -> Color {
-        self.maps.volume_in_scattered(medium, ray, length, rng)
+        self.maps
+            .volume_in_scattered(medium, ray, length, Along::CameraRay, rng)
     }
 }
 
