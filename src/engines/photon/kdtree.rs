@@ -4,12 +4,17 @@
 //! surfaces, and on an axis-aligned wall every photon shares one coordinate, so a third of its
 //! levels split nothing there. This tree splits each node at the median of its points along
 //! the axis where they spread most, down to leaves of at most `LEAF_SIZE` points, built by two
-//! threads. What made it fast, measured on 10M points on the walls of a box (one thread, k =
-//! 50, `benches/photon.rs` for the real maps):
-//! - a leaf's points stored together, position by position (8.1 → 4.1 µs a query: one leaf is
-//!   three adjacent cache lines, where one array per axis was three lines apart);
+//! threads, and searches best-first (the nearest unopened cell next). A query is bound by
+//! memory: on the Cornell box's photon map it opens about 13 leaves and reads some 250 points
+//! for k = 50 (photons lie on surfaces, where a ball meets about 3×3 cells). What made it
+//! fast, one change at a time (one thread, k = 50; BENCHMARKS.md, session 20):
+//! - a leaf's points stored together with their indices, 16 bytes each side by side (one
+//!   array per axis and one of indices were four places apart: 8.2 → 5.2 µs on the 10M-photon
+//!   map);
 //! - the candidates' heap ordered by one u64 (squared distance's bits, then index) instead of
-//!   a pair of floats (8.7 → 8.1 µs; 5.2 → 4.0 µs on 500k points, where memory matters less);
+//!   a pair of floats (5.2 → 4.0 µs on 500k points on a box's walls);
+//! - best-first rather than depth-first search (8.8 → 8.2 µs);
+//! - leaves of 32 points rather than 16 (4.5–7.4 → 4.4–5.6 µs, noisy; 8 was slower);
 //! - the points moved, not indices, while building (7.5 s → 0.95 s with the two threads).
 //!
 //! A query returns the k points nearest to it within a radius, ordered by (squared distance,
@@ -23,9 +28,9 @@ const LEAF: u32 = 3;
 /// Cells are pruned by their incremental distance times this: a bound rounded up by an ulp
 /// must not prune a point that ties with the k-th.
 const SLACK: f32 = 1.0 - 1e-6;
-/// Depth of the traversal stack: the tree is balanced (median splits), so its depth is
-/// log2(n / LEAF_SIZE) + 1, below 64 for any number of points a u32 counts.
-const STACK: usize = 64;
+/// Room for the cells a query has still to open, reserved up front (more are taken if
+/// needed).
+const PENDING: usize = 64;
 
 /// A node: an inner node splits its points at `split` along `axis` (its left child is the
 /// next node, its right child `right_or_start`); a leaf holds points `right_or_start..end`.
@@ -35,6 +40,37 @@ struct Node {
     axis: u32,
     right_or_start: u32,
     end: u32,
+}
+
+/// A cell a query has still to open, ordered nearest first (`BinaryHeap` pops its largest).
+#[derive(Clone, Copy, Debug)]
+struct Pending {
+    bound: f32,
+    node: u32,
+    offset: [f32; 3],
+}
+
+impl PartialEq for Pending {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == std::cmp::Ordering::Equal
+    }
+}
+
+impl Eq for Pending {}
+
+impl PartialOrd for Pending {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Pending {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        other
+            .bound
+            .total_cmp(&self.bound)
+            .then(other.node.cmp(&self.node))
+    }
 }
 
 /// A point found by a query: its squared distance to the query and its index in the slice the
@@ -47,10 +83,9 @@ pub struct Neighbour {
 
 pub struct KdTree {
     nodes: Vec<Node>,
-    /// The points in leaf order.
-    coords: Vec<[f32; 3]>,
-    /// The index (in the slice the tree was built from) of each point in leaf order.
-    items: Vec<u32>,
+    /// The points in leaf order, each with its index in the slice the tree was built from:
+    /// a leaf's are 16 bytes apiece, side by side, all a query reads of it.
+    points: Vec<([f32; 3], u32)>,
 }
 
 impl KdTree {
@@ -66,28 +101,29 @@ impl KdTree {
         } else {
             build(&mut entries, 0)
         };
-        let (coords, items) = entries.into_iter().unzip();
         KdTree {
             nodes,
-            coords,
-            items,
+            points: entries,
         }
     }
 
     pub fn len(&self) -> usize {
-        self.items.len()
+        self.points.len()
     }
 
     /// Renumbers the points in leaf order (queries then answer positions in it) and returns
     /// the old number of each: a caller that stores its records in that order reads a
     /// query's answer from adjacent memory.
     pub fn renumber_in_leaf_order(&mut self) -> Vec<u32> {
-        let identity = (0..self.items.len() as u32).collect();
-        std::mem::replace(&mut self.items, identity)
+        self.points
+            .iter_mut()
+            .enumerate()
+            .map(|(i, (_, item))| std::mem::replace(item, i as u32))
+            .collect()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.items.is_empty()
+        self.points.is_empty()
     }
 
     /// The `k` points nearest to `query` whose squared distance is at most `max_distance2`,
@@ -97,17 +133,25 @@ impl KdTree {
         if k == 0 || self.nodes.is_empty() {
             return Vec::new();
         }
-        // Nodes still to visit, with the query's offset from their cell along each axis (0
-        // inside it) and the squared distance that makes, a lower bound of their points' (the
+        // Cells still to visit, nearest first (best-first search: only cells nearer than the
+        // k-th point found are opened), each with the query's offset from it along each axis
+        // (0 inside) and the squared distance that makes, a lower bound of its points' (the
         // incremental distance of Arya & Mount).
-        let mut stack = [(0u32, 0.0f32, [0.0f32; 3]); STACK];
-        let mut depth = 1;
+        let mut pending = std::collections::BinaryHeap::with_capacity(PENDING);
+        pending.push(Pending {
+            bound: 0.0,
+            node: 0,
+            offset: [0.0; 3],
+        });
         let reach = |heap: &Farthest| heap.reach(max_distance2);
-        while depth > 0 {
-            depth -= 1;
-            let (mut node, bound, offset) = stack[depth];
+        while let Some(Pending {
+            mut node,
+            bound,
+            offset,
+        }) = pending.pop()
+        {
             if bound * SLACK > reach(&heap) {
-                continue;
+                break;
             }
             loop {
                 let n = self.nodes[node as usize];
@@ -126,8 +170,11 @@ impl KdTree {
                 far_offset[axis] = diff;
                 let far_bound = bound - offset[axis] * offset[axis] + diff * diff;
                 if far_bound * SLACK <= reach(&heap) {
-                    stack[depth] = (far, far_bound, far_offset);
-                    depth += 1;
+                    pending.push(Pending {
+                        bound: far_bound,
+                        node: far,
+                        offset: far_offset,
+                    });
                 }
                 node = near;
             }
@@ -143,13 +190,13 @@ impl KdTree {
             let range = first..(first + LEAF_SIZE).min(end);
             let mut distances = [0.0f32; LEAF_SIZE];
             // Squared distances of the whole chunk first, then the offers.
-            for (d, p) in distances.iter_mut().zip(&self.coords[range.clone()]) {
+            for (d, (p, _)) in distances.iter_mut().zip(&self.points[range.clone()]) {
                 let (dx, dy, dz) = (p[0] - query[0], p[1] - query[1], p[2] - query[2]);
                 *d = dx * dx + dy * dy + dz * dz;
             }
             for (k, &distance) in distances[..range.len()].iter().enumerate() {
                 if distance <= max_distance2 {
-                    heap.offer(key(distance, self.items[first + k]));
+                    heap.offer(key(distance, self.points[first + k].1));
                 }
             }
         }
