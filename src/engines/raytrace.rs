@@ -12,15 +12,13 @@
 //! radiosity`).
 
 use super::engine::RenderSettings;
-use super::scattering::{power_heuristic, reflect, Dielectric, GlossyLobe};
+use super::scattering::{power_heuristic, reflect, sky_lighting_sample, Dielectric, GlossyLobe};
 use crate::accel::Accel;
 use crate::film::ray_tree::{Segment, SegmentKind};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, vec3, Ray, Vec3};
 use crate::render::adaptive::visible_form_factor;
-use crate::render::lights::{
-    sky_lighting_sample, Light, LightPoint, LightShape, PointBlock, LANES,
-};
+use crate::render::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
 use crate::render::{render_pixels, Ambient, CameraSampler, Counts, IndirectLight, RenderStats};
 use crate::sampling::{LightSampling, Rng, Strata};
 use crate::scene::medium::Medium;

@@ -14,6 +14,7 @@
 use crate::geometry::Vec3;
 use crate::sampling::Rng;
 pub use crate::sampling::{orthonormal_basis, sample_cone};
+use crate::scene::sky::Sky;
 use crate::scene::Material;
 
 /// A cosine-distributed direction about the unit normal `n`, from (u, v) in [0,1)², and its
@@ -23,6 +24,18 @@ pub fn diffuse_sample(n: Vec3, u: f32, v: f32) -> (Vec3, f32) {
     let cos = (1.0 - x * x - y * y).max(0.0).sqrt();
     let (tx, ty) = orthonormal_basis(n);
     (tx * x + ty * y + n * cos, cos / std::f32::consts::PI)
+}
+
+/// A direction from which `sky` lights a surface of unit normal `n`, from (u, v) in [0,1)²,
+/// with the weight its radiance takes in the surface's irradiance over π, (cos/π)/density: a
+/// map's directions by its importance (a bright sun would rarely be met by the cosine's), the
+/// smooth skies' by the cosine, which weighs each by 1 (exact under a uniform sky). None for a
+/// map's direction below the surface, or a black map.
+pub fn sky_lighting_sample(sky: &Sky, n: Vec3, u: f32, v: f32) -> Option<(Vec3, f32)> {
+    match sky.map() {
+        Some(map) => map.sample_above(n, u, v),
+        None => Some((diffuse_sample(n, u, v).0, 1.0)),
+    }
 }
 
 /// A smooth dielectric boundary (glass) met by a ray: the indices on the side it arrives from

@@ -1,10 +1,8 @@
 //! The scene's emitters as area lights: every primitive whose material emits. Each can be
-//! sampled uniformly by area, and has a centre for the course's one-shadow-ray mode. And the
-//! directions from which the sky lights a surface.
+//! sampled uniformly by area, and has a centre for the course's one-shadow-ray mode.
 
 use super::solid_angle::{SphericalRectangle, MIN_SOLID_ANGLE};
 use crate::geometry::{AnalyticShape, Shape, Vec3};
-use crate::scene::sky::Sky;
 use crate::scene::{Color, PrimKind, PrimRef, Scene};
 
 /// Points on a light, a block at a time, as a structure of arrays: the loops over a block's
@@ -460,17 +458,5 @@ fn prim(kind: PrimKind, index: usize) -> PrimRef {
     PrimRef {
         kind,
         index: index as u32,
-    }
-}
-
-/// A direction from which `sky` lights a surface of unit normal `n`, from (u, v) in [0,1)²,
-/// with the weight its radiance takes in the surface's irradiance over π, (cos/π)/density: a
-/// map's directions by its importance (a bright sun would rarely be met by the cosine's), the
-/// smooth skies' by the cosine, which weighs each by 1 (exact under a uniform sky). None for a
-/// map's direction below the surface, or a black map.
-pub fn sky_lighting_sample(sky: &Sky, n: Vec3, u: f32, v: f32) -> Option<(Vec3, f32)> {
-    match sky.map() {
-        Some(map) => map.sample_above(n, u, v),
-        None => Some((crate::engines::scattering::diffuse_sample(n, u, v).0, 1.0)),
     }
 }
