@@ -265,7 +265,7 @@ pub fn final_gather(
 ) -> Gathered {
     // The fog's lookups draw from their own stream: without fog the gathers' draws, and so
     // the images, stay what they were.
-    let mut fog_rng = medium.map(|_| Rng::new(rng.next_u64(), FOG_STREAM, 0));
+    let mut fog = medium.map(|m| (m, Rng::new(rng.next_u64(), FOG_STREAM, 0)));
     gather_hemisphere(point, rays, rng, |batch| {
         let mut hits = vec![None; batch.len()];
         accel.intersect_batch(batch, &mut hits);
@@ -290,18 +290,15 @@ pub fn final_gather(
                         }
                     }
                 };
-                match (medium, fog_rng.as_mut()) {
-                    (Some(m), Some(fog_rng)) => {
-                        let through = if hit.is_some() {
-                            m.transmittance(distance) * reflected
-                        } else {
-                            Vec3::ZERO
-                        };
+                match fog.as_mut() {
+                    // (A miss reflects nothing: its transmittance to infinity, 0 or 1 per
+                    // channel, multiplies zero.)
+                    Some((m, fog_rng)) => {
                         let scattered =
                             maps.volume_in_scattered(m, ray, distance, Along::GatherRay, fog_rng);
-                        (through + scattered, distance)
+                        (m.transmittance(distance) * reflected + scattered, distance)
                     }
-                    _ => (reflected, distance),
+                    None => (reflected, distance),
                 }
             })
             .collect()
