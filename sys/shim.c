@@ -1,10 +1,17 @@
 /* trilux's C shim over Intel Embree 3 and 4: see shim.h for the interface.
  *
  * Everything version-specific lives here, behind TX_EMBREE_MAJOR (set by build.rs) and
- * RTC_GEOMETRY_INSTANCE_ARRAY (Embree 4.3+ built with instance arrays: hits are larger). The hot
- * callbacks stay in C: back-face rejection of one-sided quads is a filter over a plain array of
- * normals; user geometry (spheres, rings) unpacks each ray and calls trilux's Rust intersection
- * routine through a function pointer, so Embree and the built-in BVH run the same arithmetic. */
+ * RTC_GEOMETRY_INSTANCE_ARRAY (Embree 4.3+ built with instance arrays: hits are larger).
+ *
+ * Embree and the built-in BVH answer every query alike, primitive and t: Embree proposes
+ * candidates and trilux's exact routines (through function pointers) decide them. Quads and
+ * triangles are handed to Embree slightly enlarged, and a filter on them runs the exact test
+ * on each candidate; user geometry (spheres, rings) runs it as its intersection. Embree's own
+ * Pluecker test can settle a ray through a shared edge differently from trilux's watertight
+ * one: on the course's Cornell box it gave the edge between the ceiling and the one-sided light
+ * (seen from behind) to the light, so a camera ray left the closed box through it. A query's
+ * best hit so far lives in its context (`TxQuery`), one per ray, found by the ray's id: the
+ * nearest accepted hit, and of equally near ones the smallest key -- the BVH's rule. */
 #include "shim.h"
 
 #include <math.h>
@@ -26,6 +33,7 @@
 #define TX_RAYN_F(ray, N, i, k) (((float*)(ray))[(k) * (N) + (i)])
 #define TX_HITN_F(hit, N, i, k) (((float*)(hit))[(k) * (N) + (i)])
 #define TX_HITN_U(hit, N, i, k) (((unsigned int*)(hit))[(k) * (N) + (i)])
+#define TX_RAYN_U(ray, N, i, k) (((const unsigned int*)(ray))[(k) * (N) + (i)])
 #define RAY_ORG_X 0
 #define RAY_ORG_Y 1
 #define RAY_ORG_Z 2
@@ -42,29 +50,59 @@
 #define HIT_PRIM 5
 #define HIT_GEOM 6
 #define HIT_INST0 7
+#define RAY_ID 10
 /* Embree 4.3+ built with instance arrays has instPrimID after the instID levels. */
 #define HIT_INST_PRIM0 (HIT_INST0 + RTC_MAX_INSTANCE_LEVEL_COUNT)
 #define TX_RAYHITN_RAY(rh, N) ((struct RTCRayN*)(rh))
 #define TX_RAYHITN_HIT(rh, N) ((struct RTCHitN*)&((float*)(rh))[12 * (N)])
 
-#define TX_MAX_USER_GEOMETRIES 8
+#define TX_MAX_GEOMETRIES 8
 
 struct TxDevice {
   RTCDevice device;
 };
 
-typedef struct TxUser {
+/* A geometry's exact routine, and the key its primitive `prim` has in the tie rule
+ * (`key_base | prim`); bounds only for user geometry. */
+typedef struct TxExact {
   const void* user;
   TxBoundsFn bounds;
-  TxIntersectFn intersect;
-} TxUser;
+  TxIntersectFn exact;
+  unsigned int key_base;
+} TxExact;
 
 struct TxScene {
   RTCScene scene;
+  /* Whether Embree's candidates are decided by the exact routines (`--embree-exact`). */
+  int exact;
+  /* Front normals of one-sided quads, for the filter of a scene that is not exact. */
   float* quad_normals;
-  TxUser users[TX_MAX_USER_GEOMETRIES];
-  unsigned int n_users;
+  TxExact geometries[TX_MAX_GEOMETRIES];
+  unsigned int n_geometries;
 };
+
+/* One ray's query: its range as asked, and the best hit the exact routines accepted so far
+ * (key TX_INVALID_ID: none yet, and `t` is the end of the range). */
+typedef struct TxBest {
+  float limit;
+  float t;
+  float u;
+  float v;
+  unsigned int key;
+  unsigned int geom;
+  unsigned int prim;
+} TxBest;
+
+/* The context of a query: Embree's, extended (as its documentation allows) with the rays'
+ * bests, indexed by ray id. Callbacks receive a pointer to `context` and cast it back. */
+typedef struct TxQuery {
+#if TX_EMBREE_MAJOR >= 4
+  struct RTCRayQueryContext context;
+#else
+  struct RTCIntersectContext context;
+#endif
+  TxBest* best;
+} TxQuery;
 
 /* ---- errors ---------------------------------------------------------------------------- */
 
@@ -143,7 +181,7 @@ void tx_device_release(TxDevice* device) {
   free(device);
 }
 
-TxScene* tx_scene_new(TxDevice* device, int quality, int robust) {
+TxScene* tx_scene_new(TxDevice* device, int quality, int robust, int exact) {
   RTCScene scene = rtcNewScene(device->device);
   if (!scene) return NULL;
   TxScene* s = (TxScene*)calloc(1, sizeof *s);
@@ -153,6 +191,7 @@ TxScene* tx_scene_new(TxDevice* device, int quality, int robust) {
     return NULL;
   }
   s->scene = scene;
+  s->exact = exact;
   enum RTCBuildQuality q =
       quality <= 0 ? RTC_BUILD_QUALITY_LOW
                    : (quality == 1 ? RTC_BUILD_QUALITY_MEDIUM : RTC_BUILD_QUALITY_HIGH);
@@ -168,8 +207,140 @@ void tx_scene_release(TxScene* scene) {
   free(scene);
 }
 
-/* Rejects hits on the back side of one-sided quads: the geometry's user data is the array of
- * their front normals. */
+static TxRay load_ray(const struct RTCRayN* ray, unsigned int N, unsigned int i) {
+  TxRay r;
+  r.org[0] = TX_RAYN_F(ray, N, i, RAY_ORG_X);
+  r.org[1] = TX_RAYN_F(ray, N, i, RAY_ORG_Y);
+  r.org[2] = TX_RAYN_F(ray, N, i, RAY_ORG_Z);
+  r.tnear = TX_RAYN_F(ray, N, i, RAY_TNEAR);
+  r.dir[0] = TX_RAYN_F(ray, N, i, RAY_DIR_X);
+  r.dir[1] = TX_RAYN_F(ray, N, i, RAY_DIR_Y);
+  r.dir[2] = TX_RAYN_F(ray, N, i, RAY_DIR_Z);
+  r.tfar = TX_RAYN_F(ray, N, i, RAY_TFAR);
+  return r;
+}
+
+static TxBest* best_of(const void* context, const struct RTCRayN* ray, unsigned int N,
+                       unsigned int i) {
+  const TxQuery* q = (const TxQuery*)context;
+  return &q->best[TX_RAYN_U(ray, N, i, RAY_ID)];
+}
+
+/* How far Embree may still propose candidates once `t` is the best: a little beyond it, so
+ * that a primitive whose exact t ties with it is proposed although Embree's own t for it may
+ * be a few ulps larger; never beyond the query's range. */
+static float room(const TxBest* best) {
+  float r = best->t + fabsf(best->t) * 1e-5f + 1e-30f;
+  return r < best->limit ? r : best->limit;
+}
+
+/* Runs the exact routine of geometry g on lane i's candidate (primitive prim) and makes it
+ * the ray's best if it is hit before `cap`, nearer than the best, or as near with a smaller
+ * key. */
+static int offer(const TxExact* g, unsigned int geom, unsigned int prim,
+                 const struct RTCRayN* ray, unsigned int N, unsigned int i, TxBest* best,
+                 float cap) {
+  TxRay r = load_ray(ray, N, i);
+  /* Up to the best's t inclusive (a tie may win on its key); before any, the range. */
+  const float upto = best->key == TX_INVALID_ID ? best->limit : nextafterf(best->t, INFINITY);
+  r.tfar = cap < upto ? cap : upto;
+  float t, u, v;
+  if (!g->exact(g->user, prim, &r, &t, &u, &v)) return 0;
+  const unsigned int key = g->key_base | prim;
+  if (best->key != TX_INVALID_ID && !(t < best->t || key < best->key)) return 0;
+  best->t = t;
+  best->u = u;
+  best->v = v;
+  best->key = key;
+  best->geom = geom;
+  best->prim = prim;
+  return 1;
+}
+
+/* Whether lane i's candidate is hit by the exact routine within the query's range. */
+static int exact_occludes(const TxExact* g, unsigned int prim, const struct RTCRayN* ray,
+                          unsigned int N, unsigned int i, const TxBest* best) {
+  TxRay r = load_ray(ray, N, i);
+  r.tfar = best->limit;
+  float t, u, v;
+  return g->exact(g->user, prim, &r, &t, &u, &v);
+}
+
+/* Embree's candidate hits on quads and triangles, decided by the exact routine. */
+static void exact_intersect_filter(const struct RTCFilterFunctionNArguments* args) {
+  const TxExact* g = (const TxExact*)args->geometryUserPtr;
+  const unsigned int N = args->N;
+  for (unsigned int i = 0; i < N; i++) {
+    if (args->valid[i] != -1) continue;
+    TxBest* best = best_of(args->context, args->ray, N, i);
+    const unsigned int geom = TX_HITN_U(args->hit, N, i, HIT_GEOM);
+    const unsigned int prim = TX_HITN_U(args->hit, N, i, HIT_PRIM);
+    /* The ray's tfar is Embree's own t for this candidate here: no bound for the exact t. */
+    if (offer(g, geom, prim, args->ray, N, i, best, INFINITY)) {
+      TX_RAYN_F(args->ray, N, i, RAY_TFAR) = room(best);
+    } else {
+      args->valid[i] = 0;
+    }
+  }
+}
+
+static void exact_occluded_filter(const struct RTCFilterFunctionNArguments* args) {
+  const TxExact* g = (const TxExact*)args->geometryUserPtr;
+  const unsigned int N = args->N;
+  for (unsigned int i = 0; i < N; i++) {
+    if (args->valid[i] != -1) continue;
+    const unsigned int prim = TX_HITN_U(args->hit, N, i, HIT_PRIM);
+    if (!exact_occludes(g, prim, args->ray, N, i, best_of(args->context, args->ray, N, i)))
+      args->valid[i] = 0;
+  }
+}
+
+/* The largest coordinate magnitude of n points (3 floats each), at least 1: the scale of the
+ * rounding in Embree's test. */
+static float magnitude(const float* points, size_t n) {
+  float m = 1.0f;
+  for (size_t k = 0; k < 3 * n; k++) m = fmaxf(m, fabsf(points[k]));
+  return m;
+}
+
+/* A polygon (convex, planar) scaled about its centroid so that each edge moves outward by at
+ * least `margin`: Embree, testing the larger polygon, then proposes every point the exact
+ * test can accept despite its own rounding. Scaling (not moving coordinates one by one, which
+ * can turn an edge inward) keeps the edges parallel; a sliver is at most doubled. */
+static void enlarge(const float* in, float* out, int corners, float margin) {
+  double c[3] = {0.0, 0.0, 0.0};
+  for (int k = 0; k < corners; k++)
+    for (int a = 0; a < 3; a++) c[a] += in[3 * k + a] / (double)corners;
+  /* The centroid's distance to the nearest edge line. */
+  double h = INFINITY;
+  for (int k = 0; k < corners; k++) {
+    const float* p = in + 3 * k;
+    const float* q = in + 3 * ((k + 1) % corners);
+    double e[3], w[3];
+    for (int a = 0; a < 3; a++) {
+      e[a] = (double)q[a] - p[a];
+      w[a] = c[a] - p[a];
+    }
+    const double x = e[1] * w[2] - e[2] * w[1];
+    const double y = e[2] * w[0] - e[0] * w[2];
+    const double z = e[0] * w[1] - e[1] * w[0];
+    const double len = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    if (len > 0.0) h = fmin(h, sqrt(x * x + y * y + z * z) / len);
+  }
+  double scale = h > 0.0 ? (double)margin / h : 1.0;
+  scale = fmin(fmax(scale, 1e-4), 1.0);
+  for (int k = 0; k < corners; k++)
+    for (int a = 0; a < 3; a++)
+      out[3 * k + a] = (float)(c[a] + ((double)in[3 * k + a] - c[a]) * (1.0 + scale));
+}
+
+/* The margin by which polygons are enlarged, against coordinates of magnitude m: about 80
+ * ulps of them, far above the rounding of Embree's test and far below anything visible (the
+ * hits themselves are the exact routine's). */
+static float margin_for(float m) { return m * 1e-5f; }
+
+/* In a scene that is not exact: rejects hits on the back side of one-sided quads (the
+ * geometry's user data is the array of their front normals). */
 static void quad_front_filter(const struct RTCFilterFunctionNArguments* args) {
   const float* normals = (const float*)args->geometryUserPtr;
   const unsigned int N = args->N;
@@ -184,6 +355,21 @@ static void quad_front_filter(const struct RTCFilterFunctionNArguments* args) {
   }
 }
 
+/* Registers a geometry's exact routine, as its user data; NULL when there are too many. */
+static TxExact* add_exact(TxScene* s, const void* user, TxBoundsFn bounds, TxIntersectFn exact,
+                          unsigned int key_base) {
+  if (s->n_geometries >= TX_MAX_GEOMETRIES) {
+    record_error("trilux shim: too many geometries in one scene");
+    return NULL;
+  }
+  TxExact* g = &s->geometries[s->n_geometries++];
+  g->user = user;
+  g->bounds = bounds;
+  g->exact = exact;
+  g->key_base = key_base;
+  return g;
+}
+
 static unsigned int attach(TxScene* s, RTCGeometry geom) {
   rtcCommitGeometry(geom);
   unsigned int id = rtcAttachGeometry(s->scene, geom);
@@ -191,8 +377,23 @@ static unsigned int attach(TxScene* s, RTCGeometry geom) {
   return id;
 }
 
+/* Attaches a quad or triangle geometry whose hits the exact routine decides. */
+static unsigned int attach_decided(TxScene* s, RTCGeometry geom, const void* user,
+                                   TxIntersectFn exact, unsigned int key_base) {
+  TxExact* g = add_exact(s, user, NULL, exact, key_base);
+  if (!g) {
+    rtcReleaseGeometry(geom);
+    return TX_INVALID_ID;
+  }
+  rtcSetGeometryUserData(geom, g);
+  rtcSetGeometryIntersectFilterFunction(geom, exact_intersect_filter);
+  rtcSetGeometryOccludedFilterFunction(geom, exact_occluded_filter);
+  return attach(s, geom);
+}
+
 unsigned int tx_scene_add_quads(TxScene* s, const float* vertices, unsigned int n,
-                                const float* front_normals) {
+                                const float* front_normals, const void* user,
+                                TxIntersectFn exact, unsigned int key_base) {
   RTCDevice device = rtcGetSceneDevice(s->scene);
   RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_QUAD);
   rtcReleaseDevice(device); /* rtcGetSceneDevice retained it */
@@ -205,8 +406,13 @@ unsigned int tx_scene_add_quads(TxScene* s, const float* vertices, unsigned int 
     rtcReleaseGeometry(geom);
     return TX_INVALID_ID;
   }
-  memcpy(vb, vertices, 12 * sizeof(float) * (size_t)n);
   for (unsigned int i = 0; i < 4 * n; i++) ib[i] = i;
+  if (s->exact) {
+    const float margin = margin_for(magnitude(vertices, 4 * (size_t)n));
+    for (size_t q = 0; q < n; q++) enlarge(vertices + 12 * q, vb + 12 * q, 4, margin);
+    return attach_decided(s, geom, user, exact, key_base);
+  }
+  memcpy(vb, vertices, 12 * sizeof(float) * (size_t)n);
   if (front_normals) {
     if (s->quad_normals) {
       record_error("trilux shim: only one one-sided quad geometry per scene");
@@ -227,30 +433,48 @@ unsigned int tx_scene_add_quads(TxScene* s, const float* vertices, unsigned int 
   return attach(s, geom);
 }
 
-unsigned int tx_scene_add_triangles(TxScene* s, const float* vertices, unsigned int n_vertices,
-                                    const unsigned int* indices, unsigned int n_triangles) {
+unsigned int tx_scene_add_triangles(TxScene* s, const float* vertices,
+                                    const unsigned int* indices, unsigned int n_triangles,
+                                    const void* user, TxIntersectFn exact,
+                                    unsigned int key_base) {
   RTCDevice device = rtcGetSceneDevice(s->scene);
   RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcReleaseDevice(device);
   if (!geom) return TX_INVALID_ID;
-  /* Embree may read 16 bytes at the last vertex: the buffer it allocates itself is padded. */
+  size_t n_vertices = 0;
+  for (size_t i = 0; i < 3 * (size_t)n_triangles; i++)
+    if (indices[i] + 1 > n_vertices) n_vertices = indices[i] + 1;
+  /* An exact scene enlarges each triangle on its own, so its vertices are not shared. Embree
+   * may read 16 bytes at the last vertex: the buffer it allocates itself is padded. */
+  const size_t n_buffer = s->exact ? 3 * (size_t)n_triangles : n_vertices;
   float* vb = (float*)rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                              3 * sizeof(float), n_vertices);
+                                              3 * sizeof(float), n_buffer);
   unsigned int* ib = (unsigned int*)rtcSetNewGeometryBuffer(
       geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned int), n_triangles);
   if (!vb || !ib) {
     rtcReleaseGeometry(geom);
     return TX_INVALID_ID;
   }
-  memcpy(vb, vertices, 3 * sizeof(float) * (size_t)n_vertices);
-  memcpy(ib, indices, 3 * sizeof(unsigned int) * (size_t)n_triangles);
-  return attach(s, geom);
+  if (!s->exact) {
+    memcpy(vb, vertices, 3 * sizeof(float) * n_vertices);
+    memcpy(ib, indices, 3 * sizeof(unsigned int) * (size_t)n_triangles);
+    return attach(s, geom);
+  }
+  const float margin = margin_for(magnitude(vertices, n_vertices));
+  for (size_t t = 0; t < n_triangles; t++) {
+    float corners[9];
+    for (int k = 0; k < 3; k++)
+      memcpy(corners + 3 * k, vertices + 3 * (size_t)indices[3 * t + k], 3 * sizeof(float));
+    enlarge(corners, vb + 9 * t, 3, margin);
+  }
+  for (size_t i = 0; i < 3 * (size_t)n_triangles; i++) ib[i] = (unsigned int)i;
+  return attach_decided(s, geom, user, exact, key_base);
 }
 
 /* ---- user geometry ----------------------------------------------------------------------- */
 
 static void user_bounds(const struct RTCBoundsFunctionArguments* args) {
-  const TxUser* u = (const TxUser*)args->geometryUserPtr;
+  const TxExact* u = (const TxExact*)args->geometryUserPtr;
   float lo[3], hi[3];
   u->bounds(u->user, args->primID, lo, hi);
   args->bounds_o->lower_x = lo[0];
@@ -261,35 +485,24 @@ static void user_bounds(const struct RTCBoundsFunctionArguments* args) {
   args->bounds_o->upper_z = hi[2];
 }
 
-static TxRay load_ray(const struct RTCRayN* ray, unsigned int N, unsigned int i) {
-  TxRay r;
-  r.org[0] = TX_RAYN_F(ray, N, i, RAY_ORG_X);
-  r.org[1] = TX_RAYN_F(ray, N, i, RAY_ORG_Y);
-  r.org[2] = TX_RAYN_F(ray, N, i, RAY_ORG_Z);
-  r.tnear = TX_RAYN_F(ray, N, i, RAY_TNEAR);
-  r.dir[0] = TX_RAYN_F(ray, N, i, RAY_DIR_X);
-  r.dir[1] = TX_RAYN_F(ray, N, i, RAY_DIR_Y);
-  r.dir[2] = TX_RAYN_F(ray, N, i, RAY_DIR_Z);
-  r.tfar = TX_RAYN_F(ray, N, i, RAY_TFAR);
-  return r;
-}
-
 static void user_intersect(const struct RTCIntersectFunctionNArguments* args) {
-  const TxUser* u = (const TxUser*)args->geometryUserPtr;
+  const TxExact* u = (const TxExact*)args->geometryUserPtr;
   const unsigned int N = args->N;
   struct RTCRayN* ray = TX_RAYHITN_RAY(args->rayhit, N);
   struct RTCHitN* hit = TX_RAYHITN_HIT(args->rayhit, N);
   for (unsigned int i = 0; i < N; i++) {
     if (args->valid[i] != -1) continue;
-    TxRay r = load_ray(ray, N, i);
-    float t, hu, hv;
-    if (u->intersect(u->user, args->primID, &r, &t, &hu, &hv)) {
-      TX_RAYN_F(ray, N, i, RAY_TFAR) = t;
+    TxBest* best = best_of(args->context, ray, N, i);
+    /* In a scene that is not exact, Embree's nearest hit so far (on a quad or triangle, which
+     * the bests do not see) is the ray's tfar, and bounds the exact t; in an exact one the
+     * tfar is the bests' room, above it. */
+    if (offer(u, args->geomID, args->primID, ray, N, i, best, TX_RAYN_F(ray, N, i, RAY_TFAR))) {
+      TX_RAYN_F(ray, N, i, RAY_TFAR) = room(best);
       TX_HITN_F(hit, N, i, HIT_NG_X) = 0.0f;
       TX_HITN_F(hit, N, i, HIT_NG_Y) = 0.0f;
       TX_HITN_F(hit, N, i, HIT_NG_Z) = 0.0f;
-      TX_HITN_F(hit, N, i, HIT_U) = hu;
-      TX_HITN_F(hit, N, i, HIT_V) = hv;
+      TX_HITN_F(hit, N, i, HIT_U) = best->u;
+      TX_HITN_F(hit, N, i, HIT_V) = best->v;
       TX_HITN_U(hit, N, i, HIT_PRIM) = args->primID;
       TX_HITN_U(hit, N, i, HIT_GEOM) = args->geomID;
       TX_HITN_U(hit, N, i, HIT_INST0) = args->context->instID[0];
@@ -306,13 +519,12 @@ static void user_intersect(const struct RTCIntersectFunctionNArguments* args) {
 }
 
 static void user_occluded(const struct RTCOccludedFunctionNArguments* args) {
-  const TxUser* u = (const TxUser*)args->geometryUserPtr;
+  const TxExact* u = (const TxExact*)args->geometryUserPtr;
   const unsigned int N = args->N;
   for (unsigned int i = 0; i < N; i++) {
     if (args->valid[i] != -1) continue;
-    TxRay r = load_ray(args->ray, N, i);
-    float t, hu, hv;
-    if (u->intersect(u->user, args->primID, &r, &t, &hu, &hv)) {
+    if (exact_occludes(u, args->primID, args->ray, N, i,
+                       best_of(args->context, args->ray, N, i))) {
       TX_RAYN_F(args->ray, N, i, RAY_TFAR) = -INFINITY;
     } else {
 #if TX_EMBREE_MAJOR >= 4
@@ -323,19 +535,16 @@ static void user_occluded(const struct RTCOccludedFunctionNArguments* args) {
 }
 
 unsigned int tx_scene_add_user(TxScene* s, unsigned int n, const void* user, TxBoundsFn bounds,
-                               TxIntersectFn intersect) {
-  if (s->n_users >= TX_MAX_USER_GEOMETRIES) {
-    record_error("trilux shim: too many user geometries in one scene");
-    return TX_INVALID_ID;
-  }
+                               TxIntersectFn exact, unsigned int key_base) {
   RTCDevice device = rtcGetSceneDevice(s->scene);
   RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
   rtcReleaseDevice(device);
   if (!geom) return TX_INVALID_ID;
-  TxUser* u = &s->users[s->n_users++];
-  u->user = user;
-  u->bounds = bounds;
-  u->intersect = intersect;
+  TxExact* u = add_exact(s, user, bounds, exact, key_base);
+  if (!u) {
+    rtcReleaseGeometry(geom);
+    return TX_INVALID_ID;
+  }
   rtcSetGeometryUserPrimitiveCount(geom, n);
   rtcSetGeometryUserData(geom, u);
   rtcSetGeometryBoundsFunction(geom, user_bounds, NULL);
@@ -389,61 +598,99 @@ static void init_ray(struct RTCRay* ray, const TxRay* r) {
   ray->flags = 0;
 }
 
-static void rtc_intersect1(RTCScene scene, struct RTCRayHit* rh) {
+/* A query's context over `best` (one entry per ray id), each entry reset to the ray's range. */
+static void start_query(TxQuery* q, TxBest* best, const float* tfar, size_t n) {
 #if TX_EMBREE_MAJOR >= 4
-  rtcIntersect1(scene, rh, NULL);
+  rtcInitRayQueryContext(&q->context);
 #else
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcIntersect1(scene, &ctx, rh);
+  rtcInitIntersectContext(&q->context);
+#endif
+  q->best = best;
+  for (size_t k = 0; k < n; k++) {
+    best[k].limit = tfar[k];
+    best[k].t = tfar[k];
+    best[k].key = TX_INVALID_ID;
+    best[k].geom = TX_INVALID_ID;
+  }
+}
+
+static void rtc_intersect1(RTCScene scene, TxQuery* q, struct RTCRayHit* rh) {
+#if TX_EMBREE_MAJOR >= 4
+  struct RTCIntersectArguments args;
+  rtcInitIntersectArguments(&args);
+  args.context = &q->context;
+  rtcIntersect1(scene, rh, &args);
+#else
+  rtcIntersect1(scene, &q->context, rh);
 #endif
 }
 
-static void rtc_occluded1(RTCScene scene, struct RTCRay* ray) {
+static void rtc_occluded1(RTCScene scene, TxQuery* q, struct RTCRay* ray) {
 #if TX_EMBREE_MAJOR >= 4
-  rtcOccluded1(scene, ray, NULL);
+  struct RTCOccludedArguments args;
+  rtcInitOccludedArguments(&args);
+  args.context = &q->context;
+  rtcOccluded1(scene, ray, &args);
 #else
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcOccluded1(scene, &ctx, ray);
+  rtcOccluded1(scene, &q->context, ray);
 #endif
 }
 
-static void rtc_intersect8(const int* valid, RTCScene scene, struct RTCRayHit8* rh) {
+static void rtc_intersect8(const int* valid, RTCScene scene, TxQuery* q, struct RTCRayHit8* rh) {
 #if TX_EMBREE_MAJOR >= 4
-  rtcIntersect8(valid, scene, rh, NULL);
+  struct RTCIntersectArguments args;
+  rtcInitIntersectArguments(&args);
+  args.context = &q->context;
+  rtcIntersect8(valid, scene, rh, &args);
 #else
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcIntersect8(valid, scene, &ctx, rh);
+  rtcIntersect8(valid, scene, &q->context, rh);
 #endif
 }
 
-static void rtc_occluded8(const int* valid, RTCScene scene, struct RTCRay8* ray) {
+static void rtc_occluded8(const int* valid, RTCScene scene, TxQuery* q, struct RTCRay8* ray) {
 #if TX_EMBREE_MAJOR >= 4
-  rtcOccluded8(valid, scene, ray, NULL);
+  struct RTCOccludedArguments args;
+  rtcInitOccludedArguments(&args);
+  args.context = &q->context;
+  rtcOccluded8(valid, scene, ray, &args);
 #else
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcOccluded8(valid, scene, &ctx, ray);
+  rtcOccluded8(valid, scene, &q->context, ray);
 #endif
+}
+
+static void write_hit(TxHit* hit, const TxBest* best) {
+  hit->t = best->t;
+  hit->u = best->u;
+  hit->v = best->v;
+  hit->geom = best->geom;
+  hit->prim = best->prim;
 }
 
 void tx_intersect1(const TxScene* s, const TxRay* r, TxHit* hit) {
   struct RTCRayHit rh;
   init_rayhit(&rh, r);
-  rtc_intersect1(s->scene, &rh);
-  hit->t = rh.ray.tfar;
-  hit->u = rh.hit.u;
-  hit->v = rh.hit.v;
-  hit->geom = rh.hit.geomID;
-  hit->prim = rh.hit.primID;
+  TxQuery q;
+  TxBest best;
+  start_query(&q, &best, &r->tfar, 1);
+  rtc_intersect1(s->scene, &q, &rh);
+  if (s->exact) {
+    write_hit(hit, &best);
+  } else {
+    hit->t = rh.ray.tfar;
+    hit->u = rh.hit.u;
+    hit->v = rh.hit.v;
+    hit->geom = rh.hit.geomID;
+    hit->prim = rh.hit.primID;
+  }
 }
 
 int tx_occluded1(const TxScene* s, const TxRay* r) {
   struct RTCRay ray;
   init_ray(&ray, r);
-  rtc_occluded1(s->scene, &ray);
+  TxQuery q;
+  TxBest best;
+  start_query(&q, &best, &r->tfar, 1);
+  rtc_occluded1(s->scene, &q, &ray);
   return ray.tfar < 0.0f;
 }
 
@@ -470,7 +717,7 @@ static void load_packet(struct RTCRay8* p, int* valid, const TxRay* rays, size_t
     }
     p->time[k] = 0.0f;
     p->mask[k] = 0xFFFFFFFFu;
-    p->id[k] = 0;
+    p->id[k] = (unsigned int)k;
     p->flags[k] = 0;
   }
 }
@@ -489,18 +736,25 @@ static void init_hit_packet(struct RTCHit8* hit) {
 void tx_intersect_batch(const TxScene* s, const TxRay* rays, size_t n, TxHit* hits) {
   RTC_ALIGN(32) int valid[8];
   struct RTCRayHit8 rh;
+  TxQuery q;
+  TxBest best[8];
   for (size_t base = 0; base < n; base += 8) {
     size_t count = n - base < 8 ? n - base : 8;
     load_packet(&rh.ray, valid, rays + base, count);
     init_hit_packet(&rh.hit);
-    rtc_intersect8(valid, s->scene, &rh);
+    start_query(&q, best, rh.ray.tfar, 8);
+    rtc_intersect8(valid, s->scene, &q, &rh);
     for (size_t k = 0; k < count; k++) {
       TxHit* h = &hits[base + k];
-      h->t = rh.ray.tfar[k];
-      h->u = rh.hit.u[k];
-      h->v = rh.hit.v[k];
-      h->geom = rh.hit.geomID[k];
-      h->prim = rh.hit.primID[k];
+      if (s->exact) {
+        write_hit(h, &best[k]);
+      } else {
+        h->t = rh.ray.tfar[k];
+        h->u = rh.hit.u[k];
+        h->v = rh.hit.v[k];
+        h->geom = rh.hit.geomID[k];
+        h->prim = rh.hit.primID[k];
+      }
     }
   }
 }
@@ -508,10 +762,13 @@ void tx_intersect_batch(const TxScene* s, const TxRay* rays, size_t n, TxHit* hi
 void tx_occluded_batch(const TxScene* s, const TxRay* rays, size_t n, unsigned char* hits) {
   RTC_ALIGN(32) int valid[8];
   struct RTCRay8 ray;
+  TxQuery q;
+  TxBest best[8];
   for (size_t base = 0; base < n; base += 8) {
     size_t count = n - base < 8 ? n - base : 8;
     load_packet(&ray, valid, rays + base, count);
-    rtc_occluded8(valid, s->scene, &ray);
+    start_query(&q, best, ray.tfar, 8);
+    rtc_occluded8(valid, s->scene, &q, &ray);
     for (size_t k = 0; k < count; k++) hits[base + k] = ray.tfar[k] < 0.0f;
   }
 }
@@ -523,8 +780,11 @@ size_t tx_baseline_intersect1(const TxScene* s, const TxRay* rays, size_t n) {
   for (size_t i = 0; i < n; i++) {
     struct RTCRayHit rh;
     init_rayhit(&rh, &rays[i]);
-    rtc_intersect1(s->scene, &rh);
-    count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    TxQuery q;
+    TxBest best;
+    start_query(&q, &best, &rays[i].tfar, 1);
+    rtc_intersect1(s->scene, &q, &rh);
+    count += (s->exact ? best.geom : rh.hit.geomID) != TX_INVALID_ID;
   }
   return count;
 }
@@ -534,7 +794,10 @@ size_t tx_baseline_occluded1(const TxScene* s, const TxRay* rays, size_t n) {
   for (size_t i = 0; i < n; i++) {
     struct RTCRay ray;
     init_ray(&ray, &rays[i]);
-    rtc_occluded1(s->scene, &ray);
+    TxQuery q;
+    TxBest best;
+    start_query(&q, &best, &rays[i].tfar, 1);
+    rtc_occluded1(s->scene, &q, &ray);
     count += ray.tfar < 0.0f;
   }
   return count;
@@ -548,8 +811,12 @@ size_t tx_baseline_intersect8(const TxScene* s, const TxRay* rays, size_t n) {
     size_t m = n - base < 8 ? n - base : 8;
     load_packet(&rh.ray, valid, rays + base, m);
     init_hit_packet(&rh.hit);
-    rtc_intersect8(valid, s->scene, &rh);
-    for (size_t k = 0; k < m; k++) count += rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+    TxQuery q;
+    TxBest best[8];
+    start_query(&q, best, rh.ray.tfar, 8);
+    rtc_intersect8(valid, s->scene, &q, &rh);
+    for (size_t k = 0; k < m; k++)
+      count += (s->exact ? best[k].geom : rh.hit.geomID[k]) != TX_INVALID_ID;
   }
   return count;
 }
@@ -561,7 +828,10 @@ size_t tx_baseline_occluded8(const TxScene* s, const TxRay* rays, size_t n) {
   for (size_t base = 0; base < n; base += 8) {
     size_t m = n - base < 8 ? n - base : 8;
     load_packet(&ray, valid, rays + base, m);
-    rtc_occluded8(valid, s->scene, &ray);
+    TxQuery q;
+    TxBest best[8];
+    start_query(&q, best, ray.tfar, 8);
+    rtc_occluded8(valid, s->scene, &q, &ray);
     for (size_t k = 0; k < m; k++) count += ray.tfar[k] < 0.0f;
   }
   return count;

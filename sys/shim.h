@@ -53,24 +53,38 @@ void tx_device_release(TxDevice* device);
  * it. Returns the message length, 0 when there was none. */
 size_t tx_last_error(char* buf, size_t len);
 
-/* quality: 0 low, 1 medium, 2 high. robust: non-zero for RTC_SCENE_FLAG_ROBUST. */
-TxScene* tx_scene_new(TxDevice* device, int quality, int robust);
+/* quality: 0 low, 1 medium, 2 high. robust: non-zero for RTC_SCENE_FLAG_ROBUST. exact:
+ * non-zero for hits decided by trilux's exact routines (below); zero for Embree's own test,
+ * one-sided quads then filtered by their front normals. */
+TxScene* tx_scene_new(TxDevice* device, int quality, int robust, int exact);
 void tx_scene_release(TxScene* scene);
 
-/* Adds n quads, each given by 4 vertices (12 floats per quad). front_normals: NULL for
- * two-sided quads, else 3 floats per quad; hits from the back side (dot(normal, dir) >= 0)
- * are then rejected by a filter written in C. Returns the geometry id, or TX_INVALID_ID. */
+/* In an exact scene every primitive's hits are decided by trilux's exact routine `exact` (the
+ * one the built-in BVH runs), called with the primitive's index; `user` must outlive the
+ * scene (user geometry always runs it). Embree only
+ * proposes candidates: quads and triangles are handed to it slightly enlarged (see shim.c), so
+ * that it proposes every primitive the exact routine could accept. Of the accepted hits a
+ * query answers the nearest, and of equally near ones the one with the smallest
+ * `key_base | prim` -- the built-in BVH's rule -- so that both backends answer the same
+ * primitive at the same t.
+ *
+ * Adds n quads, each given by 4 vertices (12 floats per quad). front_normals: NULL for
+ * two-sided quads, else 3 floats per quad, read when the scene is not exact (hits from the
+ * back side, dot(normal, dir) >= 0, are then rejected by a filter written in C; the exact
+ * routine makes that test itself). Returns the geometry id, or TX_INVALID_ID. */
 unsigned int tx_scene_add_quads(TxScene* scene, const float* vertices, unsigned int n,
-                                const float* front_normals);
+                                const float* front_normals, const void* user,
+                                TxIntersectFn exact, unsigned int key_base);
 
-/* Adds an indexed triangle mesh: n_vertices * 3 floats, n_triangles * 3 indices. */
+/* Adds an indexed triangle mesh: n_triangles * 3 indices into vertices (3 floats each). */
 unsigned int tx_scene_add_triangles(TxScene* scene, const float* vertices,
-                                    unsigned int n_vertices, const unsigned int* indices,
-                                    unsigned int n_triangles);
+                                    const unsigned int* indices, unsigned int n_triangles,
+                                    const void* user, TxIntersectFn exact,
+                                    unsigned int key_base);
 
-/* Adds n user primitives with the given callbacks. `user` must outlive the scene. */
+/* Adds n user primitives (spheres, rings) with the given callbacks. */
 unsigned int tx_scene_add_user(TxScene* scene, unsigned int n, const void* user,
-                               TxBoundsFn bounds, TxIntersectFn intersect);
+                               TxBoundsFn bounds, TxIntersectFn exact, unsigned int key_base);
 
 /* Builds the acceleration structure. Returns 0 on success. */
 int tx_scene_commit(TxScene* scene);
@@ -82,8 +96,9 @@ int tx_occluded1(const TxScene* scene, const TxRay* ray);
 void tx_intersect_batch(const TxScene* scene, const TxRay* rays, size_t n, TxHit* hits);
 void tx_occluded_batch(const TxScene* scene, const TxRay* rays, size_t n, unsigned char* hits);
 
-/* Baselines for the benchmarks: plain C loops calling Embree directly, with no trilux layer.
- * They measure what the Rust API costs on top of Embree. Return the number of hits. */
+/* Baselines for the benchmarks: plain C loops calling Embree directly, with no Rust layer
+ * around the query (an exact scene still calls its exact routines). They measure what the
+ * Rust API costs on top of Embree. Return the number of hits. */
 size_t tx_baseline_intersect1(const TxScene* scene, const TxRay* rays, size_t n);
 size_t tx_baseline_occluded1(const TxScene* scene, const TxRay* rays, size_t n);
 size_t tx_baseline_intersect8(const TxScene* scene, const TxRay* rays, size_t n);

@@ -297,8 +297,11 @@ fn leaks(accel: &dyn trilux::accel::Accel, targets: &[Vec3]) -> usize {
 )]
 fn embree_without_robust_mode_leaks_through_edges() {
     let (scene, targets) = box_edge_targets(1024);
+    // Embree's own test deciding: with its hits decided by the exact routines it leaks
+    // nowhere, robust or not.
     let options = AccelOptions {
         embree_robust: false,
+        embree_exact: false,
         ..AccelOptions::default()
     };
     let accel = accel::build(&scene, trilux::accel::AccelKind::Embree, &options).expect("builds");

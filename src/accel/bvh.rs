@@ -203,7 +203,21 @@ impl Bvh {
         best: &mut Option<(usize, f32, f32)>,
     ) {
         for k in node.first as usize..(node.first + node.count) as usize {
-            if let Some((t, u, v)) = self.hit_prim(&self.prims[k], ray, shear, *t_max) {
+            // Of equally near hits the smaller packed reference wins, whatever the order the
+            // tree met them in: Embree's shim applies the same rule, so both backends answer
+            // the same primitive where a ray meets an edge two primitives share.
+            let limit = match best {
+                Some(_) => t_max.next_up(),
+                None => *t_max,
+            };
+            let Some((t, u, v)) = self.hit_prim(&self.prims[k], ray, shear, limit) else {
+                continue;
+            };
+            let wins = match best {
+                Some((b, ..)) => t < *t_max || self.prims[k].prim.raw() < self.prims[*b].prim.raw(),
+                None => true,
+            };
+            if wins {
                 *t_max = t;
                 *best = Some((k, u, v));
             }

@@ -5,8 +5,10 @@ use std::ffi::{c_void, CStr};
 use std::mem::{align_of, offset_of, size_of};
 use std::os::raw::c_char;
 
-use super::{Accel, AccelError, AccelOptions, EmbreeQuality};
-use crate::geometry::{AnalyticShape, Ray, Shape};
+use super::{Accel, AccelError, AccelOptions, EmbreeQuality, PackedPrim};
+use crate::geometry::{
+    faces_ray, intersect_quad, intersect_triangle, AnalyticShape, Ray, Shape, Vec3,
+};
 use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
 
 #[allow(
@@ -62,7 +64,8 @@ fn last_error(context: &str) -> AccelError {
 }
 
 /// Analytic shapes are handed to Embree as one user geometry; Embree calls back into the same
-/// exact intersection routines the built-in BVH uses.
+/// exact intersection routines the built-in BVH uses. (Quads and triangles too are decided by
+/// those routines: see `quad_exact` and `triangle_exact`.)
 unsafe extern "C" fn user_bounds(user: *const c_void, prim: u32, lower: *mut f32, upper: *mut f32) {
     // SAFETY: `user` points to the first of the geometry's shapes (a boxed slice alive as long
     // as the scene); Embree passes prim < the primitive count we gave, and lower/upper point
@@ -83,7 +86,7 @@ unsafe extern "C" fn user_bounds(user: *const c_void, prim: u32, lower: *mut f32
     }
 }
 
-unsafe extern "C" fn user_intersect(
+unsafe extern "C" fn shape_exact(
     user: *const c_void,
     prim: u32,
     ray: *const sys::TxRay,
@@ -108,15 +111,92 @@ unsafe extern "C" fn user_intersect(
     }
 }
 
+/// The quads as the exact test reads them: vertices, front normal, and whether the back side
+/// is to be missed.
+struct ExactQuads {
+    quads: Box<[([Vec3; 4], Vec3)]>,
+    one_sided: bool,
+}
+
+/// Writes an exact routine's answer through the shim's out-pointers.
+///
+/// # Safety
+/// `t`, `u` and `v` must be writable floats.
+unsafe fn answer(hit: Option<(f32, f32, f32)>, t: *mut f32, u: *mut f32, v: *mut f32) -> i32 {
+    match hit {
+        Some((th, uh, vh)) => {
+            // SAFETY: the caller passes writable floats.
+            unsafe {
+                *t = th;
+                *u = uh;
+                *v = vh;
+            }
+            1
+        }
+        None => 0,
+    }
+}
+
+/// The exact test of quad `prim` (the built-in BVH's, one-sidedness included), which decides
+/// each candidate Embree proposes.
+unsafe extern "C" fn quad_exact(
+    user: *const c_void,
+    prim: u32,
+    ray: *const sys::TxRay,
+    t: *mut f32,
+    u: *mut f32,
+    v: *mut f32,
+) -> i32 {
+    // SAFETY: `user` points to the `ExactQuads` boxed in the accel, alive as long as the scene;
+    // Embree proposes prim < the number of quads; `ray` has `Ray`'s layout (checked above);
+    // t/u/v are writable floats.
+    unsafe {
+        let quads = &*(user as *const ExactQuads);
+        let (vertices, normal) = &quads.quads[prim as usize];
+        let ray = &*(ray as *const Ray);
+        if quads.one_sided && !faces_ray(*normal, ray.direction) {
+            return 0;
+        }
+        answer(intersect_quad(ray, ray.t_max, vertices), t, u, v)
+    }
+}
+
+/// The exact test of triangle `prim`.
+unsafe extern "C" fn triangle_exact(
+    user: *const c_void,
+    prim: u32,
+    ray: *const sys::TxRay,
+    t: *mut f32,
+    u: *mut f32,
+    v: *mut f32,
+) -> i32 {
+    // SAFETY: `user` points to the first of the boxed triangles, alive as long as the scene;
+    // prim < their number; `ray` has `Ray`'s layout; t/u/v are writable floats.
+    unsafe {
+        let [a, b, c] = *(user as *const [Vec3; 3]).add(prim as usize);
+        let ray = &*(ray as *const Ray);
+        answer(intersect_triangle(ray, ray.t_max, a, b, c), t, u, v)
+    }
+}
+
+/// The key base of a primitive kind in the tie rule both backends apply: the packed
+/// reference of its primitive 0, so that `key_base | prim` orders as the BVH's packed
+/// references do.
+fn key_base(kind: PrimKind) -> u32 {
+    PackedPrim::new(PrimRef { kind, index: 0 }).raw()
+}
+
 /// An Embree device and scene over one trilux scene.
 pub struct EmbreeAccel {
     device: *mut sys::TxDevice,
     scene: *mut sys::TxScene,
     /// The primitive kind of each Embree geometry id.
     kinds: Vec<PrimKind>,
-    /// User data of the sphere and ring geometries: Embree holds pointers to their first
-    /// elements, which stay put when the struct moves.
+    /// User data of the geometries' exact routines: Embree holds pointers to them (to the
+    /// first element of a slice), which stay put when the struct moves.
     shapes: Box<[AnalyticShape]>,
+    quads: Box<ExactQuads>,
+    triangles: Box<[[Vec3; 3]]>,
 }
 
 // SAFETY: a committed Embree scene may be queried from any number of threads at once, and
@@ -148,12 +228,26 @@ impl EmbreeAccel {
             EmbreeQuality::High => 2,
         };
         // SAFETY: device is a live device.
-        let tx_scene = unsafe { sys::tx_scene_new(device, quality, options.embree_robust as i32) };
+        let tx_scene = unsafe {
+            sys::tx_scene_new(
+                device,
+                quality,
+                options.embree_robust as i32,
+                options.embree_exact as i32,
+            )
+        };
         let mut accel = EmbreeAccel {
             device,
             scene: tx_scene,
             kinds: Vec::new(),
             shapes: scene.shapes.iter().map(|s| s.shape).collect(),
+            quads: Box::new(ExactQuads {
+                quads: scene.quads.iter().map(|q| (q.vertices, q.normal)).collect(),
+                one_sided: !scene.two_sided_quads,
+            }),
+            triangles: (0..scene.triangles.len())
+                .map(|i| scene.triangles.vertices(i))
+                .collect(),
         };
         if tx_scene.is_null() {
             // Drop would release a NULL scene: the shim accepts it.
@@ -178,20 +272,42 @@ impl EmbreeAccel {
             };
             let n = u32::try_from(scene.quads.len())
                 .map_err(|_| AccelError::TooLarge(scene.quads.len()))?;
-            // SAFETY: vertices holds 12 floats per quad and normals 3; the shim copies both.
-            let id = unsafe { sys::tx_scene_add_quads(tx_scene, vertices.as_ptr(), n, front) };
+            let user = &*accel.quads as *const ExactQuads as *const c_void;
+            // SAFETY: vertices holds 12 floats per quad and normals 3 (the shim copies both);
+            // `user` points to a box owned by `accel`, which outlives the scene, as
+            // `quad_exact` expects.
+            let id = unsafe {
+                sys::tx_scene_add_quads(
+                    tx_scene,
+                    vertices.as_ptr(),
+                    n,
+                    front,
+                    user,
+                    Some(quad_exact),
+                    key_base(PrimKind::Quad),
+                )
+            };
             accel.register(id, PrimKind::Quad)?;
         }
         if !scene.triangles.is_empty() {
             let mesh = &scene.triangles;
             let vertices: Vec<f32> = mesh.positions.iter().flat_map(|v| v.to_array()).collect();
             let indices: Vec<u32> = mesh.indices.iter().flatten().copied().collect();
-            let nv = u32::try_from(mesh.positions.len())
-                .map_err(|_| AccelError::TooLarge(mesh.positions.len()))?;
             let nt = u32::try_from(mesh.len()).map_err(|_| AccelError::TooLarge(mesh.len()))?;
-            // SAFETY: the arrays hold 3 floats per vertex and 3 indices per triangle; copied.
+            let user = accel.triangles.as_ptr() as *const c_void;
+            // SAFETY: the arrays hold 3 floats per vertex and 3 valid vertex indices per
+            // triangle (the shim copies them); `user` points into a boxed slice owned by
+            // `accel`, one entry per triangle, as `triangle_exact` expects.
             let id = unsafe {
-                sys::tx_scene_add_triangles(tx_scene, vertices.as_ptr(), nv, indices.as_ptr(), nt)
+                sys::tx_scene_add_triangles(
+                    tx_scene,
+                    vertices.as_ptr(),
+                    indices.as_ptr(),
+                    nt,
+                    user,
+                    Some(triangle_exact),
+                    key_base(PrimKind::Triangle),
+                )
             };
             accel.register(id, PrimKind::Triangle)?;
         }
@@ -201,7 +317,14 @@ impl EmbreeAccel {
                 .map_err(|_| AccelError::TooLarge(accel.shapes.len()))?;
             // SAFETY: `user` points into a boxed slice owned by `accel`, which outlives the scene.
             let id = unsafe {
-                sys::tx_scene_add_user(tx_scene, n, user, Some(user_bounds), Some(user_intersect))
+                sys::tx_scene_add_user(
+                    tx_scene,
+                    n,
+                    user,
+                    Some(user_bounds),
+                    Some(shape_exact),
+                    key_base(PrimKind::Shape),
+                )
             };
             accel.register(id, PrimKind::Shape)?;
         }

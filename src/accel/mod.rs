@@ -88,6 +88,12 @@ pub struct AccelOptions {
     /// lets rays through the diagonal of a quad and through shared edges: visible as single
     /// background pixels on the walls of the course's Cornell box, and a light leak.
     pub embree_robust: bool,
+    /// Embree's candidate hits decided by trilux's exact routines, the BVH's (default on):
+    /// both backends then answer the same primitive at the same t for every ray, and render
+    /// the same images. Off, Embree's own test decides, and a ray through an edge two
+    /// primitives share may land on the other one (one pixel in 65,536 of the course's
+    /// Cornell box, path traced); Embree is then faster (BENCHMARKS.md, session 21).
+    pub embree_exact: bool,
 }
 
 impl Default for AccelOptions {
@@ -95,6 +101,7 @@ impl Default for AccelOptions {
         AccelOptions {
             embree_quality: EmbreeQuality::Medium,
             embree_robust: true,
+            embree_exact: true,
         }
     }
 }
@@ -151,6 +158,11 @@ impl PackedPrim {
     #[inline]
     pub fn index(self) -> u32 {
         self.0 & Self::MAX_INDEX
+    }
+    /// The packed bits: the order both backends break ties in (kind, then index).
+    #[inline]
+    pub fn raw(self) -> u32 {
+        self.0
     }
     #[inline]
     pub fn unpack(self) -> PrimRef {

@@ -119,6 +119,11 @@ pub struct CommonArgs {
     /// cracks along quad diagonals and shared edges for a little speed.
     #[arg(long, default_value_t = AccelOptions::default().embree_robust, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
     pub embree_robust: bool,
+    /// Embree's candidate hits decided by trilux's exact routines (the BVH's): on by default,
+    /// so that both backends render the same images; `--embree-exact false` lets Embree's own
+    /// test decide, which is faster and may differ at shared edges.
+    #[arg(long, default_value_t = AccelOptions::default().embree_exact, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub embree_exact: bool,
 }
 
 /// The path tracer's flags.
@@ -699,6 +704,7 @@ impl RenderArgs {
         AccelOptions {
             embree_quality: self.common.embree_quality,
             embree_robust: self.common.embree_robust,
+            embree_exact: self.common.embree_exact,
         }
     }
 

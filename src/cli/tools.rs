@@ -25,6 +25,10 @@ pub struct BenchArgs {
     /// Embree's robust (watertight) mode, as for rendering.
     #[arg(long, default_value_t = true, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
     pub embree_robust: bool,
+    /// Embree's hits decided by trilux's exact routines, as for rendering (`false`: Embree's
+    /// own test, what Embree alone costs).
+    #[arg(long, default_value_t = true, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub embree_exact: bool,
     /// Backends to measure.
     #[arg(long, value_delimiter = ',', default_values_t = default_accels())]
     pub accel: Vec<AccelKind>,
@@ -89,6 +93,7 @@ pub fn bench_accel(args: &BenchArgs) -> Result<(), String> {
     let threads = pool.current_num_threads();
     let options = AccelOptions {
         embree_robust: args.embree_robust,
+        embree_exact: args.embree_exact,
         ..AccelOptions::default()
     };
     let crate::bench::Report { rows, builds } = pool
@@ -110,12 +115,13 @@ pub fn bench_accel(args: &BenchArgs) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     let mut lines = vec![
         format!(
-            "scene: {} ({} primitives), {} rays per set, median of {} runs, embree robust: {}",
+            "scene: {} ({} primitives), {} rays per set, median of {} runs, embree robust: {}, embree exact: {}",
             args.scene,
             scene.primitive_count(),
             args.rays,
             args.repeats,
-            args.embree_robust
+            args.embree_robust,
+            args.embree_exact
         ),
         String::new(),
         "| backend | build (s) |".into(),
