@@ -494,7 +494,7 @@ impl Tracer<'_> {
                 total += light.emitted * visible;
                 continue;
             } else {
-                let by_solid_angle = if self.settings.light_sampling == LightSampling::SolidAngle
+                let by_solid_angle = if self.settings.light_sampling.by_solid_angle()
                     || (self.settings.light_sampling == LightSampling::Adaptive && fog.is_some())
                 {
                     light.solid_angle_sampler(s.point)

@@ -78,6 +78,10 @@ pub enum LightSampling {
     /// points multi-jittered too).
     #[default]
     SolidAngle,
+    /// As `solid-angle`, with independent uniform points in its parametrisation: what one
+    /// shadow ray is worth alone, its error falling as 1/N (the default's strata make it fall
+    /// faster).
+    SolidAngleRandom,
     /// Independent uniform points by area (the course's comparison).
     Random,
     /// The centres of a grid of strata by area (no randomness).
@@ -91,12 +95,20 @@ pub enum LightSampling {
 }
 
 impl LightSampling {
+    /// Whether rectangles and spheres are sampled by the solid angle they subtend.
+    pub fn by_solid_angle(self) -> bool {
+        matches!(
+            self,
+            LightSampling::SolidAngle | LightSampling::SolidAngleRandom
+        )
+    }
+
     /// The pattern of the (u, v) points, in whichever parametrisation.
     pub fn pattern(self) -> Pattern {
         match self {
             LightSampling::SolidAngle | LightSampling::Adaptive => Pattern::MultiJittered,
             LightSampling::Jittered => Pattern::Jittered,
-            LightSampling::Random => Pattern::Random,
+            LightSampling::Random | LightSampling::SolidAngleRandom => Pattern::Random,
             LightSampling::Stratified => Pattern::Stratified,
         }
     }
