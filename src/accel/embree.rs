@@ -99,15 +99,10 @@ unsafe extern "C" fn shape_exact(
     unsafe {
         let shape = &*(user as *const AnalyticShape).add(prim as usize);
         let ray = &*(ray as *const Ray);
-        match shape.intersect(ray, ray.t_max) {
-            Some((hit, _part)) => {
-                *t = hit;
-                *u = 0.0;
-                *v = 0.0;
-                1
-            }
-            None => 0,
-        }
+        let hit = shape
+            .intersect(ray, ray.t_max)
+            .map(|(t, _part)| (t, 0.0, 0.0));
+        answer(hit, t, u, v)
     }
 }
 
