@@ -5,17 +5,22 @@
 //! levels split nothing there. This tree splits each node at the median of its points along
 //! the axis where they spread most, down to leaves of at most `LEAF_SIZE` points, built by two
 //! threads, and searches best-first (the nearest unopened cell next). A query is bound by
-//! memory: on the Cornell box's photon map it opens about 13 leaves and reads some 250 points
+//! memory: on the 2M-photon Cornell box map it opens about 9 leaves and reads some 180 points
 //! for k = 50 (photons lie on surfaces, where a ball meets about 3×3 cells). What made it
-//! fast, one change at a time (one thread, k = 50; BENCHMARKS.md, session 20):
-//! - a leaf's points stored together with their indices, 16 bytes each side by side (one
-//!   array per axis and one of indices were four places apart: 8.2 → 5.2 µs on the 10M-photon
-//!   map);
-//! - the candidates' heap ordered by one u64 (squared distance's bits, then index) instead of
-//!   a pair of floats (5.2 → 4.0 µs on 500k points on a box's walls);
+//! fast, one change at a time (one thread, k = 50; BENCHMARKS.md, sessions 20 and 22):
+//! - a leaf's points stored together (one array per axis and one of indices were four
+//!   places apart: 8.2 → 5.2 µs on the 10M-photon map);
+//! - the candidates ordered by one u64 (squared distance's bits, then index) instead of a
+//!   pair of floats (5.2 → 4.0 µs on 500k points on a box's walls);
 //! - best-first rather than depth-first search (8.8 → 8.2 µs);
 //! - leaves of 32 points rather than 16 (4.5–7.4 → 4.4–5.6 µs, noisy; 8 was slower);
-//! - the points moved, not indices, while building (7.5 s → 0.95 s with the two threads).
+//! - the points moved, not indices, while building (7.5 s → 0.95 s with the two threads);
+//! - session 22, together 0.76× the time of the above in interleaved rounds: nodes of 8
+//!   bytes with no leaves stored (ranges follow from the median split); a leaf's coordinates
+//!   as runs of x, y and z, 12 bytes a point, the indices apart (the photon maps renumber
+//!   their photons in leaf order and need none); the k best kept sorted, a nearer one
+//!   inserted by a binary search, instead of a binary heap (about 33 insertions a query);
+//!   the points within reach marked as bits before they are offered.
 //!
 //! A query returns the k points nearest to it within a radius, ordered by (squared distance,
 //! index): ties are broken by the point's index, so the answer is one set whatever the tree's
@@ -23,8 +28,9 @@
 
 /// Points per leaf at most.
 const LEAF_SIZE: usize = 32;
-/// Marks a leaf in `Node::axis`.
-const LEAF: u32 = 3;
+/// Marks, as a node's axis, a cell whose points all coincide: a leaf, however many they are
+/// (no split could part them).
+const COINCIDENT: u32 = 3;
 /// Cells are pruned by their incremental distance times this: a bound rounded up by an ulp
 /// must not prune a point that ties with the k-th.
 const SLACK: f32 = 1.0 - 1e-6;
@@ -32,21 +38,26 @@ const SLACK: f32 = 1.0 - 1e-6;
 /// needed).
 const PENDING: usize = 64;
 
-/// A node: an inner node splits its points at `split` along `axis` (its left child is the
-/// next node, its right child `right_or_start`); a leaf holds points `right_or_start..end`.
+/// An inner node. Its cell's points are a range of the leaf order; it splits them at the
+/// median, the first half (rounded down) to its left child, which is the next node, and the
+/// rest to its right child, node `packed >> 2`; `split` separates them along axis
+/// `packed & 3`. The ranges follow from the root's, so no node stores one, and leaves (cells
+/// of at most `LEAF_SIZE` points) are not stored at all: 8 bytes an inner node, a quarter of
+/// what nodes with their ranges and stored leaves took.
 #[derive(Clone, Copy, Debug)]
 struct Node {
     split: f32,
-    axis: u32,
-    right_or_start: u32,
-    end: u32,
+    packed: u32,
 }
 
-/// A cell a query has still to open, ordered nearest first (`BinaryHeap` pops its largest).
+/// A cell a query has still to open, ordered nearest first (`BinaryHeap` pops its largest):
+/// its points `start..end` of the leaf order and its node (meaningful if it is not a leaf).
 #[derive(Clone, Copy, Debug)]
 struct Pending {
     bound: f32,
     node: u32,
+    start: u32,
+    end: u32,
     offset: [f32; 3],
 }
 
@@ -69,12 +80,13 @@ impl Ord for Pending {
         other
             .bound
             .total_cmp(&self.bound)
-            .then(other.node.cmp(&self.node))
+            .then(other.start.cmp(&self.start))
+            .then(other.end.cmp(&self.end))
     }
 }
 
 /// A point found by a query: its squared distance to the query and its index in the slice the
-/// tree was built from.
+/// tree was built from (or its position in the leaf order, once renumbered).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Neighbour {
     pub distance: f32,
@@ -83,9 +95,14 @@ pub struct Neighbour {
 
 pub struct KdTree {
     nodes: Vec<Node>,
-    /// The points in leaf order, each with its index in the slice the tree was built from:
-    /// a leaf's are 16 bytes apiece, side by side, all a query reads of it.
-    points: Vec<([f32; 3], u32)>,
+    /// The points' coordinates in leaf order, a leaf's as three runs (its x's, its y's, its
+    /// z's) so that their distances are computed four or eight at a time: 12 bytes a point,
+    /// all a query reads of a leaf.
+    coords: Vec<f32>,
+    /// The index in the slice the tree was built from of each point in leaf order, read
+    /// only for the points offered to a query; `None` once renumbered (a point's index is then
+    /// its position).
+    order: Option<Vec<u32>>,
 }
 
 impl KdTree {
@@ -96,43 +113,39 @@ impl KdTree {
             .enumerate()
             .map(|(i, p)| (*p, i as u32))
             .collect();
-        let nodes = if entries.is_empty() {
-            Vec::new()
-        } else {
-            build(&mut entries, 0)
-        };
+        let mut coords = vec![0.0; 3 * entries.len()];
+        let nodes = build(&mut entries, &mut coords);
         KdTree {
             nodes,
-            points: entries,
+            coords,
+            order: Some(entries.into_iter().map(|(_, i)| i).collect()),
         }
     }
 
     pub fn len(&self) -> usize {
-        self.points.len()
+        self.coords.len() / 3
     }
 
     /// Renumbers the points in leaf order (queries then answer positions in it) and returns
     /// the old number of each: a caller that stores its records in that order reads a
     /// query's answer from adjacent memory.
     pub fn renumber_in_leaf_order(&mut self) -> Vec<u32> {
-        self.points
-            .iter_mut()
-            .enumerate()
-            .map(|(i, (_, item))| std::mem::replace(item, i as u32))
-            .collect()
+        self.order
+            .take()
+            .unwrap_or_else(|| (0..self.len() as u32).collect())
     }
 
     pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
+        self.coords.is_empty()
     }
 
     /// The `k` points nearest to `query` whose squared distance is at most `max_distance2`,
     /// nearest first (ties by index).
     pub fn nearest(&self, query: [f32; 3], k: usize, max_distance2: f32) -> Vec<Neighbour> {
-        let mut heap = Farthest::with_capacity(k);
-        if k == 0 || self.nodes.is_empty() {
+        if k == 0 || self.is_empty() {
             return Vec::new();
         }
+        let mut heap = Farthest::with_capacity(k);
         // Cells still to visit, nearest first (best-first search: only cells nearer than the
         // k-th point found are opened), each with the query's offset from it along each axis
         // (0 inside) and the squared distance that makes, a lower bound of its points' (the
@@ -141,12 +154,16 @@ impl KdTree {
         pending.push(Pending {
             bound: 0.0,
             node: 0,
+            start: 0,
+            end: self.len() as u32,
             offset: [0.0; 3],
         });
         let reach = |heap: &Farthest| heap.reach(max_distance2);
         while let Some(Pending {
-            mut node,
             bound,
+            mut node,
+            mut start,
+            mut end,
             offset,
         }) = pending.pop()
         {
@@ -154,17 +171,25 @@ impl KdTree {
                 break;
             }
             loop {
-                let n = self.nodes[node as usize];
-                if n.axis == LEAF {
-                    self.search_leaf(query, n, max_distance2, &mut heap);
+                if (end - start) as usize <= LEAF_SIZE {
+                    self.search_leaf(query, start, end, max_distance2, &mut heap);
                     break;
                 }
-                let axis = n.axis as usize;
+                let n = self.nodes[node as usize];
+                let axis = n.packed & 3;
+                if axis == COINCIDENT {
+                    self.search_leaf(query, start, end, max_distance2, &mut heap);
+                    break;
+                }
+                let axis = axis as usize;
+                let middle = start + (end - start) / 2;
+                let left = (node + 1, start, middle);
+                let right = (n.packed >> 2, middle, end);
                 let diff = query[axis] - n.split;
                 let (near, far) = if diff < 0.0 {
-                    (node + 1, n.right_or_start)
+                    (left, right)
                 } else {
-                    (n.right_or_start, node + 1)
+                    (right, left)
                 };
                 let mut far_offset = offset;
                 far_offset[axis] = diff;
@@ -172,32 +197,57 @@ impl KdTree {
                 if far_bound * SLACK <= reach(&heap) {
                     pending.push(Pending {
                         bound: far_bound,
-                        node: far,
+                        node: far.0,
+                        start: far.1,
+                        end: far.2,
                         offset: far_offset,
                     });
                 }
-                node = near;
+                (node, start, end) = near;
             }
         }
         heap.into_sorted()
     }
 
-    /// Offers the points of leaf `n` to `heap`, `LEAF_SIZE` at a time (a leaf of coincident
-    /// points can hold more).
-    fn search_leaf(&self, query: [f32; 3], n: Node, max_distance2: f32, heap: &mut Farthest) {
-        let (start, end) = (n.right_or_start as usize, n.end as usize);
-        for first in (start..end).step_by(LEAF_SIZE) {
-            let range = first..(first + LEAF_SIZE).min(end);
+    /// Offers the points `start..end` of the leaf order (one leaf) to `heap`, `LEAF_SIZE` at a
+    /// time (a leaf of coincident points can hold more).
+    fn search_leaf(
+        &self,
+        query: [f32; 3],
+        start: u32,
+        end: u32,
+        max_distance2: f32,
+        heap: &mut Farthest,
+    ) {
+        let (start, count) = (start as usize, (end - start) as usize);
+        let (xs, rest) = self.coords[3 * start..3 * (start + count)].split_at(count);
+        let (ys, zs) = rest.split_at(count);
+        for first in (0..count).step_by(LEAF_SIZE) {
+            let chunk = first..(first + LEAF_SIZE).min(count);
             let mut distances = [0.0f32; LEAF_SIZE];
-            // Squared distances of the whole chunk first, then the offers.
-            for (d, (p, _)) in distances.iter_mut().zip(&self.points[range.clone()]) {
-                let (dx, dy, dz) = (p[0] - query[0], p[1] - query[1], p[2] - query[2]);
+            // Squared distances of the whole chunk first (vectorised), then the offers.
+            for (((d, x), y), z) in distances
+                .iter_mut()
+                .zip(&xs[chunk.clone()])
+                .zip(&ys[chunk.clone()])
+                .zip(&zs[chunk.clone()])
+            {
+                let (dx, dy, dz) = (x - query[0], y - query[1], z - query[2]);
                 *d = dx * dx + dy * dy + dz * dz;
             }
-            for (k, &distance) in distances[..range.len()].iter().enumerate() {
-                if distance <= max_distance2 {
-                    heap.offer(key(distance, self.points[first + k].1));
-                }
+            // Which are within the reach as it stands (it only shrinks as they are offered),
+            // as bits: the offers then follow no branch a point's distance decides.
+            let reach = heap.reach(max_distance2);
+            let mut within = 0u32;
+            for (i, &distance) in distances[..chunk.len()].iter().enumerate() {
+                within |= ((distance <= reach) as u32) << i;
+            }
+            while within != 0 {
+                let i = within.trailing_zeros() as usize;
+                within &= within - 1;
+                let position = start + first + i;
+                let item = self.order.as_ref().map_or(position as u32, |o| o[position]);
+                heap.offer(key(distances[i], item));
             }
         }
     }
@@ -206,10 +256,11 @@ impl KdTree {
 /// Subtrees of more points than this are built by two threads (rayon's `join`).
 const PARALLEL_BUILD: usize = 1 << 16;
 
-/// The subtree of `entries` (points with their indices), whose first is point `start` of the
-/// leaf order: its nodes in depth-first order, child indices counted from its root. The
-/// entries themselves are moved, so that each level reads them in order.
-fn build(entries: &mut [([f32; 3], u32)], start: u32) -> Vec<Node> {
+/// The inner nodes of the subtree of `entries` (points with their indices), in depth-first
+/// order with child indices counted from its root; `entries` end in leaf order and `coords`
+/// (three per entry) receive their coordinates, a leaf's as runs of x, y and z. The entries
+/// themselves are moved, so that each level reads them in order.
+fn build(entries: &mut [([f32; 3], u32)], coords: &mut [f32]) -> Vec<Node> {
     let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
     for (p, _) in entries.iter() {
         for a in 0..3 {
@@ -224,12 +275,20 @@ fn build(entries: &mut [([f32; 3], u32)], start: u32) -> Vec<Node> {
     // A leaf when few points are left, or when they all coincide (a node could not part
     // them; a query then takes them all in one loop).
     if entries.len() <= LEAF_SIZE || extent[axis] <= 0.0 {
-        return vec![Node {
-            split: 0.0,
-            axis: LEAF,
-            right_or_start: start,
-            end: start + entries.len() as u32,
-        }];
+        let count = entries.len();
+        for (i, (p, _)) in entries.iter().enumerate() {
+            for (a, &c) in p.iter().enumerate() {
+                coords[a * count + i] = c;
+            }
+        }
+        return if count <= LEAF_SIZE {
+            Vec::new()
+        } else {
+            vec![Node {
+                split: 0.0,
+                packed: COINCIDENT,
+            }]
+        };
     }
     let middle = entries.len() / 2;
     entries.select_nth_unstable_by(middle, |a, b| {
@@ -237,18 +296,16 @@ fn build(entries: &mut [([f32; 3], u32)], start: u32) -> Vec<Node> {
     });
     let split = entries[middle].0[axis];
     let (left, right) = entries.split_at_mut(middle);
-    let right_start = start + middle as u32;
+    let (left_coords, right_coords) = coords.split_at_mut(3 * middle);
     let (left, right) = if left.len() + right.len() > PARALLEL_BUILD {
-        rayon::join(|| build(left, start), || build(right, right_start))
+        rayon::join(|| build(left, left_coords), || build(right, right_coords))
     } else {
-        (build(left, start), build(right, right_start))
+        (build(left, left_coords), build(right, right_coords))
     };
     let mut nodes = Vec::with_capacity(1 + left.len() + right.len());
     nodes.push(Node {
         split,
-        axis: axis as u32,
-        right_or_start: 1 + left.len() as u32,
-        end: 0,
+        packed: axis as u32 | (1 + left.len() as u32) << 2,
     });
     append(&mut nodes, left);
     append(&mut nodes, right);
@@ -259,20 +316,22 @@ fn build(entries: &mut [([f32; 3], u32)], start: u32) -> Vec<Node> {
 fn append(nodes: &mut Vec<Node>, subtree: Vec<Node>) {
     let offset = nodes.len() as u32;
     nodes.extend(subtree.into_iter().map(|mut n| {
-        if n.axis != LEAF {
-            n.right_or_start += offset;
+        if n.packed & 3 != COINCIDENT {
+            n.packed += offset << 2;
         }
         n
     }));
 }
 
-/// The k best neighbours found so far, as a binary max-heap of keys (squared distance, index)
-/// packed in a u64 — a distance's bits above the index, which orders as the pair does since
-/// squared distances are not negative: one integer comparison where the pair took two float
-/// ones (the heap's comparisons were most of a query's time). The root is the key a nearer
-/// point replaces.
+/// The k best neighbours found so far, as keys (squared distance, index) packed in a u64 — a
+/// distance's bits above the index, which orders as the pair does since squared distances are
+/// not negative: one integer comparison where the pair took two float ones. The first k are
+/// taken as they come and then sorted; after that the keys stay sorted, a nearer point
+/// inserted at its place (a branch-free binary search and one move of the farther keys) and
+/// the farthest dropped. On the 2M-photon Cornell box map a k = 50 query makes about 33 such
+/// insertions, which a binary heap's sift-downs, a mispredicted branch a level, made slower.
 struct Farthest {
-    heap: Vec<u64>,
+    keys: Vec<u64>,
     capacity: usize,
 }
 
@@ -284,7 +343,7 @@ fn key(distance: f32, item: u32) -> u64 {
 impl Farthest {
     fn with_capacity(capacity: usize) -> Farthest {
         Farthest {
-            heap: Vec::with_capacity(capacity),
+            keys: Vec::with_capacity(capacity),
             capacity,
         }
     }
@@ -292,55 +351,36 @@ impl Farthest {
     /// The squared distance a point must not exceed to be offered: the farthest of k found,
     /// `max_distance2` before k are.
     fn reach(&self, max_distance2: f32) -> f32 {
-        if self.heap.len() == self.capacity {
-            f32::from_bits((self.heap[0] >> 32) as u32)
+        if self.keys.len() == self.capacity {
+            f32::from_bits((self.keys[self.capacity - 1] >> 32) as u32)
         } else {
             max_distance2
         }
     }
 
     fn offer(&mut self, key: u64) {
-        let h = &mut self.heap;
-        if h.len() < self.capacity {
-            // Sift up.
-            h.push(key);
-            let mut i = h.len() - 1;
-            while i > 0 {
-                let parent = (i - 1) / 2;
-                if h[parent] >= h[i] {
-                    break;
-                }
-                h.swap(parent, i);
-                i = parent;
+        let keys = &mut self.keys;
+        if keys.len() < self.capacity {
+            keys.push(key);
+            if keys.len() == self.capacity {
+                keys.sort_unstable();
             }
             return;
         }
-        if key >= h[0] {
+        let last = self.capacity - 1;
+        if key >= keys[last] {
             return;
         }
-        // Replace the root and sift down.
-        h[0] = key;
-        let mut i = 0;
-        loop {
-            let (l, r) = (2 * i + 1, 2 * i + 2);
-            let mut largest = i;
-            if l < h.len() && h[l] > h[largest] {
-                largest = l;
-            }
-            if r < h.len() && h[r] > h[largest] {
-                largest = r;
-            }
-            if largest == i {
-                break;
-            }
-            h.swap(i, largest);
-            i = largest;
-        }
+        let place = keys[..last].partition_point(|&k| k < key);
+        keys.copy_within(place..last, place + 1);
+        keys[place] = key;
     }
 
     fn into_sorted(mut self) -> Vec<Neighbour> {
-        self.heap.sort_unstable();
-        self.heap
+        if self.keys.len() < self.capacity {
+            self.keys.sort_unstable();
+        }
+        self.keys
             .into_iter()
             .map(|k| Neighbour {
                 distance: f32::from_bits((k >> 32) as u32),
@@ -397,6 +437,10 @@ mod tests {
         }
         let tree = KdTree::new(&points);
         assert_eq!(tree.len(), points.len());
+        // Renumbered, the points are named by their position in leaf order.
+        let mut renumbered = KdTree::new(&points);
+        let order = renumbered.renumber_in_leaf_order();
+        let in_leaf_order: Vec<[f32; 3]> = order.iter().map(|&i| points[i as usize]).collect();
         for q in 0..300 {
             let query = match q % 4 {
                 0 => [r() * 2.0 - 1.0, -1.0, r() * 2.0 - 1.0],
@@ -414,6 +458,11 @@ mod tests {
                     tree.nearest(query, k, max2),
                     brute_force(&points, query, k, max2),
                     "query {query:?}, k {k}, radius² {max2}"
+                );
+                assert_eq!(
+                    renumbered.nearest(query, k, max2),
+                    brute_force(&in_leaf_order, query, k, max2),
+                    "renumbered: query {query:?}, k {k}, radius² {max2}"
                 );
             }
         }
