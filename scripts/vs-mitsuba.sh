@@ -6,11 +6,13 @@
 #
 # 1. Mitsuba's `path` integrator (llvm_ad_rgb; scripts/mitsuba_time.py, the scene of
 #    ../shared/peers/mitsuba_cornell.py) and our path tracer at 16, 64 and 256 samples a pixel,
-#    REPEATS times (default 3) interleaved; the median time of each and the relMSE of each
-#    image against REFERENCE (`render compare`, ε = 1e-2).
+#    with its default light sampling (`path`) and by area as Mitsuba's (`path-area`,
+#    `--light-sampling random`), REPEATS times (default 3) interleaved; the median time of
+#    each and the relMSE of each image against REFERENCE (`render compare`, ε = 1e-2).
 # 2. From Mitsuba's points (relMSE ∝ 1/spp for an unbiased path tracer), the time Mitsuba
 #    needs for relMSE 1e-2 and 2e-3, by log-log interpolation between its measured points.
-# 3. Each of our engines with --time-limit equal to those two times: the relMSE it reaches.
+# 3. Each of our engines with --time-limit equal to those two times: the relMSE it reaches
+#    (skipped with VS_SPP_ONLY=1).
 #
 # REFERENCE: a converged image of the same scene (e.g. Mitsuba at 32k spp, averaged). Our
 # scene is scenes/cornell_box_diffuse_sphere.obj with a black background, as Mitsuba's.
@@ -58,13 +60,16 @@ for r in $(seq "$repeats"); do
     t=$(seconds "$render" -input "$scene" --engine path -num_antialias_samples "$spp" \
       --seed "$r" --quiet -o "$work/path_$spp.exr")
     echo "path,$spp spp,$t,$(relmse "$work/path_$spp.exr")" >>"$csv"
+    t=$(seconds "$render" -input "$scene" --engine path -num_antialias_samples "$spp" \
+      --light-sampling random --seed "$r" --quiet -o "$work/path_area_$spp.exr")
+    echo "path-area,$spp spp,$t,$(relmse "$work/path_area_$spp.exr")" >>"$csv"
   done
 done
 
 echo
 echo "| renderer | spp | median time (s) | median relMSE |"
 echo "|---|---|---|---|"
-for who in mitsuba path; do
+for who in mitsuba path path-area; do
   for spp in 16 64 256; do
     t=$(grep "^$who,$spp spp," "$csv" | cut -d, -f3 | median)
     e=$(grep "^$who,$spp spp," "$csv" | cut -d, -f4 | median)
@@ -91,6 +96,9 @@ t1=$(time_to 1e-2)
 t2=$(time_to 2e-3)
 echo
 echo "Mitsuba's time to relMSE 1e-2: $t1 s; to 2e-3: $t2 s"
+if [ "${VS_SPP_ONLY:-0}" = 1 ]; then
+  exit 0
+fi
 
 engines=(
   "path|--engine path -num_antialias_samples 4"

@@ -408,6 +408,25 @@ fn bad_input_is_a_clear_error() {
     let out = render(&dir, &["-input", "missing.obj"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.obj"));
+    // A light-sampling pattern the path tracer has no use for (one point per vertex).
+    let scene = common::own_scene_dir().join("cornell_box.obj");
+    let out = render(
+        &dir,
+        &[
+            "-input",
+            scene.to_str().unwrap(),
+            "--engine",
+            "path",
+            "--light-sampling",
+            "stratified",
+            "-o",
+            "strata.png",
+        ],
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--light-sampling stratified"), "{err}");
+    assert!(!dir.join("strata.png").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -8,7 +8,7 @@
 
 use std::path::PathBuf;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 
 use crate::accel::{AccelKind, AccelOptions, EmbreeQuality};
 use crate::engines::photon::{self, PhotonSettings};
@@ -904,6 +904,18 @@ impl RenderArgs {
             p.volume_steps,
             1..=photon::settings::MAX_VOLUME_STEPS,
         )?;
+        let sampling = self.ray_trace.light_sampling;
+        if self.engine() == EngineKind::Path
+            && !matches!(
+                sampling,
+                LightSampling::SolidAngle | LightSampling::SolidAngleRandom | LightSampling::Random
+            )
+        {
+            return Err(format!(
+                "--light-sampling {}: the path tracer takes one independent point on a light at each vertex; expected solid-angle (the default) or random (by area)",
+                sampling.to_possible_value().map_or_else(String::new, |v| v.get_name().to_owned())
+            ));
+        }
         check_number("sppm_radius", self.sppm.sppm_radius, 0.0, true)?;
         if let Some(n) = self.sppm.sppm_photons {
             check_count("sppm_photons", n, 1..=u64::MAX)?;

@@ -391,9 +391,17 @@ impl Light {
     /// `solid_angle_sampler` gives one, else uniform by area (cosθ·cosθ'·A/(π·r²)). None
     /// where the point sends `x` nothing (behind either surface).
     pub fn sample_towards(&self, x: Vec3, n: Vec3, u: f32, v: f32) -> Option<DirectSample> {
-        if let Some(sampler) = self.solid_angle_sampler(x) {
-            return sampler.sample_towards(n, u, v);
+        match self.solid_angle_sampler(x) {
+            Some(sampler) => sampler.sample_towards(n, u, v),
+            None => self.sample_by_area_towards(x, n, u, v),
         }
+    }
+
+    /// One point of this light uniform by area for the shading point `x` with unit normal
+    /// `n` (on its lit side), whatever the light's shape: weight cosθ·cosθ'·A/(π·r²), which
+    /// grows without bound near the light, density r²/(cosθ'·A). None where the point sends
+    /// `x` nothing.
+    pub fn sample_by_area_towards(&self, x: Vec3, n: Vec3, u: f32, v: f32) -> Option<DirectSample> {
         let (point, w, r2, cos_light) = self.area_point(x, u, v)?;
         let cos = n.dot(w) / r2.sqrt();
         (cos > 0.0).then(|| DirectSample {

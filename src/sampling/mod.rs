@@ -82,7 +82,8 @@ pub enum LightSampling {
     /// shadow ray is worth alone, its error falling as 1/N (the default's strata make it fall
     /// faster).
     SolidAngleRandom,
-    /// Independent uniform points by area (the course's comparison).
+    /// Independent uniform points by area (the course's comparison; the path tracer's light
+    /// samples by area, as Mitsuba's and pbrt's).
     Random,
     /// The centres of a grid of strata by area (no randomness).
     Stratified,
