@@ -223,6 +223,7 @@ fn a_hit_on_a_shared_edge_settles_to_one_surface() {
                 },
                 u: 0.72135246,
                 v: if index == 1 { 1.0 } else { 2.7e-7 },
+                exact: false,
             };
             scene.surface(&ray, &reported)
         })

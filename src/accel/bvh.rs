@@ -269,8 +269,10 @@ impl Bvh {
             z: 1.0 / safe(ray.direction.z),
         };
         let org = ray.origin;
+        // Boxes are kept up to `BOX_REACH` beyond the current hit: see there.
+        let reach = |t: f32| t * BOX_REACH;
         let root = &self.nodes[0];
-        if slab(root, org, inv, ray.t_min, *t_max).is_none() {
+        if slab(root, org, inv, ray.t_min, reach(*t_max)).is_none() {
             return;
         }
         // Far children wait with their entry distance: a closer hit found meanwhile lets
@@ -286,8 +288,8 @@ impl Bvh {
                 }
             } else {
                 let (a, b) = (node.first, node.first + 1);
-                let da = slab(&self.nodes[a as usize], org, inv, ray.t_min, *t_max);
-                let db = slab(&self.nodes[b as usize], org, inv, ray.t_min, *t_max);
+                let da = slab(&self.nodes[a as usize], org, inv, ray.t_min, reach(*t_max));
+                let db = slab(&self.nodes[b as usize], org, inv, ray.t_min, reach(*t_max));
                 match (da, db) {
                     (Some(x), Some(y)) => {
                         let (near, far, far_t) = if x <= y { (a, b, y) } else { (b, a, x) };
@@ -313,7 +315,7 @@ impl Bvh {
                 }
                 top -= 1;
                 let (candidate, entry) = stack[top];
-                if entry <= *t_max {
+                if entry <= reach(*t_max) {
                     current = candidate;
                     break;
                 }
@@ -321,6 +323,14 @@ impl Bvh {
         }
     }
 }
+
+/// How far beyond the current hit a box is still opened, as a factor. The slab test's entry
+/// distance is rounded otherwise than a primitive's exact t: a quad met exactly at its edge,
+/// a few ulps nearer than the hit found first, lay in a box whose computed entry was a few
+/// ulps beyond that hit, and was culled (three camera rays along the fog box's edges in
+/// 262,144, caught once the surface stopped re-settling the BVH's hits); and a hit at the
+/// current t still competes by the tie rule. Embree's filter keeps the same room.
+const BOX_REACH: f32 = 1.0 + 1e-5;
 
 /// Ray–box slab test. The far distance is enlarged by 2γ₃ (Ize, "Robust BVH ray traversal")
 /// so that rounding never culls a box the ray touches.
@@ -376,6 +386,7 @@ impl Accel for Bvh {
             prim: self.prims[k].prim.unpack(),
             u,
             v,
+            exact: true,
         })
     }
 

@@ -192,6 +192,8 @@ pub struct EmbreeAccel {
     shapes: Box<[AnalyticShape]>,
     quads: Box<ExactQuads>,
     triangles: Box<[[Vec3; 3]]>,
+    /// `--embree-exact`: the hits are the exact routines' (`PrimHit::exact`).
+    exact: bool,
 }
 
 // SAFETY: a committed Embree scene may be queried from any number of threads at once, and
@@ -243,6 +245,7 @@ impl EmbreeAccel {
             triangles: (0..scene.triangles.len())
                 .map(|i| scene.triangles.vertices(i))
                 .collect(),
+            exact: options.embree_exact,
         };
         if tx_scene.is_null() {
             // Drop would release a NULL scene: the shim accepts it.
@@ -355,6 +358,7 @@ impl EmbreeAccel {
             },
             u: h.u,
             v: h.v,
+            exact: self.exact,
         })
     }
 

@@ -62,6 +62,11 @@ pub struct PrimHit {
     /// The backend's surface parameters (used only when the exact routine disagrees).
     pub u: f32,
     pub v: f32,
+    /// Whether t, u and v are the exact routines' and the primitive the nearest by the shared
+    /// tie rule (the BVH's hits, and Embree's with `--embree-exact`): the surface then takes
+    /// them as they are, where a hit from elsewhere is settled among the quad's neighbours
+    /// (`settle_quad_hit`), which re-ran the exact test on every hit.
+    pub exact: bool,
 }
 
 /// A ray's closest hit with its surface: point, normals, parameters, material.
@@ -142,6 +147,7 @@ impl Scene {
                         prim: s.prim,
                         u: s.uv.0,
                         v: s.uv.1,
+                        exact: false,
                     };
                     let tc = self.flat_surface(&probe, &near).tex_coords;
                     let h = map.lookup(tc);
@@ -279,6 +285,9 @@ impl Scene {
     /// settled here by the shared exact routine: the smallest t among the quads sharing a
     /// vertex with quad i, ties to the lowest index, so both backends give the same surface.
     fn settle_quad_hit(&self, ray: &Ray, i: usize, hit: &PrimHit) -> (usize, (f32, f32, f32)) {
+        if hit.exact {
+            return (i, (hit.t, hit.u, hit.v));
+        }
         let exact = |k: usize, t_max: f32| {
             let q = &self.quads[k];
             if !self.two_sided_quads && !faces_ray(q.normal, ray.direction) {

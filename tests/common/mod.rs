@@ -130,6 +130,7 @@ impl Accel for BruteForce<'_> {
                     prim,
                     u: 0.0,
                     v: 0.0,
+                    exact: false,
                 });
             }
         }

@@ -15,7 +15,7 @@
 //! - best-first rather than depth-first search (8.8 → 8.2 µs);
 //! - leaves of 32 points rather than 16 (4.5–7.4 → 4.4–5.6 µs, noisy; 8 was slower);
 //! - the points moved, not indices, while building (7.5 s → 0.95 s with the two threads);
-//! - session 22, together 0.76× the time of the above in interleaved rounds: nodes of 8
+//! - session 22, together 0.78× the time of the above in interleaved rounds: nodes of 8
 //!   bytes with no leaves stored (ranges follow from the median split); a leaf's coordinates
 //!   as runs of x, y and z, 12 bytes a point, the indices apart (the photon maps renumber
 //!   their photons in leaf order and need none); the k best kept sorted, a nearer one
