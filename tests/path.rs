@@ -32,7 +32,7 @@ fn furnace_radiance_is_le_over_one_minus_rho() {
                 let mean =
                     film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64;
                 println!("furnace ρ = {rho} ({kind}, {sampling:?}): {mean:.4} against {truth:.4} {:+.4}%", 100.0 * (mean / truth - 1.0));
-                // Over seeds 0–9 at 1,024 paths a pixel (Russian roulette from the fifth
+                // Over seeds 0–9 at 1,024 paths a pixel (Russian roulette from the sixth
                 // vertex): ρ = 0.5 +0.02% ± 0.03% (by area +0.03% ± 0.03%), ρ = 0.9 −0.05% ±
                 // 0.21% (the roulette's spread; by area the same). 256 paths a pixel had one
                 // seed in ten at +1.02% for ρ = 0.9. The bounds are six and 4.8 standard

@@ -27,8 +27,9 @@ use crate::scene::sky::Sky;
 use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
 
 /// Vertices after which Russian roulette may end a path: Mitsuba 3's `rr_depth`. From the
-/// third vertex (as until session 22) the Cornell box's relMSE at 64 paths a pixel was 18%
-/// higher (by-area light sampling: 7.83e-3 against 6.39e-3) for 7–15% less time a path.
+/// third (as until session 22) the Cornell box's relMSE at 64 paths a pixel was 22–24% higher
+/// (by solid angle 5.37e-3 against 4.33e-3, by area 7.83e-3 against 6.39e-3) for somewhat
+/// less time a path.
 const ROULETTE_FROM: u32 = 5;
 /// The largest survival probability of Russian roulette. Survival is the path throughput's
 /// largest channel, so the throughput stays near 1 and the estimate has no heavy tail; the cap
@@ -54,8 +55,8 @@ pub struct PathTracer<'a> {
     max_depth: u32,
     /// Next-event estimation by area on every light (`--light-sampling random`), as Mitsuba
     /// and pbrt's path tracers do, rather than by solid angle and the receiver's cosine on
-    /// rectangles and spheres (the default): on the Cornell box about 0.55× the time a path
-    /// for 1.45× the relMSE at equal paths, and no bound on a sample's weight near a light.
+    /// rectangles and spheres (the default): on the Cornell box about 0.6× the time a path
+    /// for 1.5× the relMSE at equal paths, and no bound on a sample's weight near a light.
     by_area: bool,
 }
 
@@ -198,7 +199,8 @@ impl PathTracer<'_> {
         if light.prim == s.prim {
             return Vec3::ZERO;
         }
-        // By solid angle for rectangles and spheres that subtend enough, else by area.
+        // By area with `--light-sampling random`; else by solid angle for rectangles and
+        // spheres that subtend enough, by area for the rest.
         let (u, v) = (rng.next_f32(), rng.next_f32());
         let sample = if self.by_area {
             light.sample_by_area_towards(s.point, n, u, v)

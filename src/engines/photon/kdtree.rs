@@ -222,6 +222,7 @@ impl KdTree {
         let (start, count) = (start as usize, (end - start) as usize);
         let (xs, rest) = self.coords[3 * start..3 * (start + count)].split_at(count);
         let (ys, zs) = rest.split_at(count);
+        let order = self.order.as_deref();
         for first in (0..count).step_by(LEAF_SIZE) {
             let chunk = first..(first + LEAF_SIZE).min(count);
             let mut distances = [0.0f32; LEAF_SIZE];
@@ -246,7 +247,7 @@ impl KdTree {
                 let i = within.trailing_zeros() as usize;
                 within &= within - 1;
                 let position = start + first + i;
-                let item = self.order.as_ref().map_or(position as u32, |o| o[position]);
+                let item = order.map_or(position as u32, |o| o[position]);
                 heap.offer(key(distances[i], item));
             }
         }
