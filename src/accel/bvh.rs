@@ -22,6 +22,21 @@ const PARALLEL_THRESHOLD: usize = 8192;
 /// Relative cost of visiting a node against intersecting one primitive.
 const TRAVERSAL_COST: f32 = 1.0;
 
+/// Relative cost of intersecting a primitive of each kind, a triangle's being 1: a quad is
+/// two watertight triangle tests, a sphere's quadratic about as dear. Counting every kind as
+/// one left the Cornell box's seven primitives in one leaf (no split of its walls, whose
+/// boxes are as large as the room, looked cheaper); counted so, each wall gets a leaf of its
+/// own, and one thread's incoherent closest hits there went from about 5.5 to 8 Mrays/s and
+/// its shadow rays from about 6 to 10–13 (session 23, interleaved rounds). A mesh of
+/// triangles gets the same tree as before.
+fn intersection_cost(kind: PrimKind) -> f32 {
+    match kind {
+        PrimKind::Triangle => 1.0,
+        PrimKind::Quad => 2.0,
+        PrimKind::Shape => 2.0,
+    }
+}
+
 /// One flattened node: its box, and either the index of its first child (the second follows
 /// it) when `count == 0`, or the range `first .. first + count` of its primitives.
 #[repr(C, align(32))]
@@ -48,6 +63,9 @@ pub struct Bvh {
     prims: Vec<LeafPrim>,
     shapes: Vec<AnalyticShape>,
     one_sided_quads: bool,
+    /// The deepest leaf's depth (the root is at 0): how many far children traversal may
+    /// hold at once.
+    depth: usize,
 }
 
 /// A primitive during the build.
@@ -120,7 +138,7 @@ impl Bvh {
             max: Vec3::ZERO,
             count: 0,
         });
-        flatten(&root, 0, &mut nodes);
+        let depth = flatten(&root, 0, &mut nodes);
         if build.is_empty() {
             // An empty tree: a root leaf with no primitives and an empty box.
             nodes[0] = Node {
@@ -137,6 +155,7 @@ impl Bvh {
             prims,
             shapes: scene.shapes.iter().map(|s| s.shape).collect(),
             one_sided_quads: !scene.two_sided_quads,
+            depth,
         })
     }
 
@@ -149,6 +168,12 @@ impl Bvh {
             let n = &self.nodes[i];
             if depth > MAX_DEPTH + 1 {
                 return Err(format!("node {i} is deeper than {MAX_DEPTH}"));
+            }
+            if depth > self.depth {
+                return Err(format!(
+                    "node {i} is at depth {depth}, beyond the {} traversal's stack holds",
+                    self.depth
+                ));
             }
             let b = Bounds3 {
                 min: n.min,
@@ -250,7 +275,24 @@ impl Bvh {
 
     /// Walks the tree nearer child first. `visit` tests a leaf and returns true to stop.
     #[inline(always)]
-    fn traverse(&self, ray: &Ray, t_max: &mut f32, mut visit: impl FnMut(&Node, &mut f32) -> bool) {
+    fn traverse(&self, ray: &Ray, t_max: &mut f32, visit: impl FnMut(&Node, &mut f32) -> bool) {
+        // The stack of far children is an array filled afresh for each ray: a small tree
+        // takes a short one (filling all 64 entries was 6% of the Cornell box's rays).
+        if self.depth < SHALLOW_STACK {
+            self.traverse_with::<SHALLOW_STACK>(ray, t_max, visit)
+        } else {
+            self.traverse_with::<{ MAX_DEPTH + 4 }>(ray, t_max, visit)
+        }
+    }
+
+    /// `traverse` with a stack of `STACK` entries, at least the tree's depth.
+    #[inline(always)]
+    fn traverse_with<const STACK: usize>(
+        &self,
+        ray: &Ray,
+        t_max: &mut f32,
+        mut visit: impl FnMut(&Node, &mut f32) -> bool,
+    ) {
         if self.prims.is_empty() {
             return;
         }
@@ -277,7 +319,7 @@ impl Bvh {
         }
         // Far children wait with their entry distance: a closer hit found meanwhile lets
         // them be skipped without testing their box again.
-        let mut stack = [(0u32, 0f32); MAX_DEPTH + 4];
+        let mut stack = [(0u32, 0f32); STACK];
         let mut top = 0usize;
         let mut current = 0u32;
         loop {
@@ -323,6 +365,9 @@ impl Bvh {
         }
     }
 }
+
+/// Trees shallower than this are traversed with a stack of this many entries.
+const SHALLOW_STACK: usize = 16;
 
 /// How far beyond the current hit a box is still opened, as a factor. The slab test's entry
 /// distance is rounded otherwise than a primitive's exact t: a quad met exactly at its edge,
@@ -465,7 +510,7 @@ fn build_node(prims: &mut [BuildPrim], offset: usize, depth: usize) -> BuildNode
     }
     let split = match best_split(prims, &bounds, &centroids) {
         Some((axis, bin, cost)) => {
-            if cost >= n as f32 && n <= MAX_LEAF {
+            if n <= MAX_LEAF && cost >= leaf_cost(prims) {
                 return leaf;
             }
             let scale = BINS as f32 / (centroids.max[axis] - centroids.min[axis]);
@@ -499,12 +544,17 @@ fn build_node(prims: &mut [BuildPrim], offset: usize, depth: usize) -> BuildNode
     }
 }
 
+/// What testing every primitive of a leaf costs, in triangle intersections.
+fn leaf_cost(prims: &[BuildPrim]) -> f32 {
+    prims.iter().map(|p| intersection_cost(p.prim.kind)).sum()
+}
+
 #[inline]
 fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
     (((c - lo) * scale) as usize).min(BINS - 1)
 }
 
-/// The cheapest SAH split: (axis, last bin of the left side, cost relative to one primitive
+/// The cheapest SAH split: (axis, last bin of the left side, cost relative to one triangle
 /// intersection). None when all centroids coincide.
 fn best_split(
     prims: &[BuildPrim],
@@ -522,10 +572,12 @@ fn best_split(
         let lo = centroids.min[axis];
         let scale = BINS as f32 / extent[axis];
         let mut counts = [0u32; BINS];
+        let mut costs = [0f32; BINS];
         let mut boxes = [Bounds3::EMPTY; BINS];
         for p in prims {
             let b = bin_of(p.centroid[axis], lo, scale);
             counts[b] += 1;
+            costs[b] += intersection_cost(p.prim.kind);
             boxes[b] = boxes[b].union(p.bounds);
         }
         // Sweep from the right, then from the left.
@@ -535,17 +587,19 @@ fn best_split(
             acc = acc.union(boxes[b]);
             right_area[b] = acc.area();
         }
-        let (mut left_box, mut left_count) = (Bounds3::EMPTY, 0u32);
+        let (mut left_box, mut left_count, mut left_cost) = (Bounds3::EMPTY, 0u32, 0f32);
         let total = prims.len() as u32;
+        let total_cost: f32 = costs.iter().sum();
         for b in 0..BINS - 1 {
             left_box = left_box.union(boxes[b]);
             left_count += counts[b];
+            left_cost += costs[b];
             let right_count = total - left_count;
             if left_count == 0 || right_count == 0 {
                 continue;
             }
             let cost = TRAVERSAL_COST
-                + (left_box.area() * left_count as f32 + right_area[b + 1] * right_count as f32)
+                + (left_box.area() * left_cost + right_area[b + 1] * (total_cost - left_cost))
                     / parent_area;
             if best.is_none_or(|(_, _, c)| cost < c) {
                 best = Some((axis, b, cost));
@@ -567,8 +621,9 @@ fn partition(prims: &mut [BuildPrim], left: impl Fn(&BuildPrim) -> bool) -> usiz
     i
 }
 
-/// Writes `node` at `slot`, allocating its children as an adjacent pair.
-fn flatten(node: &BuildNode, slot: usize, nodes: &mut Vec<Node>) {
+/// Writes `node` at `slot`, allocating its children as an adjacent pair; returns the depth
+/// of its deepest leaf below it (0 for a leaf).
+fn flatten(node: &BuildNode, slot: usize, nodes: &mut Vec<Node>) -> usize {
     let b = node.bounds();
     match node {
         BuildNode::Leaf { first, count, .. } => {
@@ -578,6 +633,7 @@ fn flatten(node: &BuildNode, slot: usize, nodes: &mut Vec<Node>) {
                 max: b.max,
                 count: *count as u32,
             };
+            0
         }
         BuildNode::Interior { children, .. } => {
             let first = nodes.len();
@@ -595,8 +651,9 @@ fn flatten(node: &BuildNode, slot: usize, nodes: &mut Vec<Node>) {
                 max: b.max,
                 count: 0,
             };
-            flatten(&children[0], first, nodes);
-            flatten(&children[1], first + 1, nodes);
+            let left = flatten(&children[0], first, nodes);
+            let right = flatten(&children[1], first + 1, nodes);
+            1 + left.max(right)
         }
     }
 }
