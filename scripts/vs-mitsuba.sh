@@ -16,6 +16,7 @@
 #
 # REFERENCE: a converged image of the same scene (e.g. Mitsuba at 32k spp, averaged). Our
 # scene is scenes/cornell_box_diffuse_sphere.obj with a black background, as Mitsuba's.
+# VS_ACCEL=bvh (or embree) passes `--accel` to every render of ours (default: the build's best).
 # VS_SCENE=caustic measures scenes/glass_sphere_caustic.obj instead (Mitsuba's side:
 # scripts/mitsuba_caustic.py, which also makes its reference), with -num_bounces 6 for the
 # engines that trace glass by recursion.
@@ -26,6 +27,10 @@ here=$(cd "$(dirname "$0")" && pwd)
 reference=$(realpath "$1")
 repeats=${2:-3}
 render=$(realpath "${3:-$here/../target/release/render}")
+accel=()
+if [ -n "${VS_ACCEL:-}" ]; then
+  accel=(--accel "$VS_ACCEL")
+fi
 if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
   DRJIT_LIBLLVM_PATH=$(ldconfig -p | awk '/libLLVM.so.19/ { print $NF; exit }')
   export DRJIT_LIBLLVM_PATH
@@ -58,10 +63,10 @@ for r in $(seq "$repeats"); do
     t=$(python3 "$here/$mitsuba" "$spp" "$work/mi_$spp.exr" 256 "$r")
     echo "mitsuba,$spp spp,$t,$(relmse "$work/mi_$spp.exr")" >>"$csv"
     t=$(seconds "$render" -input "$scene" --engine path -num_antialias_samples "$spp" \
-      --seed "$r" --quiet -o "$work/path_$spp.exr")
+      "${accel[@]}" --seed "$r" --quiet -o "$work/path_$spp.exr")
     echo "path,$spp spp,$t,$(relmse "$work/path_$spp.exr")" >>"$csv"
     t=$(seconds "$render" -input "$scene" --engine path -num_antialias_samples "$spp" \
-      --light-sampling random --seed "$r" --quiet -o "$work/path_area_$spp.exr")
+      --light-sampling random "${accel[@]}" --seed "$r" --quiet -o "$work/path_area_$spp.exr")
     echo "path-area,$spp spp,$t,$(relmse "$work/path_area_$spp.exr")" >>"$csv"
   done
 done
@@ -115,7 +120,7 @@ for limit in "$t1" "$t2"; do
     flags=${line#*|}
     out="$work/limit_${limit}_${name// /_}.exr"
     # shellcheck disable=SC2086
-    t=$(seconds "$render" -input "$scene" $flags --time-limit "$limit" --quiet -o "$out")
+    t=$(seconds "$render" -input "$scene" $flags "${accel[@]}" --time-limit "$limit" --quiet -o "$out")
     e=$(relmse "$out")
     echo "$name,limit $limit,$t,$e" >>"$csv"
     printf '| %s (`%s`) | %s | %.2f | %.3g |\n' "$name" "$flags" "$limit" "$t" "$e"

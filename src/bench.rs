@@ -239,6 +239,56 @@ pub struct Report {
     pub builds: Vec<(String, f64)>,
 }
 
+/// One line of the BVH-against-Embree comparison: the cell, and our BVH's rays per second over
+/// Embree's (through the same `Accel` calls) in it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ratio {
+    pub rays: &'static str,
+    pub query: &'static str,
+    pub mode: &'static str,
+    pub threads: usize,
+    pub bvh_over_embree: f64,
+}
+
+impl Report {
+    /// Our BVH's throughput over Embree's in every cell both were measured in (the lines
+    /// issue #16's targets are stated in), in the rows' order.
+    pub fn ratios(&self) -> Vec<Ratio> {
+        let find = |backend: &str, r: &Row| {
+            self.rows.iter().find(|o| {
+                o.backend == backend
+                    && (o.rays, o.query, o.mode, o.threads) == (r.rays, r.query, r.mode, r.threads)
+            })
+        };
+        let bvh = AccelKind::Bvh.to_string();
+        let embree = AccelKind::Embree.to_string();
+        self.rows
+            .iter()
+            .filter(|r| r.backend == bvh)
+            .filter_map(|r| {
+                find(&embree, r).map(|e| Ratio {
+                    rays: r.rays,
+                    query: r.query,
+                    mode: r.mode,
+                    threads: r.threads,
+                    bvh_over_embree: r.mrays_per_s / e.mrays_per_s,
+                })
+            })
+            .collect()
+    }
+
+    /// Our BVH's build time over Embree's, when both were built (and Embree's took a
+    /// measurable time).
+    pub fn build_ratio(&self) -> Option<f64> {
+        let time = |kind: AccelKind| {
+            let name = kind.to_string();
+            self.builds.iter().find(|(n, _)| *n == name).map(|b| b.1)
+        };
+        let (bvh, embree) = (time(AccelKind::Bvh)?, time(AccelKind::Embree)?);
+        (embree > 0.0).then(|| bvh / embree)
+    }
+}
+
 /// The measurement over one scene: the `cells` chosen, `n_rays` per ray set, `repeats`
 /// timings per cell.
 pub fn bench_accel(
@@ -286,7 +336,13 @@ pub fn bench_accel(
                     if !chosen(query, mode) {
                         continue;
                     }
-                    for (parallel, t) in [(false, 1), (true, threads)] {
+                    // One thread, then all of them (once, when that is one).
+                    let runs: &[(bool, usize)] = if threads > 1 {
+                        &[(false, 1), (true, threads)]
+                    } else {
+                        &[(false, 1)]
+                    };
+                    for &(parallel, t) in runs {
                         let s = median_seconds(repeats, || {
                             std::hint::black_box(trace(
                                 accel.as_ref(),
@@ -358,4 +414,47 @@ pub fn bench_accel(
         }
     }
     Ok(Report { rows, builds })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(backend: &str, rays: &'static str, threads: usize, mrays_per_s: f64) -> Row {
+        Row {
+            backend: backend.into(),
+            rays,
+            query: "closest",
+            mode: "single",
+            threads,
+            mrays_per_s,
+        }
+    }
+
+    #[test]
+    fn ratios_pair_the_same_cell_of_both_backends() {
+        let report = Report {
+            rows: vec![
+                row("bvh", "terrain", 1, 1.0),
+                row("bvh", "terrain", 2, 3.0),
+                row("bvh", "camera", 1, 9.0),
+                row("embree", "terrain", 2, 4.0),
+                row("embree", "terrain", 1, 2.0),
+                row("embree C loop", "camera", 1, 3.0),
+            ],
+            builds: vec![("bvh".into(), 1.5), ("embree".into(), 0.5)],
+        };
+        let ratios = report.ratios();
+        // The camera cell has no Embree row through the Accel (the C loop is another thing).
+        assert_eq!(ratios.len(), 2);
+        assert_eq!((ratios[0].threads, ratios[0].bvh_over_embree), (1, 0.5));
+        assert_eq!((ratios[1].threads, ratios[1].bvh_over_embree), (2, 0.75));
+        assert_eq!(report.build_ratio(), Some(3.0));
+        let only_bvh = Report {
+            rows: vec![row("bvh", "terrain", 1, 1.0)],
+            builds: vec![("bvh".into(), 1.0)],
+        };
+        assert!(only_bvh.ratios().is_empty());
+        assert_eq!(only_bvh.build_ratio(), None);
+    }
 }

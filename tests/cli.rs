@@ -1015,6 +1015,28 @@ fn bench_accel_measures_only_the_cells_asked_for() {
         let rate: f64 = row[5].parse().expect("a rate");
         assert!(rate > 0.0, "{table}");
     }
+    // With both backends, a line per cell gives the BVH's rate over Embree's (through the
+    // Accel, not the C loop), as the rows above show them.
+    if cfg!(feature = "embree") {
+        let rate = |backend: &str, threads: &str| -> f64 {
+            let row = rows
+                .iter()
+                .find(|r| r[0] == backend && r[4] == threads)
+                .unwrap_or_else(|| panic!("no {backend} row at {threads} threads: {table}"));
+            row[5].parse().expect("a rate")
+        };
+        let ratios: Vec<Vec<&str>> = table
+            .lines()
+            .filter(|l| l.matches('|').count() == 6 && l.starts_with("| shadow"))
+            .map(|l| l.trim_matches('|').split('|').map(str::trim).collect())
+            .collect();
+        assert_eq!(ratios.len(), 2, "{table}");
+        for r in &ratios {
+            let printed: f64 = r[4].parse().expect("a ratio");
+            let wanted = rate("bvh", r[3]) / rate("embree", r[3]);
+            assert!((printed - wanted).abs() <= 0.02 * wanted + 0.01, "{table}");
+        }
+    }
 }
 
 /// `--stats` names the radiosity solvers' counters: the mesh's, and each solver's own.

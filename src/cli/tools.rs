@@ -96,7 +96,7 @@ pub fn bench_accel(args: &BenchArgs) -> Result<(), String> {
         embree_exact: args.embree_exact,
         ..AccelOptions::default()
     };
-    let crate::bench::Report { rows, builds } = pool
+    let report = pool
         .install(|| {
             crate::bench::bench_accel(
                 &scene,
@@ -128,20 +128,37 @@ pub fn bench_accel(args: &BenchArgs) -> Result<(), String> {
         "|---|---|".into(),
     ];
     lines.extend(
-        builds
+        report
+            .builds
             .iter()
             .map(|(name, s)| format!("| {name} | {s:.3} |")),
     );
     lines.push(String::new());
     lines.push("| backend | rays | query | mode | threads | Mrays/s |".into());
     lines.push("|---|---|---|---|---|---|".into());
-    lines.extend(rows.iter().map(|r| {
+    lines.extend(report.rows.iter().map(|r| {
         format!(
             "| {} | {} | {} | {} | {} | {:.2} |",
             r.backend, r.rays, r.query, r.mode, r.threads, r.mrays_per_s
         )
     }));
     lines.push(String::new());
+    let ratios = report.ratios();
+    if !ratios.is_empty() {
+        lines.push("| rays | query | mode | threads | bvh / embree (Mrays/s) |".into());
+        lines.push("|---|---|---|---|---|".into());
+        lines.extend(ratios.iter().map(|r| {
+            format!(
+                "| {} | {} | {} | {} | {:.2} |",
+                r.rays, r.query, r.mode, r.threads, r.bvh_over_embree
+            )
+        }));
+        lines.push(String::new());
+    }
+    if let Some(build) = report.build_ratio() {
+        lines.push(format!("build: bvh / embree = {build:.2} (time)"));
+        lines.push(String::new());
+    }
     emit(&lines.join("\n"))
 }
 

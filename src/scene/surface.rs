@@ -211,8 +211,13 @@ impl Scene {
                 let mesh = &self.triangles;
                 let [a, b, c] = mesh.indices[i].map(|k| k as usize);
                 let [p0, p1, p2] = mesh.vertices(i);
-                let (t, b1, b2) = crate::geometry::intersect_triangle(ray, t_max, p0, p1, p2)
-                    .unwrap_or((hit.t, hit.u, hit.v));
+                // An exact hit is the routine's own answer: testing again would give it back.
+                let (t, b1, b2) = if hit.exact {
+                    (hit.t, hit.u, hit.v)
+                } else {
+                    crate::geometry::intersect_triangle(ray, t_max, p0, p1, p2)
+                        .unwrap_or((hit.t, hit.u, hit.v))
+                };
                 let b0 = 1.0 - b1 - b2;
                 let point = p0 + (p1 - p0) * b1 + (p2 - p0) * b2;
                 let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
