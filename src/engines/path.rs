@@ -7,7 +7,7 @@
 //! sampling (power heuristic); glossy lobes likewise, against their Phong lobe. Mirrors,
 //! glossy lobes and glass are sampled as in the ray tracer, one branch at a time (glass
 //! chooses reflection with the Fresnel probability). Paths end by Russian roulette on their
-//! throughput from the fourth vertex on, which keeps the estimate unbiased.
+//! throughput from the sixth vertex on (`ROULETTE_FROM`), which keeps the estimate unbiased.
 //! `-num_antialias_samples` is the number of paths per pixel; every random number comes from
 //! (seed, pixel, sample). The background colour is seen, not a light: a path that leaves the
 //! scene after a diffuse bounce brings nothing back.
