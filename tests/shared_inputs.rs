@@ -255,20 +255,23 @@ fn office3_against_path_traced_references(path: &Path) {
         total_area,
         100.0 * l1_seen
     );
-    // Measured: the traces 2.16% / +0.12% apart (1.59% / +0.05% with 32 M paths), the
-    // solution L1 9.64%, power -0.08% (11.6% / -0.17% until the form factor's clip kept
-    // every crossing and the leaf scales were weighted by the light each link carries;
-    // -2.34% while links whose pairs all missed were dropped). BENCHMARKS.md says where the
-    // L1 comes from: a wall quad overlapped by coplanar ones, walls and ceiling high, lamp
-    // bulbs low. 3,336 small patches (11.05 of 155.3 m²) lie under other geometry, where
-    // the reference's rays land on something else: over the rest the L1 is 8.08%. The
-    // power bound is issue #15's; the L1 bounds are the measured figures and a tenth, not
-    // the issue's aim of 2%, which office3 does not meet.
+    // Measured against the diffuse-only trace (`diffuse_only`): the traces 1.71% apart, the
+    // solution L1 5.89%, power +0.27%; over the patches seen 4.50%. Before clusters holding
+    // an emitter were split as sources and clusters sent the light of the patches facing
+    // the receiver (`holds_emitter`, `sent`): 8.95% / +3.7% (7.63% seen), the light of a
+    // ceiling panel and of a bulb inside its shade leaking through clusters onto the
+    // ceiling and walls. Against the trace with the specular parts (which radiosity does
+    // not model), 9.76% / -0.08%: the leaks and the specular light made up for each other
+    // in power. BENCHMARKS.md says where the rest comes from: walls +3.7%, the window's
+    // glass under its blinds (unseen), the lamp shades' insides -15%. 3,343 small patches
+    // (13.69 of 155.3 m², the window's glass among them) lie under other geometry, where
+    // the reference's rays land on something else. The power bound is issue #15's; the L1 bounds are the measured
+    // figures and a tenth, not the issue's aim of 2%, which office3 does not meet.
     assert!(noise < 0.04, "the references disagree: L1 {noise}");
     assert!(power_error.abs() < 0.01, "reflected power {power_error}");
-    assert!(l1 < 0.106, "relative L1 {l1}");
+    assert!(l1 < 0.065, "relative L1 {l1}");
     assert!(
-        l1_seen < 0.089,
+        l1_seen < 0.050,
         "relative L1 over the patches seen {l1_seen}"
     );
 }

@@ -21,9 +21,12 @@
 //! points of the receiver; with a cluster at an end, the isotropic-cluster estimate
 //! cos⁺θ_R · P_S / (π d²), P_S the source's area projected towards R (a cluster's from its
 //! patches' area-weighted normals in 26 direction buckets) and cos⁺θ_R at a cluster receiver
-//! its projected area towards S over its area. Visibility: four point pairs (cluster points
-//! chosen among its members by area, facing the other end) cast as occlusion rays, a batch
-//! per 256 links, against the original geometry.
+//! its projected area towards S over its area. What a cluster sends along a link is the mean
+//! radiosity of its patches that face the receiver, each facing weighted by the area it
+//! shows (`sent`), and a cluster holding an emitter sends nothing as one: it is split until
+//! its emitters send as patches (`Hierarchy::holds_emitter`). Visibility: four point pairs
+//! (cluster points chosen among its members by area, facing the other end) cast as
+//! occlusion rays, a batch per 256 links, against the original geometry.
 //!
 //! Each leaf's gathered light is scaled, per channel, by what its links carry with their
 //! form factors taken at its centre over what they carry as they are — the light straight
@@ -188,11 +191,23 @@ fn bilinear(c: &[Vec3; 4], s: f32, t: f32) -> Vec3 {
 struct Cluster {
     kids: Vec<u32>,
     bounds: Bounds3,
-    /// Its patches' area-weighted normals summed by the nearest of 26 directions (the faces,
-    /// edges and corners of a cube): what its projected area in any direction is made of.
-    normals: [Vec3; 26],
+    /// Its patches grouped by the nearest of 26 directions (the faces, edges and corners of a
+    /// cube), the groups that hold any: what its projected area in any direction is made of.
+    facings: Vec<Facing>,
+    /// Whether one of its patches emits (see `Hierarchy::holds_emitter`).
+    emits: bool,
     first: u32,
     end: u32,
+}
+
+/// A cluster's patches that face about one way (see `Cluster::facings`).
+#[derive(Clone, Copy, Debug)]
+struct Facing {
+    /// Their area-weighted normals summed.
+    normal: Vec3,
+    area: f32,
+    /// Which of the 26 directions (`nearest_direction`).
+    direction: u8,
 }
 
 /// A link: `receiver` gathers `form_factor` × the radiosity of `source`. 16 bytes (checked
@@ -223,9 +238,11 @@ impl Link {
     }
 }
 
-/// The top half of an f32's bits (bfloat16): 8 bits of mantissa.
+/// The top half of an f32's bits (bfloat16: 8 bits of mantissa), rounded to the nearest:
+/// truncated, every partly visible link's stored reach would lose up to 0.8%, always the
+/// same way.
 fn half_bits(x: f32) -> u16 {
-    (x.to_bits() >> 16) as u16
+    (x.to_bits().saturating_add(0x8000) >> 16) as u16
 }
 
 /// The clusters, the quadtrees and their light.
@@ -242,6 +259,8 @@ struct Hierarchy<'a> {
     member_areas: Vec<f32>,
     /// Outgoing radiance of each node (inner nodes: the area mean of their children).
     radiance: Vec<Color>,
+    /// Per patch, the nearest of the 26 directions to its normal (`nearest_direction`).
+    facing: Vec<u8>,
 }
 
 impl<'a> Hierarchy<'a> {
@@ -266,6 +285,10 @@ impl<'a> Hierarchy<'a> {
             members: (0..patches.len() as u32).collect(),
             member_areas: Vec::new(),
             radiance: Vec::new(),
+            facing: patches
+                .iter()
+                .map(|p| nearest_direction(p.normal) as u8)
+                .collect(),
         };
         if !patches.is_empty() {
             let mut order = std::mem::take(&mut h.members);
@@ -279,6 +302,11 @@ impl<'a> Hierarchy<'a> {
             h.member_areas.push(sum);
         }
         h.radiance = h.emission();
+        for (node, e) in h.nodes.iter().zip(&h.radiance) {
+            if node.is_cluster() {
+                h.clusters[node.children as usize].emits = e.max_element() > 0.0;
+            }
+        }
         h
     }
 
@@ -325,14 +353,26 @@ impl<'a> Hierarchy<'a> {
             parent: NONE,
         });
         let mut normals = [Vec3::ZERO; 26];
+        let mut areas = [0.0; 26];
         for &p in order.iter() {
             let patch = &self.patches[p as usize];
-            normals[nearest_direction(patch.normal)] += patch.normal * patch.area;
+            let d = self.facing[p as usize] as usize;
+            normals[d] += patch.normal * patch.area;
+            areas[d] += patch.area;
         }
+        let facings = (0..26)
+            .filter(|&d| areas[d] > 0.0)
+            .map(|d| Facing {
+                normal: normals[d],
+                area: areas[d],
+                direction: d as u8,
+            })
+            .collect();
         self.clusters.push(Cluster {
             kids,
             bounds,
-            normals,
+            facings,
+            emits: false,
             first,
             end: first + order.len() as u32,
         });
@@ -499,6 +539,18 @@ impl<'a> Hierarchy<'a> {
             .fold(0.0, f32::max)
     }
 
+    /// Whether `n` is a cluster holding an emitting patch: such a cluster never sends light
+    /// as one, but is split until its emitters send as patches. As one, its visibility
+    /// points are drawn by area, so a lamp's bulb shone through the outside of its shade,
+    /// and the light of a ceiling panel left from the ceiling beside it: office3 lit only
+    /// straight from its lamps had light on its ceiling, which none reaches, and its
+    /// reflected power was 3.7% over the diffuse path tracer's (+1.3% with the split; L1
+    /// 8.95% → 6.90%).
+    fn holds_emitter(&self, n: u32) -> bool {
+        let node = self.node(n);
+        node.is_cluster() && self.clusters[node.children as usize].emits
+    }
+
     fn may_see(&self, r: u32, s: u32) -> bool {
         let (a, b) = (self.node(r), self.node(s));
         a.area > 0.0 && b.area > 0.0 && self.in_front(r, s) && self.in_front(s, r)
@@ -520,9 +572,9 @@ impl<'a> Hierarchy<'a> {
             return node.area * node.normal.dot(dir).max(0.0);
         }
         self.clusters[node.children as usize]
-            .normals
+            .facings
             .iter()
-            .map(|m| m.dot(dir).max(0.0))
+            .map(|f| f.normal.dot(dir).max(0.0))
             .sum()
     }
 
@@ -869,6 +921,10 @@ impl Hierarchical {
             let mut evaluate = Vec::new();
             for (r, s) in candidates {
                 let clustered = h.node(r).is_cluster() || h.node(s).is_cluster();
+                if r != s && h.holds_emitter(s) && !stop {
+                    split_pair(h, r, s, s, &mut next);
+                    continue;
+                }
                 if r == s || (clustered && !h.separated(r, s)) {
                     match pick(h, r, s, stop) {
                         Some(n) => split_pair(h, r, s, n, &mut next),
@@ -935,25 +991,77 @@ fn split_pair(h: &mut Hierarchy, r: u32, s: u32, n: u32, out: &mut Vec<(u32, u32
     }
 }
 
-/// Per node: what its own links gather of `sources` (F × the source's value, summed; in a
-/// coloured fog, F per channel by `FormFactorSampler::tint`).
+/// Per cluster, the area mean of `values` (one per node; the patches' are read) over the
+/// patches of each of its `facings`.
+fn by_direction(h: &Hierarchy, values: &[Color]) -> Vec<Vec<Color>> {
+    h.clusters
+        .par_iter()
+        .map(|c| {
+            let mut sums = [Vec3::ZERO; 26];
+            for &p in &h.members[c.first as usize..c.end as usize] {
+                let patch = &h.patches[p as usize];
+                sums[h.facing[p as usize] as usize] += values[p as usize] * patch.area;
+            }
+            c.facings
+                .iter()
+                .map(|f| sums[f.direction as usize] / f.area)
+                .collect()
+        })
+        .collect()
+}
+
+/// What source `s` sends towards receiver `r`, of `values` (one per node; `directed` their
+/// means over each cluster's facings, `by_direction`): an element its own value; a cluster
+/// the value of the patches that face `r`, each facing weighted by the area it shows towards
+/// `r`. A cluster's plain area mean sent the floor's light sideways from the walls in its
+/// cluster and the walls' light up from the floor: office3's walls came out 4.9% bright
+/// against the diffuse path tracer (3.7% with this; L1 6.90% → 5.89%).
+fn sent(h: &Hierarchy, values: &[Color], directed: &[Vec<Color>], r: u32, s: u32) -> Color {
+    let source = h.node(s);
+    if !source.is_cluster() {
+        return values[s as usize];
+    }
+    let c = &h.clusters[source.children as usize];
+    let dir = h.node(r).centre - source.centre;
+    let (mut sum, mut shown) = (Vec3::ZERO, 0.0f32);
+    for (f, v) in c.facings.iter().zip(&directed[source.children as usize]) {
+        let w = f.normal.dot(dir);
+        if w > 0.0 {
+            sum += *v * w;
+            shown += w;
+        }
+    }
+    if shown > 0.0 {
+        sum / shown
+    } else {
+        values[s as usize]
+    }
+}
+
+/// Per node: what its own links gather of `sources` (F × what the source sends towards the
+/// receiver, `sent`, summed; in a coloured fog, F per channel by `FormFactorSampler::tint`).
 fn gather(
     h: &Hierarchy,
     sampler: &FormFactorSampler,
     links: &[Link],
     sources: &[Color],
 ) -> Vec<Color> {
+    let directed = by_direction(h, sources);
+    let light: Vec<Color> = links
+        .par_iter()
+        .map(|l| {
+            let (r, s) = (l.receiver, l.source);
+            let light = sent(h, sources, &directed, r, s) * l.form_factor;
+            if sampler.tinted() {
+                light * sampler.tint(h.node(r).centre, h.node(s).centre)
+            } else {
+                light
+            }
+        })
+        .collect();
     let mut gathered = vec![Vec3::ZERO; h.nodes.len()];
-    if sampler.tinted() {
-        for l in links {
-            let (r, s) = (l.receiver as usize, l.source as usize);
-            let tint = sampler.tint(h.nodes[r].centre, h.nodes[s].centre);
-            gathered[r] += sources[s] * tint * l.form_factor;
-        }
-        return gathered;
-    }
-    for l in links {
-        gathered[l.receiver as usize] += sources[l.source as usize] * l.form_factor;
+    for (l, light) in links.iter().zip(light) {
+        gathered[l.receiver as usize] += light;
     }
     gathered
 }
