@@ -42,6 +42,18 @@ pub fn per_input_patch_difference(reference: &Solution, solution: &Solution) -> 
     per_input_patch_difference_over(reference, solution, &vec![true; solution.patches.len()])
 }
 
+/// `per_input_patch_difference`, printed after the solver's report.
+pub fn printed_difference(reference: &Solution, solution: &Solution) -> (f64, f64) {
+    let (l1, power_error) = per_input_patch_difference(reference, solution);
+    println!(
+        "{}: relative L1 {:.3}%, reflected power {:+.3}%",
+        solution.solver_report,
+        100.0 * l1,
+        100.0 * power_error
+    );
+    (l1, power_error)
+}
+
 /// `per_input_patch_difference` over the patches of `solution` that `counted` marks.
 pub fn per_input_patch_difference_over(
     reference: &Solution,

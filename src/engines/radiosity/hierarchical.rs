@@ -261,7 +261,7 @@ struct Hierarchy<'a> {
     /// Outgoing radiance of each node (inner nodes: the area mean of their children).
     radiance: Vec<Color>,
     /// Per patch, the nearest of the 26 directions to its normal (`nearest_direction`).
-    facing: Vec<u8>,
+    patch_direction: Vec<u8>,
     /// The clusters' facings (`Cluster::facings`), one cluster's after another's.
     facings: Vec<Facing>,
 }
@@ -288,7 +288,7 @@ impl<'a> Hierarchy<'a> {
             members: (0..patches.len() as u32).collect(),
             member_areas: Vec::new(),
             radiance: Vec::new(),
-            facing: patches
+            patch_direction: patches
                 .iter()
                 .map(|p| nearest_direction(p.normal) as u8)
                 .collect(),
@@ -365,7 +365,7 @@ impl<'a> Hierarchy<'a> {
         let mut areas = [0.0; 26];
         for &p in order.iter() {
             let patch = &self.patches[p as usize];
-            let d = self.facing[p as usize] as usize;
+            let d = self.patch_direction[p as usize] as usize;
             normals[d] += patch.normal * patch.area;
             areas[d] += patch.area;
         }
@@ -1008,7 +1008,7 @@ fn by_direction(h: &Hierarchy, values: &[Color]) -> Vec<Color> {
             let mut sums = [Vec3::ZERO; 26];
             for &p in &h.members[c.first as usize..c.end as usize] {
                 let patch = &h.patches[p as usize];
-                sums[h.facing[p as usize] as usize] += values[p as usize] * patch.area;
+                sums[h.patch_direction[p as usize] as usize] += values[p as usize] * patch.area;
             }
             h.facings[c.facings.clone()]
                 .iter()
@@ -1058,21 +1058,14 @@ fn gather(
     sources: &[Color],
 ) -> Vec<Color> {
     let directed = by_direction(h, sources);
-    let light: Vec<Color> = links
-        .par_iter()
-        .map(|l| {
-            let (r, s) = (l.receiver, l.source);
-            let light = sent(h, sources, &directed, r, s) * l.form_factor;
-            if sampler.tinted() {
-                light * sampler.tint(h.node(r).centre, h.node(s).centre)
-            } else {
-                light
-            }
-        })
-        .collect();
     let mut gathered = vec![Vec3::ZERO; h.nodes.len()];
-    for (l, light) in links.iter().zip(light) {
-        gathered[l.receiver as usize] += light;
+    for l in links {
+        let (r, s) = (l.receiver, l.source);
+        let mut light = sent(h, sources, &directed, r, s) * l.form_factor;
+        if sampler.tinted() {
+            light *= sampler.tint(h.node(r).centre, h.node(s).centre);
+        }
+        gathered[r as usize] += light;
     }
     gathered
 }
