@@ -22,21 +22,57 @@ pub fn point_to_polygon(x: Vec3, n: Vec3, polygon: &[Vec3]) -> f32 {
     if vertices.len() < 3 {
         return 0.0;
     }
-    let first = vertices[0] - x;
-    let mut a = first;
+    // The edges' terms are independent: taken four at a time in lanes (the compiler makes
+    // vector instructions of the lane loops), each lane with the scalar operations in the
+    // scalar order, so the result is the same to the bit; summed in edge order.
+    let count = vertices.len();
     let mut sum = 0.0f64;
-    for k in 0..vertices.len() {
-        let b = vertices.get(k + 1).map_or(first, |&v| v - x);
-        let c = a.cross(b);
-        let len = c.length();
-        if len > 0.0 && len.is_finite() {
-            // The angle between a and b from atan2: accurate for small and large angles alike.
-            let angle = angle_atan2(len, a.dot(b));
-            sum += (n.dot(c) / len * angle) as f64;
+    for first in (0..count).step_by(LANES) {
+        let mut a = [[0.0f32; LANES]; 3];
+        let mut b = [[0.0f32; LANES]; 3];
+        for l in 0..LANES.min(count - first) {
+            let (p, q) = (
+                vertices[first + l] - x,
+                vertices[(first + l + 1) % count] - x,
+            );
+            for axis in 0..3 {
+                a[axis][l] = p[axis];
+                b[axis][l] = q[axis];
+            }
         }
-        a = b;
+        // A lane past the last edge has a = b = 0: no length, no term.
+        for term in edge_terms(a, b, n) {
+            sum += term as f64;
+        }
     }
     (sum.abs() / std::f64::consts::TAU) as f32
+}
+
+/// Edges a polygon's contour sum takes at once.
+const LANES: usize = 4;
+
+/// Each lane's term of Lambert's contour sum for the edge from a to b (vertices seen from
+/// the point, given by axis then lane): n·(a×b)/|a×b| times the angle between a and b, 0
+/// where a×b has no (finite) length.
+#[inline]
+fn edge_terms(a: [[f32; LANES]; 3], b: [[f32; LANES]; 3], n: Vec3) -> [f32; LANES] {
+    let mut terms = [0.0f32; LANES];
+    for l in 0..LANES {
+        let (ax, ay, az) = (a[0][l], a[1][l], a[2][l]);
+        let (bx, by, bz) = (b[0][l], b[1][l], b[2][l]);
+        // a × b, |a × b| and a·b as glam's Vec3 computes them.
+        let (cx, cy, cz) = (ay * bz - by * az, az * bx - bz * ax, ax * by - bx * ay);
+        let len = ((cx * cx) + (cy * cy) + (cz * cz)).sqrt();
+        let dot = (ax * bx) + (ay * by) + (az * bz);
+        let normal = (n.x * cx) + (n.y * cy) + (n.z * cz);
+        let term = normal / len * angle_atan2(len, dot);
+        terms[l] = if len > 0.0 && len.is_finite() {
+            term
+        } else {
+            0.0
+        };
+    }
+    terms
 }
 
 /// atan2(y, x) for y ≥ 0, in [0, π]: the polynomial of Abramowitz & Stegun 4.4.49 (error
@@ -47,10 +83,8 @@ fn angle_atan2(y: f32, x: f32) -> f32 {
     use std::f32::consts::{FRAC_PI_2, PI};
     let ax = x.abs();
     let (num, den) = if ax >= y { (y, ax) } else { (ax, y) };
-    if den == 0.0 {
-        return 0.0;
-    }
-    let t = num / den;
+    // 0/0 where x = y = 0: then 0, as atan2 gives.
+    let t = if den == 0.0 { 0.0 } else { num / den };
     let t2 = t * t;
     let poly = [
         -0.016_165_737,

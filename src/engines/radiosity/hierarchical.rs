@@ -39,6 +39,7 @@
 //! Parameters (defaults in `RadiositySettings`): `--link-error` (1e-4), `--min-element-area`
 //! (1e-5 of the scene's area), `--cluster-above` (2000), `--radiosity-tolerance`.
 
+use std::ops::Range;
 use std::sync::atomic::Ordering::Relaxed;
 use std::time::Instant;
 
@@ -88,9 +89,9 @@ pub struct Hierarchical {
 }
 
 /// Bytes a link costs the solve at its peak: itself, its copy when the links are sorted
-/// into those to keep and to refine, and in the leaf scales its index in the receivers'
-/// order and its direction and shown area (`update_leaf_scales`).
-const LINK_BYTES: usize = 2 * std::mem::size_of::<Link>() + 4 + std::mem::size_of::<(Vec3, f32)>();
+/// into those to keep and to refine, and in the leaf scales what a link into a cluster
+/// carries (`IntoCluster`, counted for every link).
+const LINK_BYTES: usize = 2 * std::mem::size_of::<Link>() + std::mem::size_of::<IntoCluster>();
 /// Bytes a node costs the solve: itself, its radiance and emission, the sweeps' incident,
 /// gathered (direct and reflected) and new radiance, and its leaf scales.
 const NODE_BYTES: usize = std::mem::size_of::<Node>()
@@ -645,6 +646,125 @@ struct LeafScale {
     reflected: Color,
 }
 
+/// What the links that reach a leaf carry, of the direct and of the reflected light: each
+/// pair is (with the form factors taken at the leaf's centre, as they are).
+#[derive(Clone, Copy, Default)]
+struct Carried {
+    direct: (DVec3, DVec3),
+    reflected: (DVec3, DVec3),
+    /// The links' form factors summed as they are.
+    covered: f64,
+}
+
+impl Carried {
+    /// Adds what link `l` carries as it is; `weights` per source: (emission, reflected
+    /// radiosity).
+    fn add_as_is(&mut self, l: &Link, weights: &[(Color, Color)]) {
+        let (emitted, b) = weights[l.source as usize];
+        let as_is = l.form_factor as f64;
+        self.direct.1 += emitted.as_dvec3() * as_is;
+        self.reflected.1 += b.as_dvec3() * as_is;
+        self.covered += as_is;
+    }
+
+    /// Adds what link `l` carries taken at the leaf's centre, where its form factor (before
+    /// visibility) is `f`.
+    fn add_at_centre(&mut self, l: &Link, f: f32, weights: &[(Color, Color)]) {
+        let (emitted, b) = weights[l.source as usize];
+        let at_centre = (f * l.visible()) as f64;
+        self.direct.0 += emitted.as_dvec3() * at_centre;
+        self.reflected.0 += b.as_dvec3() * at_centre;
+    }
+
+    fn add_carried(&mut self, other: &Carried) {
+        self.direct.0 += other.direct.0;
+        self.direct.1 += other.direct.1;
+        self.reflected.0 += other.reflected.0;
+        self.reflected.1 += other.reflected.1;
+        self.covered += other.covered;
+    }
+
+    /// The leaf's scales: per channel, what the links carry taken at the centre over what
+    /// they carry as they are, the reflected light's held so that the scaled form factors
+    /// sum to at most `MAX_COVERAGE`.
+    fn scale(&self) -> LeafScale {
+        // A point sees at most its whole hemisphere, but the scaled form factors can sum
+        // past 1: clusters' isotropic estimates take them to 1.18 on the Cornell box with the
+        // sphere, and overlapping surfaces (graz's desks, modelled through each other) to
+        // about 2, where loops of links gained light and two-sided graz diverged. With the
+        // reflected light's scaled form factors held at MAX_COVERAGE, a loop can gain only
+        // between surfaces of albedo above 1/MAX_COVERAGE. (The direct light takes part in
+        // no loop.)
+        let most = MAX_COVERAGE / self.covered;
+        let ratio = |(at_centre, as_is): (DVec3, DVec3)| {
+            let one = |a: f64, b: f64| if b > 0.0 { (a / b) as f32 } else { 1.0 };
+            Vec3::new(
+                one(at_centre.x, as_is.x),
+                one(at_centre.y, as_is.y),
+                one(at_centre.z, as_is.z),
+            )
+        };
+        LeafScale {
+            direct: ratio(self.direct),
+            reflected: ratio(self.reflected).min(Vec3::splat(most as f32)),
+        }
+    }
+}
+
+/// A link into a cluster as the leaves below the cluster take it: the direction towards its
+/// source from the cluster's centre, and what it carries there (of the direct and of the
+/// reflected light) onto a surface facing that way, so that a leaf of normal n takes
+/// cos⁺(n, dir) of it (see `update_leaf_scales`).
+struct IntoCluster {
+    dir: Vec3,
+    direct: Color,
+    reflected: Color,
+}
+
+impl IntoCluster {
+    fn new(h: &Hierarchy, l: &Link, weights: &[(Color, Color)]) -> IntoCluster {
+        let (dir, shown) = h.towards(h.node(l.receiver).centre, l.source);
+        let (emitted, b) = weights[l.source as usize];
+        let at_centre = shown * l.visible();
+        IntoCluster {
+            dir,
+            direct: emitted * at_centre,
+            reflected: b * at_centre,
+        }
+    }
+
+    /// Adds what the link carries onto a leaf of normal `normal` to `to`.
+    fn add_at(&self, normal: Vec3, to: &mut Carried) {
+        let cos = normal.dot(self.dir).max(0.0) as f64;
+        to.direct.0 += self.direct.as_dvec3() * cos;
+        to.reflected.0 += self.reflected.as_dvec3() * cos;
+    }
+}
+
+/// Calls `visit(leaf, ranges)` for each leaf element below `root` (an input patch), depth
+/// first, with the ranges of `links` (`by_receiver`) of the leaf's ancestors from `root`
+/// down and of its own.
+fn each_leaf(
+    h: &Hierarchy,
+    by_receiver: &impl Fn(u32) -> Range<usize>,
+    root: u32,
+    mut visit: impl FnMut(u32, &[Range<usize>]),
+) {
+    let mut chain: Vec<Range<usize>> = Vec::new();
+    let mut stack = vec![(root, 0)];
+    while let Some((e, depth)) = stack.pop() {
+        chain.truncate(depth);
+        chain.push(by_receiver(e));
+        let el = h.node(e);
+        if el.children != NONE {
+            let depth = chain.len();
+            stack.extend((el.children..el.children + 4).map(|c| (c, depth)));
+        } else {
+            visit(e, &chain);
+        }
+    }
+}
+
 /// Brings each leaf element's scales up to date: per colour channel, what the links that
 /// reach it — its own, its ancestors' and its clusters' — carry when each is taken at the
 /// leaf's centre, over what they carry as they are: Σ F(centre, S)·V·w_S over Σ F_RS·V·w_S.
@@ -680,7 +800,8 @@ fn update_leaf_scales(
             reflected: Vec3::ONE,
         },
     );
-    // The links of each receiver, as ranges of `order`.
+    // The links of each receiver, as ranges of `links` (sorted by receiver, see `refine`).
+    debug_assert!(links.is_sorted_by_key(|l| l.receiver));
     let mut start = vec![0u32; n + 1];
     for l in links {
         start[l.receiver as usize + 1] += 1;
@@ -688,104 +809,83 @@ fn update_leaf_scales(
     for i in 0..n {
         start[i + 1] += start[i];
     }
-    let mut fill = start.clone();
-    let mut order = vec![0u32; links.len()];
-    for (k, l) in links.iter().enumerate() {
-        let slot = &mut fill[l.receiver as usize];
-        order[*slot as usize] = k as u32;
-        *slot += 1;
-    }
-    let by_receiver = |e: u32| &order[start[e as usize] as usize..start[e as usize + 1] as usize];
-    // A link into a cluster reaches its members' leaves as it reaches the cluster's centre,
-    // from the same direction and distance, each leaf taking its share by its own
-    // orientation (as an isotropic cluster hands its light to its members): so that is
-    // worked out once per link, not once per leaf (on the hospital, three in five of the
-    // leaves' links are such).
-    let into_clusters: Vec<(Vec3, f32)> = links
-        .par_iter()
-        .map(|l| {
-            let r = h.node(l.receiver);
-            if r.is_cluster() {
-                h.towards(r.centre, l.source)
-            } else {
-                (Vec3::ZERO, 0.0)
-            }
+    let by_receiver = |e: u32| start[e as usize] as usize..start[e as usize + 1] as usize;
+    // Per source, the weights of what its links carry: (emission, reflected radiosity).
+    let weights: Vec<(Color, Color)> = emission
+        .iter()
+        .zip(&h.radiance)
+        .map(|(&e, &b)| {
+            (
+                e,
+                if weighted {
+                    (b - e).max(Vec3::ZERO)
+                } else {
+                    Vec3::ONE
+                },
+            )
         })
         .collect();
-    let per_patch: Vec<Vec<(u32, LeafScale)>> = (0..h.patches.len() as u32)
+    // The links into clusters: each cluster's links lie together, the clusters' after the
+    // patches' (nodes P..P+C, see `Hierarchy::new`).
+    let (patches, clusters) = (h.patches.len(), h.clusters.len());
+    let into_clusters = start[patches] as usize..start[patches + clusters] as usize;
+    let into_cluster: Vec<IntoCluster> = links[into_clusters.clone()]
+        .par_iter()
+        .map(|l| IntoCluster::new(h, l, &weights))
+        .collect();
+    // Per cluster, what its links carry as they are, and the same summed over the clusters
+    // above it (a cluster comes after its members, see `Hierarchy::cluster`).
+    let mut cluster_as_is: Vec<Carried> = (0..clusters)
+        .into_par_iter()
+        .map(|c| {
+            let mut sum = Carried::default();
+            for l in &links[by_receiver((patches + c) as u32)] {
+                sum.add_as_is(l, &weights);
+            }
+            sum
+        })
+        .collect();
+    for c in (0..clusters).rev() {
+        let parent = h.node((patches + c) as u32).parent;
+        if parent != NONE {
+            let above = cluster_as_is[parent as usize - patches];
+            cluster_as_is[c].add_carried(&above);
+        }
+    }
+    let per_patch: Vec<Vec<(u32, LeafScale)>> = (0..patches as u32)
         .into_par_iter()
         .map(|root| {
-            // The links of the clusters above the patch.
-            let mut chain = Vec::new();
-            let mut c = h.node(root).parent;
+            // A link into a cluster reaches its members' leaves as it reaches the cluster's
+            // centre, from the same direction and distance, each leaf taking its share by
+            // its orientation (as an isotropic cluster hands its light to its members): alike
+            // for all the leaves of a patch, so summed once for the patch.
+            let normal = h.node(root).normal;
+            let parent = h.node(root).parent;
+            let mut above = if parent == NONE {
+                Carried::default()
+            } else {
+                cluster_as_is[parent as usize - patches]
+            };
+            let mut c = parent;
             while c != NONE {
-                chain.extend_from_slice(by_receiver(c));
+                let range = by_receiver(c);
+                let range = range.start - into_clusters.start..range.end - into_clusters.start;
+                for link in &into_cluster[range] {
+                    link.add_at(normal, &mut above);
+                }
                 c = h.node(c).parent;
             }
             let mut out = Vec::new();
-            let mut stack = vec![(root, chain.len())];
-            // Depth first; `chain` holds the links of the element's ancestors and its own.
-            while let Some((e, depth)) = stack.pop() {
-                chain.truncate(depth);
-                chain.extend_from_slice(by_receiver(e));
+            each_leaf(h, &by_receiver, root, |e, chain| {
                 let el = h.node(e);
-                if el.children != NONE {
-                    let depth = chain.len();
-                    stack.extend((el.children..el.children + 4).map(|c| (c, depth)));
-                    continue;
+                let mut carried = above;
+                for l in chain.iter().flat_map(|r| &links[r.clone()]) {
+                    let f = h.point_form_factor(el.centre, e, Some(el.normal), l.source);
+                    carried.add_as_is(l, &weights);
+                    carried.add_at_centre(l, f, &weights);
                 }
-                // What the links carry (taken at the centre, as they are), of the direct and
-                // of the reflected light.
-                let mut direct = (DVec3::ZERO, DVec3::ZERO);
-                let mut reflected = (DVec3::ZERO, DVec3::ZERO);
-                // The links' form factors summed as they are.
-                let mut covered = 0.0f64;
-                for &k in &chain {
-                    let l = &links[k as usize];
-                    let s = l.source as usize;
-                    let f = if h.node(l.receiver).is_cluster() {
-                        let (dir, shown) = into_clusters[k as usize];
-                        el.normal.dot(dir).max(0.0) * shown
-                    } else {
-                        h.point_form_factor(el.centre, e, Some(el.normal), l.source)
-                    };
-                    let (at_centre, as_is) = ((f * l.visible()) as f64, l.form_factor as f64);
-                    let emitted = emission[s].as_dvec3();
-                    let b = if weighted {
-                        (h.radiance[s] - emission[s]).max(Vec3::ZERO).as_dvec3()
-                    } else {
-                        DVec3::ONE
-                    };
-                    direct.0 += emitted * at_centre;
-                    direct.1 += emitted * as_is;
-                    reflected.0 += b * at_centre;
-                    reflected.1 += b * as_is;
-                    covered += as_is;
-                }
-                // A point sees at most its whole hemisphere, but the scaled form factors
-                // can sum past 1: clusters' isotropic estimates take them to 1.18 on the
-                // Cornell box with the sphere, and overlapping surfaces (graz's desks,
-                // modelled through each other) to about 2, where loops of links gained
-                // light and two-sided graz diverged. With the reflected light's scaled form
-                // factors held at MAX_COVERAGE, a loop can gain only between surfaces of
-                // albedo above 1/MAX_COVERAGE. (The direct light takes part in no loop.)
-                let most = MAX_COVERAGE / covered;
-                let ratio = |(at_centre, as_is): (DVec3, DVec3)| {
-                    let one = |a: f64, b: f64| if b > 0.0 { (a / b) as f32 } else { 1.0 };
-                    Vec3::new(
-                        one(at_centre.x, as_is.x),
-                        one(at_centre.y, as_is.y),
-                        one(at_centre.z, as_is.z),
-                    )
-                };
-                out.push((
-                    e,
-                    LeafScale {
-                        direct: ratio(direct),
-                        reflected: ratio(reflected).min(Vec3::splat(most as f32)),
-                    },
-                ));
-            }
+                out.push((e, carried.scale()));
+            });
             out
         })
         .collect();
@@ -959,6 +1059,9 @@ impl Hierarchical {
             }
             candidates = next;
         }
+        // Sorted by receiver (stably: a receiver's links keep their order, and so its
+        // gathered sums), each receiver's links lie together for `update_leaf_scales`.
+        links.sort_by_key(|l| l.receiver);
         capped
     }
 }
