@@ -824,6 +824,7 @@ fn each_leaf(
 fn update_leaf_scales(
     h: &Hierarchy,
     links: &[Link],
+    starts: &[u32],
     emission: &[Color],
     weighted: bool,
     scales: &mut Vec<LeafScale>,
@@ -837,16 +838,7 @@ fn update_leaf_scales(
             reflected: Vec3::ONE,
         },
     );
-    // The links of each receiver, as ranges of `links` (sorted by receiver, see `refine`).
-    debug_assert!(links.is_sorted_by_key(|l| l.receiver));
-    let mut start = vec![0u32; n + 1];
-    for l in links {
-        start[l.receiver as usize + 1] += 1;
-    }
-    for i in 0..n {
-        start[i + 1] += start[i];
-    }
-    let by_receiver = |e: u32| start[e as usize] as usize..start[e as usize + 1] as usize;
+    let by_receiver = |e: u32| starts[e as usize] as usize..starts[e as usize + 1] as usize;
     // Per source, the weights of what its links carry: (emission, reflected radiosity).
     let weights: Vec<(Color, Color)> = emission
         .iter()
@@ -865,7 +857,7 @@ fn update_leaf_scales(
     // The links into clusters: each cluster's links lie together, the clusters' after the
     // patches' (nodes P..P+C, see `Hierarchy::new`).
     let (patches, clusters) = (h.patches.len(), h.clusters.len());
-    let into_clusters = start[patches] as usize..start[patches + clusters] as usize;
+    let into_clusters = starts[patches] as usize..starts[patches + clusters] as usize;
     let into_cluster: Vec<IntoCluster> = links[into_clusters.clone()]
         .par_iter()
         .map(|l| IntoCluster::new(h, l, &weights))
@@ -1191,23 +1183,46 @@ fn sent(h: &Hierarchy, values: &[Color], directed: &[Color], r: u32, s: u32) -> 
 
 /// Per node: what its own links gather of `sources` (F × what the source sends towards the
 /// receiver, `sent`, summed; in a coloured fog, F per channel by `FormFactorSampler::tint`).
+/// `links` are sorted by receiver, node r's at `starts[r]..starts[r + 1]`
+/// (`receiver_starts`): each node sums its own, in parallel.
 fn gather(
     h: &Hierarchy,
     sampler: &FormFactorSampler,
     links: &[Link],
+    starts: &[u32],
     sources: &[Color],
 ) -> Vec<Color> {
     let directed = by_direction(h, sources);
     let mut gathered = vec![Vec3::ZERO; h.nodes.len()];
-    for l in links {
-        let (r, s) = (l.receiver, l.source);
-        let mut light = sent(h, sources, &directed, r, s) * l.form_factor;
-        if sampler.tinted() {
-            light *= sampler.tint(h.node(r).centre, h.node(s).centre);
-        }
-        gathered[r as usize] += light;
-    }
     gathered
+        .par_iter_mut()
+        .with_min_len(1024)
+        .enumerate()
+        .for_each(|(r, gathered)| {
+            for l in &links[starts[r] as usize..starts[r + 1] as usize] {
+                let s = l.source;
+                let mut light = sent(h, sources, &directed, r as u32, s) * l.form_factor;
+                if sampler.tinted() {
+                    light *= sampler.tint(h.node(r as u32).centre, h.node(s).centre);
+                }
+                *gathered += light;
+            }
+        });
+    gathered
+}
+
+/// Where each of `nodes` nodes' links start in `links` (sorted by receiver, see
+/// `Hierarchical::refine`), and one past the last: node r's are `starts[r]..starts[r + 1]`.
+fn receiver_starts(nodes: usize, links: &[Link]) -> Vec<u32> {
+    debug_assert!(links.is_sorted_by_key(|l| l.receiver));
+    let mut starts = vec![0u32; nodes + 1];
+    for l in links {
+        starts[l.receiver as usize + 1] += 1;
+    }
+    for i in 0..nodes {
+        starts[i + 1] += starts[i];
+    }
+    starts
 }
 
 /// Pushes what the links gathered — of the sources' emission and of what they reflect,
@@ -1342,9 +1357,10 @@ impl RadiositySolver for Hierarchical {
         let mut capped = self.refine(&mut h, sampler, initial, threshold, min_area, &mut links);
         let mut emission = h.emission();
         // What the links gather of the emission changes only with the links.
-        let mut direct = gather(&h, sampler, &links, &emission);
+        let mut starts = receiver_starts(h.nodes.len(), &links);
+        let mut direct = gather(&h, sampler, &links, &starts, &emission);
         let mut scales = Vec::new();
-        update_leaf_scales(&h, &links, &emission, false, &mut scales);
+        update_leaf_scales(&h, &links, &starts, &emission, false, &mut scales);
 
         let mut light = PatchLight::default();
         // Set by every sweep; the loop below makes at least one.
@@ -1366,7 +1382,7 @@ impl RadiositySolver for Hierarchical {
                     .collect();
                 let gathered = Gathered {
                     direct: &direct,
-                    reflected: &gather(&h, sampler, &links, &reflected),
+                    reflected: &gather(&h, sampler, &links, &starts, &reflected),
                 };
                 let (inc, radiance) = sweep(&h, &scales, &gathered);
                 let before = power(&h.radiance[..patches.len()]);
@@ -1429,12 +1445,13 @@ impl RadiositySolver for Hierarchical {
                 let candidates = again.iter().map(|l| (l.receiver, l.source)).collect();
                 capped |= self.refine(&mut h, sampler, candidates, threshold, min_area, &mut links);
                 emission = h.emission();
-                direct = gather(&h, sampler, &links, &emission);
+                starts = receiver_starts(h.nodes.len(), &links);
+                direct = gather(&h, sampler, &links, &starts, &emission);
             }
             // Whether or not links were refined, the leaf scales now weigh the links by the
             // radiosities just solved for; the next round's first sweep says how much that
             // moved, and the rule above ends the solve once it is under the tolerance.
-            update_leaf_scales(&h, &links, &emission, true, &mut scales);
+            update_leaf_scales(&h, &links, &starts, &emission, true, &mut scales);
         }
 
         // What came straight from the emitters: one gather of the emission alone.
