@@ -514,9 +514,15 @@ impl<'a> Hierarchy<'a> {
             let facings = &self.facings[self.clusters[node.children as usize].facings.clone()];
             let to = towards - node.centre;
             let turned = |f: &Facing| f.normal.dot(to) > 0.0;
-            let any = !facings.iter().any(turned);
+            let none_turned = !facings.iter().any(turned);
             let mut pick = || {
-                let weight = |f: &Facing| if any || turned(f) { f.area } else { 0.0 };
+                let weight = |f: &Facing| {
+                    if none_turned || turned(f) {
+                        f.area
+                    } else {
+                        0.0
+                    }
+                };
                 let f = &facings[by_weight(facings, weight, rng.next_f32())];
                 let sums = &self.facing_areas[f.first as usize..f.end as usize];
                 let target = sums[sums.len() - 1] * rng.next_f32();
@@ -526,7 +532,8 @@ impl<'a> Hierarchy<'a> {
                 (p.point(rng.next_f32(), rng.next_f32()), patch)
             };
             let mut found = pick();
-            for _ in 0..if any { 0 } else { CLUSTER_TRIES } {
+            let tries = if none_turned { 0 } else { CLUSTER_TRIES };
+            for _ in 0..tries {
                 let p = &self.patches[found.1 as usize];
                 if (towards - found.0).dot(p.normal) > 0.0 {
                     break;
@@ -857,8 +864,8 @@ fn update_leaf_scales(
     // The links into clusters: each cluster's links lie together, the clusters' after the
     // patches' (nodes P..P+C, see `Hierarchy::new`).
     let (patches, clusters) = (h.patches.len(), h.clusters.len());
-    let into_clusters = starts[patches] as usize..starts[patches + clusters] as usize;
-    let into_cluster: Vec<IntoCluster> = links[into_clusters.clone()]
+    let cluster_links = starts[patches] as usize..starts[patches + clusters] as usize;
+    let into_clusters: Vec<IntoCluster> = links[cluster_links.clone()]
         .par_iter()
         .map(|l| IntoCluster::new(h, l, &weights))
         .collect();
@@ -898,8 +905,8 @@ fn update_leaf_scales(
             let mut c = parent;
             while c != NONE {
                 let range = by_receiver(c);
-                let range = range.start - into_clusters.start..range.end - into_clusters.start;
-                for link in &into_cluster[range] {
+                let range = range.start - cluster_links.start..range.end - cluster_links.start;
+                for link in &into_clusters[range] {
                     link.add_at(normal, &mut above);
                 }
                 c = h.node(c).parent;
