@@ -62,6 +62,11 @@ const NONE: u32 = u32::MAX;
 const PAIRS: usize = 4;
 /// Links evaluated by one parallel task (their rays go to the Accel as one batch).
 const LINK_CHUNK: usize = 256;
+/// Candidate pairs a thread sorts into split and evaluated at a time.
+const SPLIT_CHUNK: usize = 4096;
+
+/// (receiver, source) pairs of nodes.
+type NodePairs = Vec<(u32, u32)>;
 /// Refinement rounds at most (each followed by a solve).
 const MAX_ROUNDS: u32 = 12;
 /// Most patches a cluster holds directly.
@@ -478,24 +483,35 @@ impl<'a> Hierarchy<'a> {
         &self.nodes[n as usize]
     }
 
-    /// The children of a node: a cluster's members, or an element's four children (made on
-    /// first use).
-    fn children(&mut self, n: u32) -> Vec<u32> {
+    /// Makes an element's four children if it has none yet (a cluster's members exist from
+    /// the start). Children are numbered in the order they are made, and the visibility
+    /// points are drawn per node number: so they are made in one thread, in the order the
+    /// refinement meets them.
+    fn make_children(&mut self, n: u32) {
         let node = self.nodes[n as usize];
-        if node.is_cluster() {
-            return self.clusters[node.children as usize].kids.clone();
+        if node.is_cluster() || node.children != NONE {
+            return;
         }
-        if node.children == NONE {
-            let first = self.nodes.len() as u32;
-            for corners in node.split() {
-                self.nodes
-                    .push(Node::element(node.patch, corners, node.normal));
-                self.radiance.push(self.radiance[n as usize]);
-            }
-            self.nodes[n as usize].children = first;
+        let first = self.nodes.len() as u32;
+        for corners in node.split() {
+            self.nodes
+                .push(Node::element(node.patch, corners, node.normal));
+            self.radiance.push(self.radiance[n as usize]);
         }
-        let first = self.nodes[n as usize].children;
-        (first..first + 4).collect()
+        self.nodes[n as usize].children = first;
+    }
+
+    /// The children of a node (made, see `make_children`): a cluster's members, or an
+    /// element's four children.
+    fn children(&self, n: u32) -> impl Iterator<Item = u32> + Clone + '_ {
+        let node = self.node(n);
+        let (members, quad): (&[u32], Range<u32>) = if node.is_cluster() {
+            (&self.clusters[node.children as usize].kids, 0..0)
+        } else {
+            debug_assert!(node.children != NONE, "the children of {n} are not made");
+            (&[], node.children..node.children + 4)
+        };
+        members.iter().copied().chain(quad)
     }
 
     /// Point `k` of node `n` and the patch it lies on. Elements: the centres of their 2×2
@@ -1061,23 +1077,47 @@ impl Hierarchical {
             // After Ctrl-C nothing is split further: the pairs at hand become links as they
             // are, so the light they carry is kept, and the solve stops at its next sweep.
             let stop = capped || crate::interrupt::requested();
-            let mut next = Vec::new();
-            let mut evaluate = Vec::new();
-            for (r, s) in candidates {
-                let clustered = h.node(r).is_cluster() || h.node(s).is_cluster();
-                if r != s && h.holds_emitter(s) && !stop {
-                    split_pair(h, r, s, s, &mut next);
-                    continue;
-                }
-                if r == s || (clustered && !h.separated(r, s)) {
-                    match pick(h, r, s, stop) {
-                        Some(n) => split_pair(h, r, s, n, &mut next),
-                        None => evaluate.push((r, s)),
+            // Which pairs are split before any form factor is taken: any towards a cluster
+            // holding an emitter, a node linked to itself, clusters too near for their
+            // isotropic estimate. Decided in parallel; `Some(n)` splits node n.
+            let pairs = std::mem::take(&mut candidates);
+            let split_first: Vec<Option<u32>> = pairs
+                .par_iter()
+                .map(|&(r, s)| {
+                    if r != s && h.holds_emitter(s) && !stop {
+                        return Some(s);
                     }
-                } else {
-                    evaluate.push((r, s));
-                }
+                    let clustered = h.node(r).is_cluster() || h.node(s).is_cluster();
+                    if r == s || (clustered && !h.separated(r, s)) {
+                        pick(h, r, s, stop)
+                    } else {
+                        None
+                    }
+                })
+                .collect();
+            for &n in split_first.iter().flatten() {
+                h.make_children(n);
             }
+            // The pairs that replace the split ones, and those to evaluate, in the
+            // candidates' order.
+            let h_read: &Hierarchy = h;
+            let (parts, to_evaluate): (Vec<NodePairs>, Vec<NodePairs>) = pairs
+                .par_chunks(SPLIT_CHUNK)
+                .zip(split_first.par_chunks(SPLIT_CHUNK))
+                .map(|(chunk, split)| {
+                    let (mut next, mut evaluate) = (Vec::new(), Vec::new());
+                    for (&(r, s), &n) in chunk.iter().zip(split) {
+                        match n {
+                            Some(n) => split_pair(h_read, r, s, n, &mut next),
+                            None => evaluate.push((r, s)),
+                        }
+                    }
+                    (next, evaluate)
+                })
+                .unzip();
+            drop((pairs, split_first));
+            let (mut next, evaluate) = (parts.concat(), to_evaluate.concat());
+            drop((parts, to_evaluate));
             for link in self.links(h, sampler, &evaluate) {
                 // A link that carries nothing is refined while what is at stake (its spread)
                 // matters, and dropped once it does not: dropped at once, the parts of its
@@ -1088,7 +1128,10 @@ impl Hierarchical {
                 }
                 let (r, s) = (link.receiver, link.source);
                 match pick(h, r, s, stop).filter(|_| link_error(h, &link) > threshold) {
-                    Some(n) => split_pair(h, r, s, n, &mut next),
+                    Some(n) => {
+                        h.make_children(n);
+                        split_pair(h, r, s, n, &mut next);
+                    }
                     None if link.form_factor > 0.0 => links.push(link),
                     None => {}
                 }
@@ -1110,13 +1153,13 @@ fn link_error(h: &Hierarchy, l: &Link) -> f32 {
     h.node(l.receiver).area * varies * h.radiance[l.source as usize].max_element()
 }
 
-/// The pairs that replace (r, s) when node `n` (one of them) is split; a node linked to
-/// itself becomes every pair of its children.
-fn split_pair(h: &mut Hierarchy, r: u32, s: u32, n: u32, out: &mut Vec<(u32, u32)>) {
+/// The pairs that replace (r, s) when node `n` (one of them, its children made) is split; a
+/// node linked to itself becomes every pair of its children.
+fn split_pair(h: &Hierarchy, r: u32, s: u32, n: u32, out: &mut Vec<(u32, u32)>) {
     let kids = h.children(n);
     if r == s {
-        for &a in &kids {
-            for &b in &kids {
+        for a in kids.clone() {
+            for b in kids.clone() {
                 // A flat element cannot light itself; a cluster's members can light each other.
                 let linked = if a == b {
                     h.node(a).is_cluster()
