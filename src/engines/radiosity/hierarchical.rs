@@ -825,64 +825,6 @@ fn each_leaf(
     }
 }
 
-/// The form factors from each leaf's centre to the sources of the links that reach it (what
-/// `update_leaf_scales` weighs), kept per input patch in the order `each_leaf` visits them:
-/// they change only where a refinement changed a patch's links or elements (on the
-/// hospital's last round, one patch in 25), while the weights change every round. Kept only
-/// while they fit in what `--max-memory` leaves beside the links and nodes.
-struct CentreFormFactors {
-    per_patch: Vec<Vec<f32>>,
-    /// Per patch, whether `per_patch` must be taken afresh.
-    stale: Vec<bool>,
-    /// False once they did not fit: then taken afresh every time.
-    keep: bool,
-}
-
-impl CentreFormFactors {
-    fn new(patches: usize) -> CentreFormFactors {
-        CentreFormFactors {
-            per_patch: vec![Vec::new(); patches],
-            stale: vec![true; patches],
-            keep: true,
-        }
-    }
-
-    /// Marks the patch of element `n` (nothing for a cluster) to be taken afresh.
-    fn touch(&mut self, h: &Hierarchy, n: u32) {
-        let node = h.node(n);
-        if !node.is_cluster() {
-            self.stale[node.patch as usize] = true;
-        }
-    }
-
-    /// Decides whether they are kept through the next `update_leaf_scales`: while one f32 a
-    /// leaf for each link reaching it from its patch's elements fits in `budget` beside the
-    /// links and nodes.
-    fn plan(&mut self, h: &Hierarchy, links: &[Link], budget: u64) {
-        // Leaves below each element; children are made after their parents.
-        let mut leaves = vec![0u64; h.nodes.len()];
-        for n in (0..h.nodes.len()).rev() {
-            let node = &h.nodes[n];
-            if node.is_cluster() {
-                continue;
-            }
-            leaves[n] = if node.children == NONE {
-                1
-            } else {
-                (node.children..node.children + 4)
-                    .map(|c| leaves[c as usize])
-                    .sum()
-            };
-        }
-        let values: u64 = links.iter().map(|l| leaves[l.receiver as usize]).sum();
-        let held = links.len() * LINK_BYTES + h.nodes.len() * NODE_BYTES;
-        self.keep = self.keep && values * 4 <= budget.saturating_sub(held as u64);
-        if !self.keep {
-            self.per_patch = vec![Vec::new(); self.per_patch.len()];
-        }
-    }
-}
-
 /// Brings each leaf element's scales up to date: per colour channel, what the links that
 /// reach it — its own, its ancestors' and its clusters' — carry when each is taken at the
 /// leaf's centre, over what they carry as they are: Σ F(centre, S)·V·w_S over Σ F_RS·V·w_S.
@@ -908,7 +850,6 @@ fn update_leaf_scales(
     starts: &[u32],
     emission: &[Color],
     weighted: bool,
-    centre_form_factors: &mut CentreFormFactors,
     scales: &mut Vec<LeafScale>,
 ) {
     let n = h.nodes.len();
@@ -963,14 +904,9 @@ fn update_leaf_scales(
             cluster_as_is[c].add_carried(&above);
         }
     }
-    let keep = centre_form_factors.keep;
-    let per_patch: Vec<Vec<(u32, LeafScale)>> = centre_form_factors
-        .per_patch
-        .par_iter_mut()
-        .zip(centre_form_factors.stale.par_iter_mut())
-        .enumerate()
-        .map(|(root, (kept, stale))| {
-            let root = root as u32;
+    let per_patch: Vec<Vec<(u32, LeafScale)>> = (0..patches as u32)
+        .into_par_iter()
+        .map(|root| {
             // A link into a cluster reaches its members' leaves as it reaches the cluster's
             // centre, from the same direction and distance, each leaf taking its share by
             // its orientation (as an isotropic cluster hands its light to its members): alike
@@ -991,32 +927,17 @@ fn update_leaf_scales(
                 }
                 c = h.node(c).parent;
             }
-            let fresh = *stale || !keep;
-            if fresh {
-                kept.clear();
-            }
-            let mut next = 0;
             let mut out = Vec::new();
             each_leaf(h, &by_receiver, root, |e, chain| {
                 let el = h.node(e);
                 let mut carried = above;
                 for l in chain.iter().flat_map(|r| &links[r.clone()]) {
-                    let f = if fresh {
-                        let f = h.point_form_factor(el.centre, e, Some(el.normal), l.source);
-                        if keep {
-                            kept.push(f);
-                        }
-                        f
-                    } else {
-                        next += 1;
-                        kept[next - 1]
-                    };
+                    let f = h.point_form_factor(el.centre, e, Some(el.normal), l.source);
                     carried.add_as_is(l, &weights);
                     carried.add_at_centre(l, f, &weights);
                 }
                 out.push((e, carried.scale()));
             });
-            *stale = !keep;
             out
         })
         .collect();
@@ -1127,14 +1048,10 @@ impl Hierarchical {
         h: &mut Hierarchy,
         sampler: &FormFactorSampler,
         mut candidates: Vec<(u32, u32)>,
-        rule: SplitRule,
+        threshold: f32,
+        min_area: f32,
         links: &mut Vec<Link>,
-        changed: &mut CentreFormFactors,
     ) -> bool {
-        let SplitRule {
-            threshold,
-            min_area,
-        } = rule;
         let mut capped = false;
         // The node of a pair to split, if either can be (none once over the memory budget
         // or after Ctrl-C).
@@ -1180,7 +1097,6 @@ impl Hierarchical {
                 .collect();
             for &n in split_first.iter().flatten() {
                 h.make_children(n);
-                changed.touch(h, n);
             }
             // The pairs that replace the split ones, and those to evaluate, in the
             // candidates' order.
@@ -1214,13 +1130,9 @@ impl Hierarchical {
                 match pick(h, r, s, stop).filter(|_| link_error(h, &link) > threshold) {
                     Some(n) => {
                         h.make_children(n);
-                        changed.touch(h, n);
                         split_pair(h, r, s, n, &mut next);
                     }
-                    None if link.form_factor > 0.0 => {
-                        changed.touch(h, r);
-                        links.push(link);
-                    }
+                    None if link.form_factor > 0.0 => links.push(link),
                     None => {}
                 }
             }
@@ -1231,15 +1143,6 @@ impl Hierarchical {
         links.sort_by_key(|l| l.receiver);
         capped
     }
-}
-
-/// When `Hierarchical::refine` splits a link.
-#[derive(Clone, Copy)]
-struct SplitRule {
-    /// The largest `link_error` a link may keep.
-    threshold: f32,
-    /// The area below which an element is not split.
-    min_area: f32,
 }
 
 /// What a link gets wrong by carrying one value over its receiver: A_R × (the spread of the
@@ -1484,10 +1387,7 @@ impl RadiositySolver for Hierarchical {
         let total_emitted: f32 = emitted_power.iter().sum();
         let scene_area: f32 = patches.iter().map(|p| p.area).sum();
         let threshold = self.link_error * largest;
-        let rule = SplitRule {
-            threshold,
-            min_area: self.min_element_area * scene_area,
-        };
+        let min_area = self.min_element_area * scene_area;
 
         // The root linked to itself, refined with B = emission.
         // Few patches: every pair of them, which needs no cluster estimate. Many: the root
@@ -1504,30 +1404,13 @@ impl RadiositySolver for Hierarchical {
             Vec::new()
         };
         let mut links = Vec::new();
-        let mut centre_form_factors = CentreFormFactors::new(patches.len());
-        let mut capped = self.refine(
-            &mut h,
-            sampler,
-            initial,
-            rule,
-            &mut links,
-            &mut centre_form_factors,
-        );
+        let mut capped = self.refine(&mut h, sampler, initial, threshold, min_area, &mut links);
         let mut emission = h.emission();
         // What the links gather of the emission changes only with the links.
         let mut starts = receiver_starts(h.nodes.len(), &links);
         let mut direct = gather(&h, sampler, &links, &starts, &emission);
         let mut scales = Vec::new();
-        centre_form_factors.plan(&h, &links, self.memory_budget);
-        update_leaf_scales(
-            &h,
-            &links,
-            &starts,
-            &emission,
-            false,
-            &mut centre_form_factors,
-            &mut scales,
-        );
+        update_leaf_scales(&h, &links, &starts, &emission, false, &mut scales);
 
         let mut light = PatchLight::default();
         // Set by every sweep; the loop below makes at least one.
@@ -1609,18 +1492,8 @@ impl RadiositySolver for Hierarchical {
             let pending: f32 = again.iter().map(|l| link_error(&h, l)).sum();
             if !again.is_empty() && pending > limits.tolerance * total_emitted {
                 links = keep;
-                for l in &again {
-                    centre_form_factors.touch(&h, l.receiver);
-                }
                 let candidates = again.iter().map(|l| (l.receiver, l.source)).collect();
-                capped |= self.refine(
-                    &mut h,
-                    sampler,
-                    candidates,
-                    rule,
-                    &mut links,
-                    &mut centre_form_factors,
-                );
+                capped |= self.refine(&mut h, sampler, candidates, threshold, min_area, &mut links);
                 emission = h.emission();
                 starts = receiver_starts(h.nodes.len(), &links);
                 direct = gather(&h, sampler, &links, &starts, &emission);
@@ -1628,16 +1501,7 @@ impl RadiositySolver for Hierarchical {
             // Whether or not links were refined, the leaf scales now weigh the links by the
             // radiosities just solved for; the next round's first sweep says how much that
             // moved, and the rule above ends the solve once it is under the tolerance.
-            centre_form_factors.plan(&h, &links, self.memory_budget);
-            update_leaf_scales(
-                &h,
-                &links,
-                &starts,
-                &emission,
-                true,
-                &mut centre_form_factors,
-                &mut scales,
-            );
+            update_leaf_scales(&h, &links, &starts, &emission, true, &mut scales);
         }
 
         // What came straight from the emitters: one gather of the emission alone.
