@@ -801,26 +801,82 @@ impl IntoCluster {
     }
 }
 
-/// Calls `visit(leaf, ranges)` for each leaf element below `root` (an input patch), depth
-/// first, with the ranges of `links` (`by_receiver`) of the leaf's ancestors from `root`
-/// down and of its own.
-fn each_leaf(
-    h: &Hierarchy,
-    by_receiver: &impl Fn(u32) -> Range<usize>,
-    root: u32,
-    mut visit: impl FnMut(u32, &[Range<usize>]),
-) {
-    let mut chain: Vec<Range<usize>> = Vec::new();
+/// Calls `visit(leaf, chain)` for each leaf element below `root` (an input patch), depth
+/// first, with the leaf's ancestors from `root` down and itself.
+fn each_leaf(h: &Hierarchy, root: u32, mut visit: impl FnMut(u32, &[u32])) {
+    let mut chain: Vec<u32> = Vec::new();
     let mut stack = vec![(root, 0)];
     while let Some((e, depth)) = stack.pop() {
         chain.truncate(depth);
-        chain.push(by_receiver(e));
+        chain.push(e);
         let el = h.node(e);
         if el.children != NONE {
             let depth = chain.len();
             stack.extend((el.children..el.children + 4).map(|c| (c, depth)));
         } else {
             visit(e, &chain);
+        }
+    }
+}
+
+/// The form factors from each leaf's centre to the sources of the links that reach it (what
+/// `update_leaf_scales` weighs), kept from one update to the next: such a value depends
+/// only on the leaf and the source, and a refinement keeps most links as they were, while
+/// the weights change every round. Kept only while they fit in what `--max-memory` leaves
+/// beside the links and nodes.
+struct CentreFormFactors {
+    /// Per input patch, its leaves' values in the order `each_leaf` visits them, each leaf's
+    /// in the order of its chain's links.
+    per_patch: Vec<Vec<f32>>,
+    /// Per node, where its values start in its patch's if it was a leaf at the last update
+    /// (`NONE` if not).
+    start: Vec<u32>,
+    /// The sources of the links and their receivers' starts (`receiver_starts`) at the last
+    /// update, if a refinement changed the links since.
+    previous: Option<(Vec<u32>, Vec<u32>)>,
+    /// False once they did not fit: then taken afresh every time.
+    keep: bool,
+}
+
+impl CentreFormFactors {
+    fn new(patches: usize) -> CentreFormFactors {
+        CentreFormFactors {
+            per_patch: vec![Vec::new(); patches],
+            start: Vec::new(),
+            previous: None,
+            keep: true,
+        }
+    }
+
+    /// Decides whether they are kept through the next `update_leaf_scales`: while one f32 a
+    /// leaf for each link reaching it from its patch's elements fits in `budget` beside the
+    /// links and nodes.
+    fn plan(&mut self, h: &Hierarchy, links: &[Link], budget: u64) {
+        // Leaves below each element; children are made after their parents.
+        let mut leaves = vec![0u64; h.nodes.len()];
+        for n in (0..h.nodes.len()).rev() {
+            let node = &h.nodes[n];
+            if node.is_cluster() {
+                continue;
+            }
+            leaves[n] = if node.children == NONE {
+                1
+            } else {
+                (node.children..node.children + 4)
+                    .map(|c| leaves[c as usize])
+                    .sum()
+            };
+        }
+        let values: u64 = links.iter().map(|l| leaves[l.receiver as usize]).sum();
+        let previous = self
+            .previous
+            .as_ref()
+            .map_or(0, |(l, s)| 4 * (l.len() + s.len()));
+        let held = links.len() * LINK_BYTES + h.nodes.len() * NODE_BYTES + previous;
+        self.keep = self.keep && values * 4 <= budget.saturating_sub(held as u64);
+        if !self.keep {
+            self.per_patch = vec![Vec::new(); self.per_patch.len()];
+            self.previous = None;
         }
     }
 }
@@ -850,6 +906,7 @@ fn update_leaf_scales(
     starts: &[u32],
     emission: &[Color],
     weighted: bool,
+    centre_form_factors: &mut CentreFormFactors,
     scales: &mut Vec<LeafScale>,
 ) {
     let n = h.nodes.len();
@@ -904,9 +961,15 @@ fn update_leaf_scales(
             cluster_as_is[c].add_carried(&above);
         }
     }
-    let per_patch: Vec<Vec<(u32, LeafScale)>> = (0..patches as u32)
-        .into_par_iter()
-        .map(|root| {
+    let cache = &mut *centre_form_factors;
+    cache.start.resize(n, NONE);
+    let (keep, start, previous) = (cache.keep, &cache.start, &cache.previous);
+    let per_patch: Vec<Vec<(u32, LeafScale, u32)>> = cache
+        .per_patch
+        .par_iter_mut()
+        .enumerate()
+        .map(|(root, kept)| {
+            let root = root as u32;
             // A link into a cluster reaches its members' leaves as it reaches the cluster's
             // centre, from the same direction and distance, each leaf taking its share by
             // its orientation (as an isotropic cluster hands its light to its members): alike
@@ -927,23 +990,79 @@ fn update_leaf_scales(
                 }
                 c = h.node(c).parent;
             }
+            let old = std::mem::take(kept);
             let mut out = Vec::new();
-            each_leaf(h, &by_receiver, root, |e, chain| {
+            each_leaf(h, root, |e, chain| {
                 let el = h.node(e);
+                let begins = kept.len() as u32;
+                // The leaf's values at the last update, receiver by receiver of its chain.
+                let mut from =
+                    (keep && start[e as usize] != NONE).then(|| start[e as usize] as usize);
                 let mut carried = above;
-                for l in chain.iter().flat_map(|r| &links[r.clone()]) {
-                    let f = h.point_form_factor(el.centre, e, Some(el.normal), l.source);
-                    carried.add_as_is(l, &weights);
-                    carried.add_at_centre(l, f, &weights);
+                for &a in chain {
+                    let now = &links[by_receiver(a)];
+                    // The last update's values of `a`'s links at this leaf, and the sources
+                    // of those links if a refinement changed them since.
+                    let mut values: Option<&[f32]> = None;
+                    let mut before: Option<&[u32]> = None;
+                    if let Some(at) = from {
+                        let count = match previous {
+                            Some((old_sources, old_starts)) => {
+                                let range = old_starts[a as usize] as usize
+                                    ..old_starts[a as usize + 1] as usize;
+                                let sources = &old_sources[range];
+                                before = Some(sources);
+                                sources.len()
+                            }
+                            None => now.len(),
+                        };
+                        values = Some(&old[at..at + count]);
+                        from = Some(at + count);
+                    }
+                    let mut i = 0;
+                    for (k, l) in now.iter().enumerate() {
+                        // The value depends only on the leaf and the source: a link kept
+                        // since is found in the same order, the links refined away skipped.
+                        let kept_value = match (values, before) {
+                            (Some(v), None) => Some(v[k]),
+                            (Some(v), Some(b)) => {
+                                match b[i..].iter().position(|&s| s == l.source) {
+                                    Some(j) => {
+                                        i += j + 1;
+                                        Some(v[i - 1])
+                                    }
+                                    // Past the kept links (they come first, in their order):
+                                    // the rest were added since.
+                                    None => {
+                                        i = b.len();
+                                        None
+                                    }
+                                }
+                            }
+                            (None, _) => None,
+                        };
+                        let f = kept_value.unwrap_or_else(|| {
+                            h.point_form_factor(el.centre, e, Some(el.normal), l.source)
+                        });
+                        if keep {
+                            kept.push(f);
+                        }
+                        carried.add_as_is(l, &weights);
+                        carried.add_at_centre(l, f, &weights);
+                    }
                 }
-                out.push((e, carried.scale()));
+                out.push((e, carried.scale(), begins));
             });
             out
         })
         .collect();
-    for (e, scale) in per_patch.into_iter().flatten() {
+    for (e, scale, begins) in per_patch.into_iter().flatten() {
         scales[e as usize] = scale;
+        if keep {
+            cache.start[e as usize] = begins;
+        }
     }
+    cache.previous = None;
 }
 
 impl Hierarchical {
@@ -1048,10 +1167,13 @@ impl Hierarchical {
         h: &mut Hierarchy,
         sampler: &FormFactorSampler,
         mut candidates: Vec<(u32, u32)>,
-        threshold: f32,
-        min_area: f32,
+        rule: SplitRule,
         links: &mut Vec<Link>,
     ) -> bool {
+        let SplitRule {
+            threshold,
+            min_area,
+        } = rule;
         let mut capped = false;
         // The node of a pair to split, if either can be (none once over the memory budget
         // or after Ctrl-C).
@@ -1143,6 +1265,15 @@ impl Hierarchical {
         links.sort_by_key(|l| l.receiver);
         capped
     }
+}
+
+/// When `Hierarchical::refine` splits a link.
+#[derive(Clone, Copy)]
+struct SplitRule {
+    /// The largest `link_error` a link may keep.
+    threshold: f32,
+    /// The area below which an element is not split.
+    min_area: f32,
 }
 
 /// What a link gets wrong by carrying one value over its receiver: A_R × (the spread of the
@@ -1387,7 +1518,10 @@ impl RadiositySolver for Hierarchical {
         let total_emitted: f32 = emitted_power.iter().sum();
         let scene_area: f32 = patches.iter().map(|p| p.area).sum();
         let threshold = self.link_error * largest;
-        let min_area = self.min_element_area * scene_area;
+        let rule = SplitRule {
+            threshold,
+            min_area: self.min_element_area * scene_area,
+        };
 
         // The root linked to itself, refined with B = emission.
         // Few patches: every pair of them, which needs no cluster estimate. Many: the root
@@ -1404,13 +1538,23 @@ impl RadiositySolver for Hierarchical {
             Vec::new()
         };
         let mut links = Vec::new();
-        let mut capped = self.refine(&mut h, sampler, initial, threshold, min_area, &mut links);
+        let mut centre_form_factors = CentreFormFactors::new(patches.len());
+        let mut capped = self.refine(&mut h, sampler, initial, rule, &mut links);
         let mut emission = h.emission();
         // What the links gather of the emission changes only with the links.
         let mut starts = receiver_starts(h.nodes.len(), &links);
         let mut direct = gather(&h, sampler, &links, &starts, &emission);
         let mut scales = Vec::new();
-        update_leaf_scales(&h, &links, &starts, &emission, false, &mut scales);
+        centre_form_factors.plan(&h, &links, self.memory_budget);
+        update_leaf_scales(
+            &h,
+            &links,
+            &starts,
+            &emission,
+            false,
+            &mut centre_form_factors,
+            &mut scales,
+        );
 
         let mut light = PatchLight::default();
         // Set by every sweep; the loop below makes at least one.
@@ -1491,9 +1635,12 @@ impl RadiositySolver for Hierarchical {
             // solution by more than the tolerance.
             let pending: f32 = again.iter().map(|l| link_error(&h, l)).sum();
             if !again.is_empty() && pending > limits.tolerance * total_emitted {
+                // The links as the leaf scales last took them, for their values kept.
+                let sources = links.iter().map(|l| l.source).collect();
+                centre_form_factors.previous = Some((sources, std::mem::take(&mut starts)));
                 links = keep;
                 let candidates = again.iter().map(|l| (l.receiver, l.source)).collect();
-                capped |= self.refine(&mut h, sampler, candidates, threshold, min_area, &mut links);
+                capped |= self.refine(&mut h, sampler, candidates, rule, &mut links);
                 emission = h.emission();
                 starts = receiver_starts(h.nodes.len(), &links);
                 direct = gather(&h, sampler, &links, &starts, &emission);
@@ -1501,7 +1648,16 @@ impl RadiositySolver for Hierarchical {
             // Whether or not links were refined, the leaf scales now weigh the links by the
             // radiosities just solved for; the next round's first sweep says how much that
             // moved, and the rule above ends the solve once it is under the tolerance.
-            update_leaf_scales(&h, &links, &starts, &emission, true, &mut scales);
+            centre_form_factors.plan(&h, &links, self.memory_budget);
+            update_leaf_scales(
+                &h,
+                &links,
+                &starts,
+                &emission,
+                true,
+                &mut centre_form_factors,
+                &mut scales,
+            );
         }
 
         // What came straight from the emitters: one gather of the emission alone.
