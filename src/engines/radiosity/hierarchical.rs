@@ -64,9 +64,6 @@ const PAIRS: usize = 4;
 const LINK_CHUNK: usize = 256;
 /// Candidate pairs a thread sorts into split and evaluated at a time.
 const SPLIT_CHUNK: usize = 4096;
-
-/// (receiver, source) pairs of nodes.
-type NodePairs = Vec<(u32, u32)>;
 /// Refinement rounds at most (each followed by a solve).
 const MAX_ROUNDS: u32 = 12;
 /// Most patches a cluster holds directly.
@@ -1266,6 +1263,9 @@ impl Hierarchical {
         capped
     }
 }
+
+/// (receiver, source) pairs of nodes.
+type NodePairs = Vec<(u32, u32)>;
 
 /// When `Hierarchical::refine` splits a link.
 #[derive(Clone, Copy)]
