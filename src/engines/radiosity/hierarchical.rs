@@ -878,6 +878,52 @@ impl CentreFormFactors {
     }
 }
 
+/// Each node's scales (`update_leaf_scales`) and the centre form factors kept for them.
+struct LeafScales {
+    scales: Vec<LeafScale>,
+    centre_form_factors: CentreFormFactors,
+    /// What `--max-memory` leaves the solve (`Hierarchical::memory_budget`).
+    budget: u64,
+}
+
+impl LeafScales {
+    fn new(patches: usize, budget: u64) -> LeafScales {
+        LeafScales {
+            scales: Vec::new(),
+            centre_form_factors: CentreFormFactors::new(patches),
+            budget,
+        }
+    }
+
+    /// See `update_leaf_scales`.
+    fn update(
+        &mut self,
+        h: &Hierarchy,
+        links: &[Link],
+        starts: &[u32],
+        emission: &[Color],
+        weighted: bool,
+    ) {
+        self.centre_form_factors.plan(h, links, self.budget);
+        update_leaf_scales(
+            h,
+            links,
+            starts,
+            emission,
+            weighted,
+            &mut self.centre_form_factors,
+            &mut self.scales,
+        );
+    }
+
+    /// Notes the links and their receivers' starts the last update took, before a
+    /// refinement changes them (see `CentreFormFactors::previous`).
+    fn before_refinement(&mut self, links: &[Link], starts: Vec<u32>) {
+        let sources = links.iter().map(|l| l.source).collect();
+        self.centre_form_factors.previous = Some((sources, starts));
+    }
+}
+
 /// Brings each leaf element's scales up to date: per colour channel, what the links that
 /// reach it — its own, its ancestors' and its clusters' — carry when each is taken at the
 /// leaf's centre, over what they carry as they are: Σ F(centre, S)·V·w_S over Σ F_RS·V·w_S.
@@ -1538,23 +1584,13 @@ impl RadiositySolver for Hierarchical {
             Vec::new()
         };
         let mut links = Vec::new();
-        let mut centre_form_factors = CentreFormFactors::new(patches.len());
         let mut capped = self.refine(&mut h, sampler, initial, rule, &mut links);
         let mut emission = h.emission();
         // What the links gather of the emission changes only with the links.
         let mut starts = receiver_starts(h.nodes.len(), &links);
         let mut direct = gather(&h, sampler, &links, &starts, &emission);
-        let mut scales = Vec::new();
-        centre_form_factors.plan(&h, &links, self.memory_budget);
-        update_leaf_scales(
-            &h,
-            &links,
-            &starts,
-            &emission,
-            false,
-            &mut centre_form_factors,
-            &mut scales,
-        );
+        let mut scales = LeafScales::new(patches.len(), self.memory_budget);
+        scales.update(&h, &links, &starts, &emission, false);
 
         let mut light = PatchLight::default();
         // Set by every sweep; the loop below makes at least one.
@@ -1578,7 +1614,7 @@ impl RadiositySolver for Hierarchical {
                     direct: &direct,
                     reflected: &gather(&h, sampler, &links, &starts, &reflected),
                 };
-                let (inc, radiance) = sweep(&h, &scales, &gathered);
+                let (inc, radiance) = sweep(&h, &scales.scales, &gathered);
                 let before = power(&h.radiance[..patches.len()]);
                 let change = (power(&radiance[..patches.len()]) - before).abs();
                 h.radiance = radiance;
@@ -1636,8 +1672,7 @@ impl RadiositySolver for Hierarchical {
             let pending: f32 = again.iter().map(|l| link_error(&h, l)).sum();
             if !again.is_empty() && pending > limits.tolerance * total_emitted {
                 // The links as the leaf scales last took them, for their values kept.
-                let sources = links.iter().map(|l| l.source).collect();
-                centre_form_factors.previous = Some((sources, std::mem::take(&mut starts)));
+                scales.before_refinement(&links, std::mem::take(&mut starts));
                 links = keep;
                 let candidates = again.iter().map(|l| (l.receiver, l.source)).collect();
                 capped |= self.refine(&mut h, sampler, candidates, rule, &mut links);
@@ -1648,16 +1683,7 @@ impl RadiositySolver for Hierarchical {
             // Whether or not links were refined, the leaf scales now weigh the links by the
             // radiosities just solved for; the next round's first sweep says how much that
             // moved, and the rule above ends the solve once it is under the tolerance.
-            centre_form_factors.plan(&h, &links, self.memory_budget);
-            update_leaf_scales(
-                &h,
-                &links,
-                &starts,
-                &emission,
-                true,
-                &mut centre_form_factors,
-                &mut scales,
-            );
+            scales.update(&h, &links, &starts, &emission, true);
         }
 
         // What came straight from the emitters: one gather of the emission alone.
@@ -1666,7 +1692,7 @@ impl RadiositySolver for Hierarchical {
             direct: &direct,
             reflected: &none,
         };
-        let (incident_direct, _) = sweep(&h, &scales, &gathered);
+        let (incident_direct, _) = sweep(&h, &scales.scales, &gathered);
         light.radiance = h.radiance[..patches.len()].to_vec();
         light.incident = incident[..patches.len()].to_vec();
         light.incident_direct = incident_direct[..patches.len()].to_vec();
