@@ -919,8 +919,11 @@ impl LeafScales {
     /// Notes the links and their receivers' starts the last update took, before a
     /// refinement changes them (see `CentreFormFactors::previous`).
     fn before_refinement(&mut self, links: &[Link], starts: Vec<u32>) {
-        let sources = links.iter().map(|l| l.source).collect();
-        self.centre_form_factors.previous = Some((sources, starts));
+        // Not needed once the values are no longer kept.
+        if self.centre_form_factors.keep {
+            let sources = links.iter().map(|l| l.source).collect();
+            self.centre_form_factors.previous = Some((sources, starts));
+        }
     }
 }
 
@@ -1046,22 +1049,18 @@ fn update_leaf_scales(
                     let now = &links[by_receiver(a)];
                     // The last update's values of `a`'s links at this leaf, and the sources
                     // of those links if a refinement changed them since.
-                    let mut values: Option<&[f32]> = None;
-                    let mut before: Option<&[u32]> = None;
-                    if let Some(at) = from {
-                        let count = match previous {
-                            Some((old_sources, old_starts)) => {
-                                let range = old_starts[a as usize] as usize
-                                    ..old_starts[a as usize + 1] as usize;
-                                let sources = &old_sources[range];
-                                before = Some(sources);
-                                sources.len()
-                            }
-                            None => now.len(),
-                        };
-                        values = Some(&old[at..at + count]);
-                        from = Some(at + count);
-                    }
+                    let (before, values): (Option<&[u32]>, Option<&[f32]>) = match from {
+                        None => (None, None),
+                        Some(at) => {
+                            let before = previous.as_ref().map(|(sources, starts)| {
+                                &sources
+                                    [starts[a as usize] as usize..starts[a as usize + 1] as usize]
+                            });
+                            let count = before.map_or(now.len(), |b| b.len());
+                            from = Some(at + count);
+                            (before, Some(&old[at..at + count]))
+                        }
+                    };
                     let mut i = 0;
                     for (k, l) in now.iter().enumerate() {
                         // The value depends only on the leaf and the source: a link kept
