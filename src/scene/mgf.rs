@@ -1126,44 +1126,36 @@ fn newell_normal(points: &[Vec3]) -> Vec3 {
 /// Faces whose area is below this times their size² are degenerate and skipped.
 const AREA_EPSILON: f32 = 1e-9;
 
-/// Triangles of a simple polygon by ear clipping in its plane (N − 2 of them; a fan where
-/// clipping finds no ear, as for degenerate input).
+/// Triangles of a polygon, counter-clockwise about its Newell normal, by ear clipping in its
+/// plane (mapbox's earcut: N − 2 triangles of a simple polygon; fewer where it drops
+/// repeated and collinear vertices). MGF writes a wall with a window as one polygon whose
+/// outline runs along a seam to the window and round it (office3's window wall: ten
+/// vertices, one repeated); a plain ear clipper found no ear there and fell back to a fan,
+/// which covered the window and folded over itself (20.9 m² of triangles for a 7.7 m² wall).
 fn triangulate(points: &[Vec3]) -> Vec<[usize; 3]> {
-    let n = points.len();
-    let normal = newell_normal(points);
-    let mut left: Vec<usize> = (0..n).collect();
-    let mut out = Vec::with_capacity(n - 2);
-    let turn = |a: Vec3, b: Vec3, c: Vec3| (b - a).cross(c - b).dot(normal);
-    let convex = |a: Vec3, b: Vec3, c: Vec3| turn(a, b, c) > 0.0;
-    // On the boundary counts as inside: an ear whose edge touches another vertex would
-    // leave a polygon that turns back on itself.
-    let inside = |p: Vec3, a: Vec3, b: Vec3, c: Vec3| {
-        turn(a, b, p) >= 0.0 && turn(b, c, p) >= 0.0 && turn(c, a, p) >= 0.0
-    };
-    let mut guard = 0;
-    while left.len() > 3 && guard < n * n {
-        guard += 1;
-        let m = left.len();
-        let ear = (0..m).find(|&k| {
-            let (a, b, c) = (left[(k + m - 1) % m], left[k], left[(k + 1) % m]);
-            convex(points[a], points[b], points[c])
-                && !left.iter().any(|&o| {
-                    o != a && o != b && o != c && inside(points[o], points[a], points[b], points[c])
-                })
-        });
-        match ear {
-            Some(k) => {
-                out.push([left[(k + m - 1) % m], left[k], left[(k + 1) % m]]);
-                left.remove(k);
+    let (u, v) = frame(newell_normal(points).normalize_or_zero());
+    // In f64, as earcut's own tests run it: the plane's coordinates of nearly coincident
+    // vertices keep their order.
+    let plane: Vec<[f64; 2]> = points
+        .iter()
+        .map(|p| [p.dot(u) as f64, p.dot(v) as f64])
+        .collect();
+    let mut indices: Vec<u32> = Vec::new();
+    earcut::Earcut::new().earcut(plane.iter().copied(), &[] as &[u32], &mut indices);
+    indices
+        .chunks_exact(3)
+        .map(|t| {
+            let [a, b, c] = [t[0] as usize, t[1] as usize, t[2] as usize];
+            let (pa, pb, pc) = (plane[a], plane[b], plane[c]);
+            let turn = (pb[0] - pa[0]) * (pc[1] - pa[1]) - (pb[1] - pa[1]) * (pc[0] - pa[0]);
+            // earcut's winding is its own; the face's is its normal's.
+            if turn < 0.0 {
+                [a, c, b]
+            } else {
+                [a, b, c]
             }
-            None => break,
-        }
-    }
-    // What is left is convex (or degenerate): a fan.
-    for k in 1..left.len().saturating_sub(1) {
-        out.push([left[0], left[k], left[k + 1]]);
-    }
-    out
+        })
+        .collect()
 }
 
 /// Two unit vectors completing the unit `axis` to a right-handed frame.
@@ -1371,6 +1363,43 @@ mod tests {
         assert!(t
             .iter()
             .all(|&[a, b, c]| (l[b] - l[a]).cross(l[c] - l[a]).z > 0.0));
+    }
+
+    #[test]
+    fn a_wall_whose_window_is_joined_by_a_seam_triangulates_around_the_window() {
+        // office3's window wall (office.mgf, in its own units): the outline, then along the
+        // window's bottom edge to the window and round it, back along the same edge.
+        let xy = [
+            (30.0, 15.5),
+            (-30.0, 15.5),
+            (-30.0, 51.0),
+            (30.0, 51.0),
+            (30.0, 26.0),
+            (23.5, 26.0),
+            (23.5, 43.0),
+            (-23.5, 43.0),
+            (-23.5, 26.0),
+            (30.0, 26.0),
+        ];
+        let wall: Vec<Vec3> = xy.iter().map(|&(x, y)| vec3(x, y, 30.0)).collect();
+        let normal = newell_normal(&wall).normalize();
+        let t = triangulate(&wall);
+        assert_eq!(t.len(), wall.len() - 2);
+        let areas: Vec<f32> = t
+            .iter()
+            .map(|&[a, b, c]| (wall[b] - wall[a]).cross(wall[c] - wall[a]).dot(normal) / 2.0)
+            .collect();
+        // Every triangle faces the wall's way, and together they cover the wall less the
+        // window once: 60 × 35.5 − 47 × 17 = 1331 (the fan before covered 3,601 in all).
+        assert!(areas.iter().all(|&a| a >= 0.0), "{areas:?}");
+        let area: f32 = areas.iter().sum();
+        assert!((area - 1331.0).abs() < 1e-3, "{area}");
+        // None reaches into the window.
+        for &[a, b, c] in &t {
+            let centroid = (wall[a] + wall[b] + wall[c]) / 3.0;
+            let in_window = centroid.x.abs() < 23.5 && centroid.y > 26.0 && centroid.y < 43.0;
+            assert!(!in_window, "{centroid:?}");
+        }
     }
 
     #[test]

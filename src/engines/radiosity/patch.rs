@@ -129,7 +129,7 @@ pub fn on_primitive(scene: &Scene, patch: &Patch, p: Vec3, side: Vec3) -> Vec3 {
 
 /// For each patch, the earlier patch it coincides with exactly — the same corners, facing the
 /// same way — or `NONE`. Such twins are one surface (the hospital of RenderPark's scenes
-/// holds 12,368 of them among 25,083 faces: its structure file already has the furniture the
+/// holds 12,388 of them among 25,099 faces: its structure file already has the furniture the
 /// main file adds); solved as two, every receiver would see their light twice (the
 /// hierarchical solver's sweeps diverged). `Solution::solve` gives the solvers each twin
 /// with no area and copies its first copy's light to it.
