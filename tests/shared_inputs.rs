@@ -17,6 +17,7 @@ use common::references::{
     seen_by_the_reference, solve,
 };
 use libtest_mimic::{Arguments, Failed, Trial};
+use trilux::engines::radiosity::Solution;
 use trilux::scene::Scene;
 
 fn main() {
@@ -213,10 +214,10 @@ fn shipped_mgf_scenes_load_with_renderparks_patch_counts(dir: &Path) {
     assert_eq!(two_sided, 27_896.0, "plan, graz two-sided");
 }
 
-/// office3 (RenderPark's office: 12,628 input patches, one 21 m² floor), hierarchical,
-/// against the path tracer averaged per input patch: 16 M paths shared by area (at least 16
-/// a patch), traced twice with different seeds, so that the L1 between the two traces — the
-/// reference's own noise — is measured beside the solver's.
+/// office3 (RenderPark's office: 12,629 input patches, one 21 m² floor), hierarchical,
+/// against the path tracer averaged per input patch: 16 M paths (`reference_paths`), traced
+/// twice with different seeds, so that the L1 between the two traces — the reference's own
+/// noise — is measured beside the solver's.
 fn office3_against_path_traced_references(path: &Path) {
     let scene = Scene::load(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut settings = hierarchical(0);
@@ -224,11 +225,7 @@ fn office3_against_path_traced_references(path: &Path) {
     settings.num_shadow_samples = 1;
     let solution = solve(&scene, &settings);
     let total_area: f64 = solution.patches.iter().map(|p| p.area as f64).sum();
-    let paths: Vec<u32> = solution
-        .patches
-        .iter()
-        .map(|p| ((16e6 * p.area as f64 / total_area) as u32).max(16))
-        .collect();
+    let paths = reference_paths(&solution, 16e6);
     let mut traced = solution.clone();
     traced.state.radiance = path_traced_patches(&scene, &solution, &paths, 7);
     let mut again = solution.clone();
@@ -256,24 +253,45 @@ fn office3_against_path_traced_references(path: &Path) {
         total_area,
         100.0 * l1_seen
     );
-    // Measured against the diffuse-only trace (`diffuse_only`): the traces 1.71% apart, the
-    // solution L1 5.94%, power +0.24%; over the patches seen 4.55% (5.89%, +0.27%, 4.50%
-    // while a cluster's points were drawn among all its patches). Before clusters holding
-    // an emitter were split as sources and clusters sent the light of the patches facing
-    // the receiver (`holds_emitter`, `sent`): 8.95% / +3.7% (7.63% seen), the light of a
-    // ceiling panel and of a bulb inside its shade leaking through clusters onto the
-    // ceiling and walls. Against the trace with the specular parts (which radiosity does
-    // not model), 9.76% / -0.08%: the leaks and the specular light made up for each other
-    // in power. BENCHMARKS.md says where the rest comes from: walls +3.7%, the window's
-    // glass under its blinds (unseen), the lamp shades' insides -11%. 3,343 small patches
-    // (13.69 of 155.3 m², the window's glass among them) lie under other geometry, where
-    // the reference's rays land on something else. The power bound is issue #15's; the L1 bounds are the measured
-    // figures and a tenth, not the issue's aim of 2%, which office3 does not meet.
-    assert!(noise < 0.04, "the references disagree: L1 {noise}");
+    // Measured against the diffuse-only trace (`diffuse_only`): the traces 0.82% apart, the
+    // solution L1 2.27%, power -0.82%; over the patches seen 2.23%. Before MGF polygons with
+    // a seam to a hole were triangulated round the hole, office3's window wall was a fan of
+    // 20.9 m² folded over itself and over the window, where its doubled light lit the room
+    // (walls +3.7%): 5.94% / +0.24% (4.55% seen), its traces shared by area alone 1.71%
+    // apart. Before clusters holding an emitter were split as sources and clusters sent the
+    // light of the patches facing the receiver (`holds_emitter`, `sent`): 8.95% / +3.7%.
+    // What is left is mostly the desk lamp's shade (BENCHMARKS.md): its narrow top, a tube
+    // lit from the bulb below it, gets half the light the trace finds there. The power bound
+    // is issue #15's; the L1 bounds are the measured figures and a tenth, above the issue's
+    // aim of 2%.
+    assert!(noise < 0.012, "the references disagree: L1 {noise}");
     assert!(power_error.abs() < 0.01, "reflected power {power_error}");
-    assert!(l1 < 0.065, "relative L1 {l1}");
+    assert!(l1 < 0.025, "relative L1 {l1}");
     assert!(
-        l1_seen < 0.050,
+        l1_seen < 0.025,
         "relative L1 over the patches seen {l1_seen}"
     );
+}
+
+/// How many of `total` paths the reference traces to each patch of `solution`, at least 16:
+/// half shared by area, half by the solution's reflected power. The L1 weighs each patch by
+/// its area times its radiance, so a bright patch's noise counts for more: by area alone,
+/// office3's lamp shades (0.04 m², a hundred times the walls' radiance) got 64 paths a patch,
+/// and the two traces came 1.79% apart, half of that on the shades.
+fn reference_paths(solution: &Solution, total: f64) -> Vec<u32> {
+    let reflected = |k: usize| {
+        let p = &solution.patches[k];
+        (solution.state.radiance[k] - p.emitted)
+            .element_sum()
+            .max(0.0) as f64
+            * p.area as f64
+    };
+    let area: f64 = solution.patches.iter().map(|p| p.area as f64).sum();
+    let power: f64 = (0..solution.patches.len()).map(reflected).sum();
+    (0..solution.patches.len())
+        .map(|k| {
+            let share = 0.5 * solution.patches[k].area as f64 / area + 0.5 * reflected(k) / power;
+            ((total * share) as u32).max(16)
+        })
+        .collect()
 }
