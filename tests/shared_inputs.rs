@@ -281,19 +281,16 @@ fn office3_against_path_traced_references(path: &Path) {
 /// office3's lamp shades (0.04 m², a hundred times the walls' radiance) got 64 paths a patch,
 /// and the two traces came 1.79% apart, half of that on the shades.
 fn reference_paths(solution: &Solution, total: f64) -> Vec<u32> {
-    let reflected = |k: usize| {
-        let p = &solution.patches[k];
-        (solution.state.radiance[k] - p.emitted)
-            .element_sum()
-            .max(0.0) as f64
-            * p.area as f64
-    };
-    let area: f64 = solution.patches.iter().map(|p| p.area as f64).sum();
-    let power: f64 = (0..solution.patches.len()).map(reflected).sum();
-    (0..solution.patches.len())
-        .map(|k| {
-            let share = 0.5 * solution.patches[k].area as f64 / area + 0.5 * reflected(k) / power;
-            ((total * share) as u32).max(16)
+    let (area, reflected): (Vec<f64>, Vec<f64>) = (solution.patches.iter())
+        .zip(&solution.state.radiance)
+        .map(|(p, b)| {
+            let a = p.area as f64;
+            (a, a * (*b - p.emitted).element_sum().max(0.0) as f64)
         })
+        .unzip();
+    let (area_sum, power): (f64, f64) = (area.iter().sum(), reflected.iter().sum());
+    area.iter()
+        .zip(&reflected)
+        .map(|(a, r)| ((total * (0.5 * a / area_sum + 0.5 * r / power)) as u32).max(16))
         .collect()
 }

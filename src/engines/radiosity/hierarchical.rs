@@ -767,10 +767,14 @@ impl Carried {
         ((1.0 - self.at_centre).max(0.0) / clusters.at_centre).min(1.0)
     }
 
-    /// The leaf's scales: per channel, what the links carry taken at the centre over what
-    /// they carry as they are, the reflected light's held so that the scaled form factors
-    /// sum to at most `MAX_COVERAGE`.
-    fn scale(&self) -> LeafScale {
+    /// The leaf's scales, from what its element links carry (`self`) and what the clusters
+    /// above its patch hand down (`clusters`, of which it keeps `share_of_clusters`): per
+    /// channel, what the links carry taken at the centre over what they carry as they are,
+    /// the reflected light's held so that the scaled form factors sum to at most
+    /// `MAX_COVERAGE`.
+    fn scale(mut self, clusters: &Carried) -> LeafScale {
+        let share = self.share_of_clusters(clusters);
+        self.add_carried(clusters, share);
         // A point sees at most its whole hemisphere, but the scaled form factors can sum
         // past 1: clusters' isotropic estimates take them to 1.18 on the Cornell box with the
         // sphere, and overlapping surfaces (graz's desks, modelled through each other) to
@@ -790,7 +794,7 @@ impl Carried {
         LeafScale {
             direct: ratio(self.direct),
             reflected: ratio(self.reflected).min(Vec3::splat(most as f32)),
-            from_clusters: 1.0,
+            from_clusters: share as f32,
         }
     }
 }
@@ -1125,13 +1129,7 @@ fn update_leaf_scales(
                         carried.add_at_centre(l, f, &weights);
                     }
                 }
-                let share = carried.share_of_clusters(&above);
-                carried.add_carried(&above, share);
-                let scale = LeafScale {
-                    from_clusters: share as f32,
-                    ..carried.scale()
-                };
-                out.push((e, scale, begins));
+                out.push((e, carried.scale(&above), begins));
             });
             out
         })
