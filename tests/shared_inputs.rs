@@ -253,24 +253,27 @@ fn office3_against_path_traced_references(path: &Path) {
         total_area,
         100.0 * l1_seen
     );
-    // Measured against the diffuse-only trace (`diffuse_only`): the traces 0.82% apart, the
-    // solution L1 2.07%, power -0.82%; over the patches seen 2.03%. 2.27% (2.23% seen)
-    // while a leaf kept all the light the clusters above it handed down, however much of its
-    // hemisphere its element links covered (`share_of_clusters`). Before MGF polygons with a
-    // seam to a hole were triangulated round the hole, office3's window wall was a fan of
-    // 20.9 m² folded over itself and over the window, where its doubled light lit the room
-    // (walls +3.7%): 5.94% / +0.24% (4.55% seen), its traces shared by area alone 1.71%
-    // apart. Before clusters holding an emitter were split as sources and clusters sent the
-    // light of the patches facing the receiver (`holds_emitter`, `sent`): 8.95% / +3.7%.
-    // What is left is mostly the desk lamp's shade (BENCHMARKS.md): its narrow top, a tube
-    // lit from the bulb below it, gets under half the light the trace finds there. The power
-    // bound is issue #15's; the L1 bounds are the measured figures and a tenth, just above
-    // the issue's aim of 2%.
+    // Measured against the diffuse-only trace (`diffuse_only`): the traces 0.83% apart, the
+    // solution L1 1.90%, power -0.65%; over the patches seen 1.86%. 2.07% / -0.82% (2.03%
+    // seen) while every leaf's links were taken at its centre, and each link's visibility
+    // multiplied its mean form factor rather than each point's (`update_leaf_scales`,
+    // `Hierarchical::links`): the desk lamp's shade, whose tube above the bulb is lit
+    // through its lower end, got 0.45 of the light the trace finds there, now 0.68. 2.27%
+    // (2.23% seen) while a leaf kept all the light the clusters above it handed down,
+    // however much of its hemisphere its element links covered (`share_of_clusters`).
+    // Before MGF polygons with a seam to a hole were triangulated round the hole, office3's
+    // window wall was a fan of 20.9 m² folded over itself and over the window, where its
+    // doubled light lit the room (walls +3.7%): 5.94% / +0.24% (4.55% seen), its traces
+    // shared by area alone 1.71% apart. Before clusters holding an emitter were split as
+    // sources and clusters sent the light of the patches facing the receiver
+    // (`holds_emitter`, `sent`): 8.95% / +3.7%. What is left is a third on the lamp's shade
+    // (BENCHMARKS.md). The L1 bounds are issue #15's aim of 2% (the measured figures and
+    // about a tenth), the power bound its 1%.
     assert!(noise < 0.012, "the references disagree: L1 {noise}");
     assert!(power_error.abs() < 0.01, "reflected power {power_error}");
-    assert!(l1 < 0.023, "relative L1 {l1}");
+    assert!(l1 < 0.02, "relative L1 {l1}");
     assert!(
-        l1_seen < 0.023,
+        l1_seen < 0.02,
         "relative L1 over the patches seen {l1_seen}"
     );
 }
