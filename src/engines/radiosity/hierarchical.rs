@@ -984,8 +984,9 @@ impl LeafScales {
 /// points see, so they are taken as they are (only the clusters' light is scaled). Taken at
 /// the centre, a leaf whose form factors vary along it by more than their mean lost light:
 /// office3's lamp shade, whose tube above the bulb is 16 strips 0.9 cm × 7.6 cm lit through
-/// their lower ends, got 0.45 of the path tracer's light (0.62 of its direct light), 0.68
-/// (0.83) as they are.
+/// their lower ends, got 0.45 of the path tracer's light (0.62 of its direct light); as they
+/// are, with each visibility pair counted with its own point's form factor
+/// (`Hierarchical::links`), 0.68 (0.83).
 ///
 /// Two ratios, each weighted by what the links carry: for the direct light w is the
 /// sources' emission (exact from the start), for the reflected light their reflected
