@@ -198,9 +198,10 @@ fn cornell_box_mgf_agrees_with_path_traced_and_fine_progressive_references() {
                 100.0 * l1,
                 100.0 * power_error
             );
-            // Measured (pairs, root cluster): against the path tracer 0.89% / +0.13% and
-            // 0.92% / +0.03%, against the fine progressive 1.03% / +0.08% and 1.07% / -0.02%.
-            // The L1 bound is the worst of those and two fifths (the references are 0.30%
+            // Measured (pairs, root cluster): against the path tracer 0.91% / +0.14% and
+            // 0.92% / +0.13%, against the fine progressive 1.02% / +0.09% and 1.04% / +0.08%
+            // (0.90%, 0.92%, 1.01%, 1.03% while each link's visibility multiplied its mean
+            // form factor and every leaf was taken at its centre). The L1 bound is the worst of those and two fifths (the references are 0.30%
             // apart), the power bound issue #15's. History: 1.79% / -1.23% until session 9,
             // then -2.0% once elements sent light from their front only, because a link none
             // of whose four point pairs saw its source was dropped instead of refined; then
