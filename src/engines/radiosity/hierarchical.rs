@@ -622,6 +622,12 @@ impl<'a> Hierarchy<'a> {
         node.is_cluster() && self.clusters[node.children as usize].emits
     }
 
+    /// Whether node `n` is an input patch never split: a leaf with no ancestors (see
+    /// `update_leaf_scales`).
+    fn is_whole_patch(&self, n: u32) -> bool {
+        (n as usize) < self.patches.len() && self.node(n).children == NONE
+    }
+
     fn may_see(&self, r: u32, s: u32) -> bool {
         let (a, b) = (self.node(r), self.node(s));
         a.area > 0.0 && b.area > 0.0 && self.in_front(r, s) && self.in_front(s, r)
@@ -902,10 +908,9 @@ impl CentreFormFactors {
                     .sum()
             };
         }
-        // A leaf that is its whole patch needs none (see `update_leaf_scales`).
-        let whole_patch = |n: u32| (n as usize) < h.patches.len() && h.node(n).children == NONE;
+        // A leaf that is its whole patch needs none.
         let values: u64 = (links.iter())
-            .filter(|l| !whole_patch(l.receiver))
+            .filter(|l| !h.is_whole_patch(l.receiver))
             .map(|l| leaves[l.receiver as usize])
             .sum();
         let previous = self
@@ -1092,11 +1097,10 @@ fn update_leaf_scales(
             let old = std::mem::take(kept);
             let mut out = Vec::new();
             each_leaf(h, root, |e, chain| {
-                let el = h.node(e);
                 let begins = kept.len() as u32;
                 let mut carried = Carried::default();
-                if chain.len() == 1 {
-                    // A leaf that is its whole patch: its links as they are (see above).
+                if h.is_whole_patch(e) {
+                    // Its links as they are (see above).
                     for l in &links[by_receiver(e)] {
                         carried.add_as_is(l, &weights);
                         carried.add_at_leaf(l, l.form_factor, &weights);
@@ -1104,6 +1108,7 @@ fn update_leaf_scales(
                     out.push((e, carried.scale(&above), begins));
                     return;
                 }
+                let el = h.node(e);
                 // The leaf's values at the last update, receiver by receiver of its chain.
                 let mut from =
                     (keep && start[e as usize] != NONE).then(|| start[e as usize] as usize);
