@@ -1,14 +1,15 @@
 //! trilux's own BVH: a binary tree built by binned SAH (in parallel near the root), flattened
 //! into one array with the two children of a node side by side, and traversed iteratively,
 //! nearer child first. Leaves hold copies of their primitives in leaf order, so a leaf's
-//! primitives are read from consecutive memory.
+//! primitives are read from consecutive memory: triangles in packs of four tested at once
+//! (`tri4`), quads and analytic shapes one by one.
 
 use rayon::prelude::*;
 
+use super::tri4::{Tri4, Tri4Ray};
 use super::{Accel, AccelError, PackedPrim};
 use crate::geometry::{
-    faces_ray, intersect_quad_sheared, intersect_triangle_sheared, AnalyticShape, Bounds3, Ray,
-    RayShear, Shape, Vec3,
+    faces_ray, intersect_quad_sheared, AnalyticShape, Bounds3, Ray, RayShear, Shape, Vec3,
 };
 use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
 
@@ -24,19 +25,20 @@ const PARALLEL_THRESHOLD: usize = 8192;
 /// Relative cost of visiting a node against intersecting one triangle.
 const TRAVERSAL_COST: f32 = 1.0;
 
-/// Relative cost of intersecting a primitive of each kind, a triangle's being 1: a quad is
-/// two watertight triangle tests, a sphere's quadratic about as dear. Counting every kind as
-/// one left the Cornell box's seven primitives in one leaf (no split of its walls, whose
-/// boxes are as large as the room, looked cheaper); counted so, each wall gets a leaf of its
-/// own, and one thread's incoherent closest hits there went from about 5.5 to 8 Mrays/s and
-/// its shadow rays from about 6 to 10–13 (session 23, interleaved rounds). A mesh of
-/// triangles gets the same tree as before.
-fn intersection_cost(kind: PrimKind) -> f32 {
-    match kind {
-        PrimKind::Triangle => 1.0,
-        PrimKind::Quad => 2.0,
-        PrimKind::Shape => 2.0,
-    }
+/// Relative cost of intersecting a quad or an analytic shape, one watertight triangle test
+/// being 1: a quad is two triangle tests, a sphere's quadratic about as dear. Counting every
+/// kind as one left the Cornell box's seven primitives in one leaf (no split of its walls,
+/// whose boxes are as large as the room, looked cheaper); counted so, each wall gets a leaf of
+/// its own, and one thread's incoherent closest hits there went from about 5.5 to 8 Mrays/s
+/// and its shadow rays from about 6 to 10–13 (session 23, interleaved rounds).
+const SINGLE_PRIM_COST: f32 = 2.0;
+/// Relative cost of testing a pack of up to four triangles at once (`tri4`): a leaf's
+/// triangles cost by the pack, so the SAH makes leaves of about four.
+const TRI4_COST: f32 = 2.0;
+
+/// What testing a leaf of `triangles` triangles and `singles` other primitives costs.
+fn leaf_cost(triangles: u32, singles: u32) -> f32 {
+    triangles.div_ceil(4) as f32 * TRI4_COST + singles as f32 * SINGLE_PRIM_COST
 }
 
 /// One flattened node: its box, and either the index of its first child (the second follows
@@ -50,9 +52,8 @@ struct Node {
     count: u32,
 }
 
-/// A primitive copied into leaf order: a triangle's three vertices, a quad's four vertices
-/// and its front normal, or for spheres and rings just the reference into
-/// `spheres`/`rings`.
+/// A primitive tested on its own, copied into leaf order: a quad's four vertices and its
+/// front normal, or for an analytic shape just the reference into `shapes`.
 #[derive(Clone, Copy, Debug)]
 struct LeafPrim {
     v: [Vec3; 4],
@@ -60,9 +61,20 @@ struct LeafPrim {
     prim: PackedPrim,
 }
 
+/// What a leaf holds, in leaf order: its triangles in packs of four, then its other
+/// primitives one by one.
+#[derive(Clone, Copy, Debug)]
+enum LeafItem {
+    Triangles(Tri4),
+    Single(LeafPrim),
+}
+
 pub struct Bvh {
     nodes: Vec<Node>,
-    prims: Vec<LeafPrim>,
+    /// The leaves' contents; a leaf node's `first .. first + count` indexes this.
+    items: Vec<LeafItem>,
+    /// How many primitives the tree holds (those with finite bounds).
+    prim_count: usize,
     shapes: Vec<AnalyticShape>,
     one_sided_quads: bool,
     /// The deepest leaf's depth (the root is at 0): how many far children traversal may
@@ -148,7 +160,8 @@ impl Bvh {
             max: Vec3::ZERO,
             count: 0,
         });
-        let depth = flatten(&root, 0, &mut nodes);
+        let mut leaves = Vec::new();
+        let depth = flatten(&root, 0, &build, &mut nodes, &mut leaves, &mut 0);
         if build.is_empty() {
             // An empty tree: a root leaf with no primitives and an empty box.
             nodes[0] = Node {
@@ -159,10 +172,14 @@ impl Bvh {
             };
         }
 
-        let prims = build.par_iter().map(|b| leaf_prim(scene, b.prim)).collect();
+        let items = leaves
+            .par_iter()
+            .flat_map_iter(|leaf| leaf_items(scene, &build[leaf.clone()]))
+            .collect();
         Ok(Bvh {
             nodes,
-            prims,
+            items,
+            prim_count: build.len(),
             shapes: scene.shapes.iter().map(|s| s.shape).collect(),
             one_sided_quads: !scene.two_sided_quads,
             depth,
@@ -172,7 +189,7 @@ impl Bvh {
     /// Checks the tree's invariants: every child box inside its parent's, every primitive's
     /// box inside its leaf's, every primitive in exactly one leaf. Returns what is wrong.
     pub fn validate(&self, scene: &Scene) -> Result<(), String> {
-        let mut seen = vec![0u32; self.prims.len()];
+        let mut seen = std::collections::HashMap::<u32, u32>::new();
         let mut stack = vec![(0usize, 0usize)];
         while let Some((i, depth)) = stack.pop() {
             let n = &self.nodes[i];
@@ -189,19 +206,20 @@ impl Bvh {
                 min: n.min,
                 max: n.max,
             };
-            if n.count > 0 || (i == 0 && self.prims.is_empty()) {
-                let range = n.first as usize..(n.first + n.count) as usize;
-                for (k, count) in seen
-                    .iter_mut()
-                    .enumerate()
-                    .take(range.end)
-                    .skip(range.start)
-                {
-                    let pb = prim_bounds(scene, self.prims[k].prim.unpack());
+            if n.count > 0 || (i == 0 && self.items.is_empty()) {
+                let items = self
+                    .items
+                    .get(n.first as usize..(n.first + n.count) as usize)
+                    .ok_or(format!("leaf {i} runs past the leaves' contents"))?;
+                for prim in items.iter().flat_map(LeafItem::prims) {
+                    let pb = prim_bounds(scene, prim.unpack());
                     if !contains(&b, &pb) {
-                        return Err(format!("primitive {k} sticks out of leaf {i}"));
+                        return Err(format!(
+                            "primitive {:?} sticks out of leaf {i}",
+                            prim.unpack()
+                        ));
                     }
-                    *count += 1;
+                    *seen.entry(prim.raw()).or_default() += 1;
                 }
             } else {
                 for c in [n.first as usize, n.first as usize + 1] {
@@ -220,47 +238,61 @@ impl Bvh {
                 }
             }
         }
-        match seen.iter().position(|&s| s != 1) {
-            Some(k) => Err(format!("primitive {k} is in {} leaves", seen[k])),
-            None => Ok(()),
+        if let Some((&raw, &count)) = seen.iter().find(|(_, &count)| count != 1) {
+            return Err(format!("primitive {raw:#x} is in {count} leaves"));
         }
+        if seen.len() != self.prim_count {
+            return Err(format!(
+                "the leaves hold {} primitives of {}",
+                seen.len(),
+                self.prim_count
+            ));
+        }
+        Ok(())
     }
 
-    /// Tests the primitives of one leaf; returns the index of the closest hit and shrinks
-    /// `t_max` to it.
+    /// The items of a leaf node.
+    #[inline(always)]
+    fn leaf(&self, node: &Node) -> &[LeafItem] {
+        &self.items[node.first as usize..(node.first + node.count) as usize]
+    }
+
+    /// Tests the primitives of one leaf; keeps in `best` the closest hit (primitive, u, v)
+    /// and shrinks `t_max` to it.
     #[inline(always)]
     fn leaf_closest(
         &self,
         node: &Node,
-        ray: &Ray,
-        shear: &RayShear,
+        rays: (&Ray, &RayShear, &Tri4Ray),
         t_max: &mut f32,
-        best: &mut Option<(usize, f32, f32)>,
+        best: &mut Option<(PackedPrim, f32, f32)>,
     ) {
-        for k in node.first as usize..(node.first + node.count) as usize {
-            // Of equally near hits the smaller packed reference wins, whatever the order the
-            // tree met them in: Embree's shim applies the same rule, so both backends answer
-            // the same primitive where a ray meets an edge two primitives share.
+        let (ray, shear, pack_ray) = rays;
+        for item in self.leaf(node) {
+            // A hit at exactly the current t may still win by the tie rule (`keep_closest`).
             let limit = match best {
                 Some(_) => t_max.next_up(),
                 None => *t_max,
             };
-            let Some((t, u, v)) = self.hit_prim(&self.prims[k], ray, shear, limit) else {
-                continue;
-            };
-            let wins = match best {
-                Some((b, ..)) => t < *t_max || self.prims[k].prim.raw() < self.prims[*b].prim.raw(),
-                None => true,
-            };
-            if wins {
-                *t_max = t;
-                *best = Some((k, u, v));
+            match item {
+                LeafItem::Triangles(pack) => {
+                    let hits = pack.intersect(pack_ray, ray, shear, limit);
+                    for i in (0..4).filter(|i| hits.mask >> i & 1 != 0) {
+                        let hit = (pack.prim(i), hits.t[i], hits.u[i], hits.v[i]);
+                        keep_closest(best, t_max, hit);
+                    }
+                }
+                LeafItem::Single(p) => {
+                    if let Some((t, u, v)) = self.hit_single(p, ray, shear, limit) {
+                        keep_closest(best, t_max, (p.prim, t, u, v));
+                    }
+                }
             }
         }
     }
 
     #[inline(always)]
-    fn hit_prim(
+    fn hit_single(
         &self,
         p: &LeafPrim,
         ray: &Ray,
@@ -268,9 +300,7 @@ impl Bvh {
         t_max: f32,
     ) -> Option<(f32, f32, f32)> {
         match p.prim.kind() {
-            PrimKind::Triangle => {
-                intersect_triangle_sheared(ray, shear, t_max, p.v[0], p.v[1], p.v[2])
-            }
+            PrimKind::Triangle => unreachable!("triangles are tested in packs of four"),
             PrimKind::Quad => {
                 if self.one_sided_quads && !faces_ray(p.normal, ray.direction) {
                     return None;
@@ -303,7 +333,7 @@ impl Bvh {
         t_max: &mut f32,
         mut visit: impl FnMut(&Node, &mut f32) -> bool,
     ) {
-        if self.prims.is_empty() {
+        if self.items.is_empty() {
             return;
         }
         // A zero direction component becomes a tiny one of the same sign: the slab test
@@ -376,6 +406,26 @@ impl Bvh {
     }
 }
 
+/// Keeps `hit` (primitive, t, u, v) in `best` if it is nearer than `t_max`, and shrinks
+/// `t_max` to it. Of equally near hits the smaller packed reference wins, whatever the order
+/// the tree met them in: Embree's shim applies the same rule, so both backends answer the same
+/// primitive where a ray meets an edge two primitives share.
+#[inline(always)]
+fn keep_closest(
+    best: &mut Option<(PackedPrim, f32, f32)>,
+    t_max: &mut f32,
+    (prim, t, u, v): (PackedPrim, f32, f32, f32),
+) {
+    let wins = match best {
+        Some((b, ..)) => t < *t_max || (t == *t_max && prim.raw() < b.raw()),
+        None => t < *t_max,
+    };
+    if wins {
+        *t_max = t;
+        *best = Some((prim, u, v));
+    }
+}
+
 /// Trees shallower than this are traversed with a stack of this many entries.
 const SHALLOW_STACK: usize = 16;
 
@@ -430,15 +480,16 @@ impl Accel for Bvh {
 
     fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
         let shear = RayShear::new(ray);
+        let pack_ray = Tri4Ray::new(ray, &shear);
         let mut t_max = ray.t_max;
         let mut best = None;
         self.traverse(ray, &mut t_max, |node, t_max| {
-            self.leaf_closest(node, ray, &shear, t_max, &mut best);
+            self.leaf_closest(node, (ray, &shear, &pack_ray), t_max, &mut best);
             false
         });
-        best.map(|(k, u, v)| PrimHit {
+        best.map(|(prim, u, v)| PrimHit {
             t: t_max,
-            prim: self.prims[k].prim.unpack(),
+            prim: prim.unpack(),
             u,
             v,
             exact: true,
@@ -447,16 +498,17 @@ impl Accel for Bvh {
 
     fn occluded(&self, ray: &Ray) -> bool {
         let shear = RayShear::new(ray);
+        let pack_ray = Tri4Ray::new(ray, &shear);
         let mut t_max = ray.t_max;
         let mut hit = false;
         self.traverse(ray, &mut t_max, |node, t_max| {
-            for k in node.first as usize..(node.first + node.count) as usize {
-                if self.hit_prim(&self.prims[k], ray, &shear, *t_max).is_some() {
-                    hit = true;
-                    return true;
+            hit = self.leaf(node).iter().any(|item| match item {
+                LeafItem::Triangles(pack) => {
+                    pack.intersect(&pack_ray, ray, &shear, *t_max).mask != 0
                 }
-            }
-            false
+                LeafItem::Single(p) => self.hit_single(p, ray, &shear, *t_max).is_some(),
+            });
+            hit
         });
         hit
     }
@@ -481,21 +533,57 @@ fn prim_bounds(scene: &Scene, prim: PrimRef) -> Bounds3 {
     }
 }
 
-fn leaf_prim(scene: &Scene, prim: PrimRef) -> LeafPrim {
-    let i = prim.index as usize;
-    let (v, normal) = match prim.kind {
-        PrimKind::Quad => (scene.quads[i].vertices, scene.quads[i].normal),
-        PrimKind::Triangle => {
-            let [a, b, c] = scene.triangles.vertices(i);
-            ([a, b, c, c], Vec3::ZERO)
+impl LeafItem {
+    /// The primitives the item holds.
+    fn prims(&self) -> Vec<PackedPrim> {
+        match self {
+            LeafItem::Triangles(pack) => pack.triangles().map(|(_, prim)| prim).collect(),
+            LeafItem::Single(p) => vec![p.prim],
         }
-        PrimKind::Shape => ([Vec3::ZERO; 4], Vec3::ZERO),
-    };
-    LeafPrim {
-        v,
-        normal,
-        prim: PackedPrim::new(prim),
     }
+}
+
+/// A leaf's contents: its triangles in packs of four, then its other primitives.
+fn leaf_items(scene: &Scene, leaf: &[BuildPrim]) -> Vec<LeafItem> {
+    let triangles: Vec<([Vec3; 3], PackedPrim)> = leaf
+        .iter()
+        .filter(|p| p.prim.kind == PrimKind::Triangle)
+        .map(|p| {
+            let vertices = scene.triangles.vertices(p.prim.index as usize);
+            (vertices, PackedPrim::new(p.prim))
+        })
+        .collect();
+    let singles = leaf.iter().filter_map(|p| {
+        let i = p.prim.index as usize;
+        let (v, normal) = match p.prim.kind {
+            PrimKind::Triangle => return None,
+            PrimKind::Quad => (scene.quads[i].vertices, scene.quads[i].normal),
+            PrimKind::Shape => ([Vec3::ZERO; 4], Vec3::ZERO),
+        };
+        Some(LeafItem::Single(LeafPrim {
+            v,
+            normal,
+            prim: PackedPrim::new(p.prim),
+        }))
+    });
+    triangles
+        .chunks(4)
+        .map(|pack| LeafItem::Triangles(Tri4::new(pack)))
+        .chain(singles)
+        .collect()
+}
+
+/// How many items `leaf_items` makes of a leaf, and the leaf's cost.
+fn leaf_shape(leaf: &[BuildPrim]) -> (usize, f32) {
+    let triangles = leaf
+        .iter()
+        .filter(|p| p.prim.kind == PrimKind::Triangle)
+        .count();
+    let singles = leaf.len() - triangles;
+    (
+        triangles.div_ceil(4) + singles,
+        leaf_cost(triangles as u32, singles as u32),
+    )
 }
 
 fn union_bounds(prims: &[BuildPrim]) -> (Bounds3, Bounds3) {
@@ -520,7 +608,7 @@ fn build_node(prims: &mut [BuildPrim], offset: usize, depth: usize) -> BuildNode
     }
     let split = match best_split(prims, &bounds, &centroids) {
         Some((axis, bin, cost)) => {
-            if n <= MAX_LEAF && cost >= leaf_cost(prims) {
+            if n <= MAX_LEAF && cost >= leaf_shape(prims).1 {
                 return leaf;
             }
             let scale = BINS as f32 / (centroids.max[axis] - centroids.min[axis]);
@@ -554,11 +642,6 @@ fn build_node(prims: &mut [BuildPrim], offset: usize, depth: usize) -> BuildNode
     }
 }
 
-/// What testing every primitive of a leaf costs, in triangle intersections.
-fn leaf_cost(prims: &[BuildPrim]) -> f32 {
-    prims.iter().map(|p| intersection_cost(p.prim.kind)).sum()
-}
-
 #[inline]
 fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
     (((c - lo) * scale) as usize).min(BINS - 1)
@@ -582,12 +665,12 @@ fn best_split(
         let lo = centroids.min[axis];
         let scale = BINS as f32 / extent[axis];
         let mut counts = [0u32; BINS];
-        let mut costs = [0f32; BINS];
+        let mut triangles = [0u32; BINS];
         let mut boxes = [Bounds3::EMPTY; BINS];
         for p in prims {
             let b = bin_of(p.centroid[axis], lo, scale);
             counts[b] += 1;
-            costs[b] += intersection_cost(p.prim.kind);
+            triangles[b] += (p.prim.kind == PrimKind::Triangle) as u32;
             boxes[b] = boxes[b].union(p.bounds);
         }
         // Sweep from the right, then from the left.
@@ -597,20 +680,22 @@ fn best_split(
             acc = acc.union(boxes[b]);
             right_area[b] = acc.area();
         }
-        let (mut left_box, mut left_count, mut left_cost) = (Bounds3::EMPTY, 0u32, 0f32);
+        let (mut left_box, mut left_count, mut left_triangles) = (Bounds3::EMPTY, 0u32, 0u32);
         let total = prims.len() as u32;
-        let total_cost: f32 = costs.iter().sum();
+        let total_triangles: u32 = triangles.iter().sum();
         for b in 0..BINS - 1 {
             left_box = left_box.union(boxes[b]);
             left_count += counts[b];
-            left_cost += costs[b];
+            left_triangles += triangles[b];
             let right_count = total - left_count;
             if left_count == 0 || right_count == 0 {
                 continue;
             }
+            let right_triangles = total_triangles - left_triangles;
+            let left_cost = leaf_cost(left_triangles, left_count - left_triangles);
+            let right_cost = leaf_cost(right_triangles, right_count - right_triangles);
             let cost = TRAVERSAL_COST
-                + (left_box.area() * left_cost + right_area[b + 1] * (total_cost - left_cost))
-                    / parent_area;
+                + (left_box.area() * left_cost + right_area[b + 1] * right_cost) / parent_area;
             if best.is_none_or(|(_, _, c)| cost < c) {
                 best = Some((axis, b, cost));
             }
@@ -631,18 +716,31 @@ fn partition(prims: &mut [BuildPrim], left: impl Fn(&BuildPrim) -> bool) -> usiz
     i
 }
 
-/// Writes `node` at `slot`, allocating its children as an adjacent pair; returns the depth
-/// of its deepest leaf below it (0 for a leaf).
-fn flatten(node: &BuildNode, slot: usize, nodes: &mut Vec<Node>) -> usize {
+/// Writes `node` at `slot`, allocating its children as an adjacent pair, and appends each
+/// leaf's range of `prims` to `leaves` in the order their items will be stored (`item_count`
+/// items so far); returns the
+/// depth of its deepest leaf below it (0 for a leaf).
+fn flatten(
+    node: &BuildNode,
+    slot: usize,
+    prims: &[BuildPrim],
+    nodes: &mut Vec<Node>,
+    leaves: &mut Vec<std::ops::Range<usize>>,
+    item_count: &mut usize,
+) -> usize {
     let b = node.bounds();
     match node {
         BuildNode::Leaf { first, count, .. } => {
+            let range = *first..first + count;
+            let items = leaf_shape(&prims[range.clone()]).0;
             nodes[slot] = Node {
                 min: b.min,
-                first: *first as u32,
+                first: *item_count as u32,
                 max: b.max,
-                count: *count as u32,
+                count: items as u32,
             };
+            leaves.push(range);
+            *item_count += items;
             0
         }
         BuildNode::Interior { children, .. } => {
@@ -661,8 +759,8 @@ fn flatten(node: &BuildNode, slot: usize, nodes: &mut Vec<Node>) -> usize {
                 max: b.max,
                 count: 0,
             };
-            let left = flatten(&children[0], first, nodes);
-            let right = flatten(&children[1], first + 1, nodes);
+            let left = flatten(&children[0], first, prims, nodes, leaves, item_count);
+            let right = flatten(&children[1], first + 1, prims, nodes, leaves, item_count);
             1 + left.max(right)
         }
     }

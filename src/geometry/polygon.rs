@@ -36,6 +36,18 @@ impl RayShear {
             sz: 1.0 / d[kz],
         }
     }
+
+    /// The permuted axes `[kx, ky, kz]`: z the direction's dominant axis.
+    #[inline]
+    pub fn axes(&self) -> [usize; 3] {
+        [self.kx, self.ky, self.kz]
+    }
+
+    /// The shear factors `(sx, sy, sz)`.
+    #[inline]
+    pub fn factors(&self) -> (f32, f32, f32) {
+        (self.sx, self.sy, self.sz)
+    }
 }
 
 /// Ray–triangle test. Returns `(t, b1, b2)` with the hit at

@@ -1,0 +1,277 @@
+//! Four triangles tested against one ray at once: the BVH's leaves keep their triangles in
+//! packs of four, coordinates side by side (one SIMD lane a triangle), and run the same
+//! watertight test as `intersect_triangle_sheared` in all four lanes. Every lane performs that
+//! function's operations in its order, so a lane's hit, t and barycentrics are bit for bit the
+//! scalar test's; the rare lane with an edge function exactly zero (where the scalar test
+//! recomputes in f64) is handed to the scalar test itself.
+
+use glam::Vec4;
+
+use super::PackedPrim;
+use crate::geometry::{intersect_triangle_sheared, Ray, RayShear, Vec3};
+
+/// Four triangles: `v[k][a]` holds coordinate `a` (x, y, z) of vertex `k` of each. A pack of
+/// fewer than four repeats its last triangle, which can only give the same hit again.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Tri4 {
+    v: [[Vec4; 3]; 3],
+    prims: [PackedPrim; 4],
+}
+
+/// The ray in the form the pack test wants, made once per ray: its origin and shear in every
+/// lane, axes already permuted so that z is the direction's dominant axis.
+pub(super) struct Tri4Ray {
+    org: [Vec4; 3],
+    sx: Vec4,
+    sy: Vec4,
+    sz: Vec4,
+    t_min: Vec4,
+    axes: [usize; 3],
+}
+
+impl Tri4Ray {
+    pub fn new(ray: &Ray, shear: &RayShear) -> Tri4Ray {
+        let axes = shear.axes();
+        let (sx, sy, sz) = shear.factors();
+        let o = ray.origin.to_array();
+        Tri4Ray {
+            org: axes.map(|a| Vec4::splat(o[a])),
+            sx: Vec4::splat(sx),
+            sy: Vec4::splat(sy),
+            sz: Vec4::splat(sz),
+            t_min: Vec4::splat(ray.t_min),
+            axes,
+        }
+    }
+}
+
+/// The lanes a pack test found hit, with each lane's t and barycentrics.
+pub(super) struct Tri4Hits {
+    /// Bit `i` set when lane `i` is hit.
+    pub mask: u32,
+    pub t: [f32; 4],
+    pub u: [f32; 4],
+    pub v: [f32; 4],
+}
+
+impl Tri4 {
+    /// Packs up to four triangles (at least one).
+    pub fn new(tris: &[([Vec3; 3], PackedPrim)]) -> Tri4 {
+        debug_assert!((1..=4).contains(&tris.len()));
+        let lane = |i: usize| &tris[i.min(tris.len() - 1)];
+        let v = std::array::from_fn(|k| {
+            std::array::from_fn(|a| Vec4::from_array(std::array::from_fn(|i| lane(i).0[k][a])))
+        });
+        Tri4 {
+            v,
+            prims: std::array::from_fn(|i| lane(i).1),
+        }
+    }
+
+    /// The distinct triangles of the pack.
+    pub fn triangles(&self) -> impl Iterator<Item = ([Vec3; 3], PackedPrim)> + '_ {
+        (0..4)
+            .filter(|&i| i == 0 || self.prims[i] != self.prims[i - 1])
+            .map(|i| {
+                let vertex =
+                    |k: usize| Vec3::new(self.v[k][0][i], self.v[k][1][i], self.v[k][2][i]);
+                ([vertex(0), vertex(1), vertex(2)], self.prims[i])
+            })
+    }
+
+    #[inline(always)]
+    pub fn prim(&self, lane: usize) -> PackedPrim {
+        self.prims[lane]
+    }
+
+    /// The lanes hit in `(ray.t_min, limit)`, as `intersect_triangle_sheared` decides each.
+    #[inline(always)]
+    pub fn intersect(&self, r: &Tri4Ray, ray: &Ray, shear: &RayShear, limit: f32) -> Tri4Hits {
+        let [kx, ky, kz] = r.axes;
+        // Vertex k relative to the origin, on the permuted axes.
+        let rel = |k: usize| {
+            let v = &self.v[k];
+            (v[kx] - r.org[0], v[ky] - r.org[1], v[kz] - r.org[2])
+        };
+        let (a_x, a_y, a_z) = rel(0);
+        let (b_x, b_y, b_z) = rel(1);
+        let (c_x, c_y, c_z) = rel(2);
+        let ax = a_x - r.sx * a_z;
+        let ay = a_y - r.sy * a_z;
+        let bx = b_x - r.sx * b_z;
+        let by = b_y - r.sy * b_z;
+        let cx = c_x - r.sx * c_z;
+        let cy = c_y - r.sy * c_z;
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = Vec4::ZERO;
+        let on_edge = u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero);
+        let outside = (u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero))
+            & (u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero));
+        let det = u + v + w;
+        let t_scaled = u * (r.sz * a_z) + v * (r.sz * b_z) + w * (r.sz * c_z);
+        let inv = Vec4::ONE / det;
+        let t = t_scaled * inv;
+        let hit = !outside
+            & det.cmpne(zero)
+            & det.abs().cmplt(Vec4::INFINITY)
+            & t.cmpgt(r.t_min)
+            & t.cmplt(Vec4::splat(limit));
+        let mut hits = Tri4Hits {
+            mask: (hit & !on_edge).bitmask(),
+            t: t.to_array(),
+            u: (v * inv).to_array(),
+            v: (w * inv).to_array(),
+        };
+        let on_edge = on_edge.bitmask();
+        if on_edge != 0 {
+            self.settle_on_edge(on_edge, ray, shear, limit, &mut hits);
+        }
+        hits
+    }
+
+    /// Lanes with an edge function exactly zero, decided by the scalar test (which redoes
+    /// them in f64).
+    #[cold]
+    fn settle_on_edge(
+        &self,
+        lanes: u32,
+        ray: &Ray,
+        shear: &RayShear,
+        limit: f32,
+        hits: &mut Tri4Hits,
+    ) {
+        for i in (0..4).filter(|i| lanes >> i & 1 != 0) {
+            let vertex = |k: usize| Vec3::new(self.v[k][0][i], self.v[k][1][i], self.v[k][2][i]);
+            let hit =
+                intersect_triangle_sheared(ray, shear, limit, vertex(0), vertex(1), vertex(2));
+            if let Some((t, u, v)) = hit {
+                hits.mask |= 1 << i;
+                hits.t[i] = t;
+                hits.u[i] = u;
+                hits.v[i] = v;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+    use crate::scene::{PrimKind, PrimRef};
+
+    fn prim(index: u32) -> PackedPrim {
+        PackedPrim::new(PrimRef {
+            kind: PrimKind::Triangle,
+            index,
+        })
+    }
+
+    /// Every lane's answer, bit for bit, is `intersect_triangle_sheared`'s: random triangles
+    /// (some sharing vertices, some degenerate), rays aimed at random points, at the
+    /// triangles' vertices and at their edges' midpoints (where edge functions are zero and
+    /// the scalar test goes to f64), and limits that cut some hits off.
+    #[test]
+    fn every_lane_answers_as_the_scalar_test() {
+        let mut rng = Rng::new(7, 0, 0);
+        let point = |rng: &mut Rng| {
+            Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE
+        };
+        let (mut checked, mut hits, mut on_edges) = (0, 0, 0);
+        for case in 0..4000u32 {
+            let count = 1 + case as usize % 4;
+            let mut tris: Vec<([Vec3; 3], PackedPrim)> = (0..count)
+                .map(|i| {
+                    (
+                        [point(&mut rng), point(&mut rng), point(&mut rng)],
+                        prim(i as u32),
+                    )
+                })
+                .collect();
+            if case % 5 == 0 && count > 1 {
+                // Two triangles sharing an edge, as in a mesh.
+                tris[1].0[0] = tris[0].0[1];
+                tris[1].0[1] = tris[0].0[0];
+            }
+            if case % 7 == 0 {
+                // A degenerate triangle: all three vertices on a line.
+                let [a, b, _] = tris[0].0;
+                tris[0].0[2] = a + (b - a) * 0.5;
+            }
+            let pack = Tri4::new(&tris);
+            let origin = point(&mut rng) * 3.0;
+            let [a, b, c] = tris[rng.next_u64() as usize % count].0;
+            let target = match case % 4 {
+                0 => a,
+                1 => (a + b) * 0.5,
+                2 => point(&mut rng),
+                _ => (a + b + c) / 3.0,
+            };
+            let ray = Ray::new(origin, target - origin);
+            let shear = RayShear::new(&ray);
+            let pack_ray = Tri4Ray::new(&ray, &shear);
+            for limit in [f32::INFINITY, 1.0, 0.999] {
+                let got = pack.intersect(&pack_ray, &ray, &shear, limit);
+                for (i, (v, p)) in tris.iter().enumerate() {
+                    let want = intersect_triangle_sheared(&ray, &shear, limit, v[0], v[1], v[2]);
+                    let lane = match got.mask >> i & 1 {
+                        1 => Some((got.t[i], got.u[i], got.v[i])),
+                        _ => None,
+                    };
+                    let bits = |h: Option<(f32, f32, f32)>| {
+                        h.map(|(t, u, v)| (t.to_bits(), u.to_bits(), v.to_bits()))
+                    };
+                    assert_eq!(
+                        bits(lane),
+                        bits(want),
+                        "case {case}, lane {i}, limit {limit}"
+                    );
+                    assert_eq!(pack.prim(i), *p);
+                    checked += 1;
+                    hits += want.is_some() as u32;
+                }
+                // The padding lanes repeat the last triangle.
+                for i in count..4 {
+                    assert_eq!(got.mask >> i & 1, got.mask >> (count - 1) & 1);
+                    assert_eq!(pack.prim(i), tris[count - 1].1);
+                }
+            }
+            let edge = |p: Vec3, q: Vec3, r: Vec3| {
+                let rel = |x: Vec3| x - origin;
+                let (p, q, r) = (rel(p), rel(q), rel(r));
+                p.cross(q).dot(ray.direction) == 0.0
+                    || q.cross(r).dot(ray.direction) == 0.0
+                    || r.cross(p).dot(ray.direction) == 0.0
+            };
+            on_edges += tris.iter().any(|(v, _)| edge(v[0], v[1], v[2])) as u32;
+        }
+        // The cases reached what they are for: hits, misses, and rays along edges.
+        assert!(
+            hits > 2000 && checked - hits > 2000,
+            "{hits} hits of {checked}"
+        );
+        assert!(
+            on_edges > 100,
+            "{on_edges} rays through a vertex or along an edge"
+        );
+    }
+
+    /// `triangles()` gives back what was packed, without the padding.
+    #[test]
+    fn a_pack_gives_back_its_triangles() {
+        let tris: Vec<([Vec3; 3], PackedPrim)> = (0..3)
+            .map(|i| {
+                let o = Vec3::splat(i as f32);
+                ([o, o + Vec3::X, o + Vec3::Y], prim(i))
+            })
+            .collect();
+        let pack = Tri4::new(&tris);
+        let back: Vec<_> = pack.triangles().collect();
+        assert_eq!(back.len(), 3);
+        for ((v, p), (w, q)) in back.iter().zip(&tris) {
+            assert_eq!((v, p), (w, q));
+        }
+    }
+}
