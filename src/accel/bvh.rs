@@ -1,10 +1,13 @@
-//! trilux's own BVH: a binary tree built by binned SAH (in parallel near the root), flattened
-//! into one array with the two children of a node side by side, and traversed iteratively,
-//! nearer child first. Leaves hold copies of their primitives in leaf order, so a leaf's
-//! primitives are read from consecutive memory: triangles in packs of four tested at once
-//! (`tri4`), quads and analytic shapes one by one.
+//! trilux's own BVH: a binary tree built by binned SAH (in parallel near the root), then
+//! collapsed into a 4-wide tree whose nodes hold their four children's boxes side by side, so
+//! that one ray is tested against all four at once (glam's `Vec4`). Traversal is iterative and
+//! ordered: the children a ray enters are taken nearest first. Leaves hold copies of their
+//! primitives in leaf order, so a leaf's primitives are read from consecutive memory:
+//! triangles in packs of four tested at once (`tri4`), quads and analytic shapes one by one.
 
 use rayon::prelude::*;
+
+use glam::Vec4;
 
 use super::tri4::{Tri4, Tri4Ray};
 use super::{Accel, AccelError, PackedPrim};
@@ -17,8 +20,7 @@ use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
 const BINS: usize = 16;
 /// Largest leaf the SAH may choose.
 const MAX_LEAF: usize = 8;
-/// Deeper than this the build makes a leaf whatever its size, so traversal's fixed stack
-/// (one entry per level) cannot overflow.
+/// Deeper than this the build makes a leaf whatever its size.
 const MAX_DEPTH: usize = 60;
 /// Subtrees with more primitives than this are built on two threads.
 const PARALLEL_THRESHOLD: usize = 8192;
@@ -41,15 +43,103 @@ fn leaf_cost(triangles: u32, singles: u32) -> f32 {
     triangles.div_ceil(4) as f32 * TRI4_COST + singles as f32 * SINGLE_PRIM_COST
 }
 
-/// One flattened node: its box, and either the index of its first child (the second follows
-/// it) when `count == 0`, or the range `first .. first + count` of its primitives.
-#[repr(C, align(32))]
+/// Children of a node of the traversed tree.
+const WIDTH: usize = 4;
+
+/// One node of the 4-wide tree: its children's boxes side by side (rows: x, y, z of the
+/// minimum corners, then of the maximum ones; one lane a child), and per child either the
+/// index of its node (`count == 0`) or the range `first .. first + count` of `items`. An
+/// unused slot has the empty box (minimum +∞, maximum −∞), which no ray enters. 128 bytes,
+/// two cache lines.
+#[repr(C, align(64))]
 #[derive(Clone, Copy, Debug)]
-struct Node {
-    min: Vec3,
+struct Node4 {
+    bounds: [Vec4; 6],
+    first: [u32; WIDTH],
+    count: [u32; WIDTH],
+}
+
+impl Node4 {
+    const EMPTY: Node4 = Node4 {
+        bounds: [
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+            Vec4::NEG_INFINITY,
+        ],
+        first: [0; WIDTH],
+        count: [0; WIDTH],
+    };
+
+    fn child_bounds(&self, slot: usize) -> Bounds3 {
+        let b = |row: usize| self.bounds[row][slot];
+        Bounds3 {
+            min: Vec3::new(b(0), b(1), b(2)),
+            max: Vec3::new(b(3), b(4), b(5)),
+        }
+    }
+
+    fn set_child(&mut self, slot: usize, bounds: Bounds3, first: u32, count: u32) {
+        for axis in 0..3 {
+            self.bounds[axis][slot] = bounds.min[axis];
+            self.bounds[axis + 3][slot] = bounds.max[axis];
+        }
+        self.first[slot] = first;
+        self.count[slot] = count;
+    }
+}
+
+/// A child traversal will enter: a node (`count == 0`, `first` its index) or a leaf's items,
+/// with the distance at which the ray enters its box.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
     first: u32,
-    max: Vec3,
     count: u32,
+    t: f32,
+}
+
+/// The root, entered at no particular distance.
+const ROOT: Entry = Entry {
+    first: 0,
+    count: 0,
+    t: f32::NEG_INFINITY,
+};
+
+/// Entries of traversal's stack kept in an array; deeper ones spill into a vector (a node
+/// pushes up to three, and the tree may be `MAX_DEPTH` deep). The array is filled afresh for
+/// every ray, so it is kept short: rays on small scenes cost tens of nanoseconds.
+const STACK: usize = 16;
+
+/// A ray set up for the 4-wide slab test: origin and inverse direction in every lane, and per
+/// axis which row of a node's bounds is the near plane (the minimum when the direction is
+/// positive).
+struct RayBoxes {
+    org: [Vec4; 3],
+    inv: [Vec4; 3],
+    near: [usize; 3],
+}
+
+impl RayBoxes {
+    #[inline(always)]
+    fn new(ray: &Ray) -> RayBoxes {
+        // A zero direction component becomes a tiny one of the same sign: the slab test
+        // then never computes 0·∞ = NaN, and can use plain comparisons.
+        let safe = |d: f32| {
+            if d.abs() < 1e-30 {
+                1e-30f32.copysign(d)
+            } else {
+                d
+            }
+        };
+        let inv = [0, 1, 2].map(|a| 1.0 / safe(ray.direction[a]));
+        RayBoxes {
+            org: [0, 1, 2].map(|a| Vec4::splat(ray.origin[a])),
+            inv: inv.map(Vec4::splat),
+            near: [0, 1, 2].map(|a| if inv[a] < 0.0 { a + 3 } else { a }),
+        }
+    }
 }
 
 /// A primitive tested on its own, copied into leaf order: a quad's four vertices and its
@@ -70,16 +160,13 @@ enum LeafItem {
 }
 
 pub struct Bvh {
-    nodes: Vec<Node>,
+    nodes: Vec<Node4>,
     /// The leaves' contents; a leaf node's `first .. first + count` indexes this.
     items: Vec<LeafItem>,
     /// How many primitives the tree holds (those with finite bounds).
     prim_count: usize,
     shapes: Vec<AnalyticShape>,
     one_sided_quads: bool,
-    /// The deepest leaf's depth (the root is at 0): how many far children traversal may
-    /// hold at once.
-    depth: usize,
 }
 
 /// A primitive during the build.
@@ -153,23 +240,19 @@ impl Bvh {
         build.retain(|p| p.bounds.min.is_finite() && p.bounds.max.is_finite());
 
         let root = build_node(&mut build, 0, 0);
-        let mut nodes = Vec::with_capacity(2 * build.len() / 2 + 1);
-        nodes.push(Node {
-            min: Vec3::ZERO,
-            first: 0,
-            max: Vec3::ZERO,
-            count: 0,
-        });
+        let mut nodes = Vec::with_capacity(build.len() / 4 + 1);
         let mut leaves = Vec::new();
-        let depth = flatten(&root, 0, &build, &mut nodes, &mut leaves, &mut 0);
         if build.is_empty() {
-            // An empty tree: a root leaf with no primitives and an empty box.
-            nodes[0] = Node {
-                min: Vec3::splat(f32::INFINITY),
-                first: 0,
-                max: Vec3::splat(f32::NEG_INFINITY),
-                count: 0,
+            // An empty tree: a root whose slots are all unused.
+            nodes.push(Node4::EMPTY);
+        } else {
+            let mut collapse = Collapse {
+                prims: &build,
+                nodes: &mut nodes,
+                leaves: &mut leaves,
+                item_count: 0,
             };
+            collapse.node(&root);
         }
 
         let items = leaves
@@ -182,59 +265,49 @@ impl Bvh {
             prim_count: build.len(),
             shapes: scene.shapes.iter().map(|s| s.shape).collect(),
             one_sided_quads: !scene.two_sided_quads,
-            depth,
         })
     }
 
     /// Checks the tree's invariants: every child box inside its parent's, every primitive's
-    /// box inside its leaf's, every primitive in exactly one leaf. Returns what is wrong.
+    /// box inside its leaf's, every primitive in exactly one leaf, unused slots empty. Returns
+    /// what is wrong.
     pub fn validate(&self, scene: &Scene) -> Result<(), String> {
         let mut seen = std::collections::HashMap::<u32, u32>::new();
-        let mut stack = vec![(0usize, 0usize)];
-        while let Some((i, depth)) = stack.pop() {
-            let n = &self.nodes[i];
+        let mut stack = vec![(0usize, None::<Bounds3>, 0usize)];
+        while let Some((i, parent, depth)) = stack.pop() {
+            let n = self.nodes.get(i).ok_or(format!("node {i} missing"))?;
             if depth > MAX_DEPTH + 1 {
                 return Err(format!("node {i} is deeper than {MAX_DEPTH}"));
             }
-            if depth > self.depth {
-                return Err(format!(
-                    "node {i} is at depth {depth}, deeper than the {} levels traversal's stack holds",
-                    self.depth
-                ));
-            }
-            let b = Bounds3 {
-                min: n.min,
-                max: n.max,
-            };
-            if n.count > 0 || (i == 0 && self.items.is_empty()) {
+            for slot in 0..WIDTH {
+                let b = n.child_bounds(slot);
+                if b.is_empty() {
+                    if n.count[slot] != 0 || n.first[slot] != 0 {
+                        return Err(format!("node {i}: unused slot {slot} refers to something"));
+                    }
+                    continue;
+                }
+                if parent.is_some_and(|p| !contains(&p, &b)) {
+                    return Err(format!("node {i}: child {slot} sticks out of its parent"));
+                }
+                if n.count[slot] == 0 {
+                    stack.push((n.first[slot] as usize, Some(b), depth + 1));
+                    continue;
+                }
                 let items = self
                     .items
-                    .get(n.first as usize..(n.first + n.count) as usize)
-                    .ok_or(format!("leaf {i} runs past the leaves' contents"))?;
+                    .get(n.first[slot] as usize..(n.first[slot] + n.count[slot]) as usize)
+                    .ok_or(format!(
+                        "node {i}: leaf {slot} runs past the leaves' contents"
+                    ))?;
                 for prim in items.iter().flat_map(LeafItem::prims) {
-                    let pb = prim_bounds(scene, prim.unpack());
-                    if !contains(&b, &pb) {
+                    if !contains(&b, &prim_bounds(scene, prim.unpack())) {
                         return Err(format!(
-                            "primitive {:?} sticks out of leaf {i}",
+                            "primitive {:?} sticks out of its leaf in node {i}",
                             prim.unpack()
                         ));
                     }
                     *seen.entry(prim.raw()).or_default() += 1;
-                }
-            } else {
-                for c in [n.first as usize, n.first as usize + 1] {
-                    let cn = self
-                        .nodes
-                        .get(c)
-                        .ok_or(format!("node {i}: child {c} missing"))?;
-                    let cb = Bounds3 {
-                        min: cn.min,
-                        max: cn.max,
-                    };
-                    if !contains(&b, &cb) {
-                        return Err(format!("node {c} sticks out of its parent {i}"));
-                    }
-                    stack.push((c, depth + 1));
                 }
             }
         }
@@ -251,10 +324,10 @@ impl Bvh {
         Ok(())
     }
 
-    /// The items of a leaf node.
+    /// The items of a leaf.
     #[inline(always)]
-    fn leaf(&self, node: &Node) -> &[LeafItem] {
-        &self.items[node.first as usize..(node.first + node.count) as usize]
+    fn leaf(&self, leaf: &Entry) -> &[LeafItem] {
+        &self.items[leaf.first as usize..(leaf.first + leaf.count) as usize]
     }
 
     /// Tests the primitives of one leaf; keeps in `best` the closest hit (primitive, u, v)
@@ -262,13 +335,13 @@ impl Bvh {
     #[inline(always)]
     fn leaf_closest(
         &self,
-        node: &Node,
+        leaf: &Entry,
         rays: (&Ray, &RayShear, &Tri4Ray),
         t_max: &mut f32,
         best: &mut Option<(PackedPrim, f32, f32)>,
     ) {
         let (ray, shear, pack_ray) = rays;
-        for item in self.leaf(node) {
+        for item in self.leaf(leaf) {
             // A hit at exactly the current t may still win by the tie rule (`keep_closest`).
             let limit = match best {
                 Some(_) => t_max.next_up(),
@@ -313,82 +386,70 @@ impl Bvh {
         }
     }
 
-    /// Walks the tree nearer child first. `visit` tests a leaf and returns true to stop.
+    /// Walks the tree, the children a ray enters nearest first. `visit` tests a leaf and
+    /// returns true to stop.
     #[inline(always)]
-    fn traverse(&self, ray: &Ray, t_max: &mut f32, visit: impl FnMut(&Node, &mut f32) -> bool) {
-        // The stack of far children is an array filled afresh for each ray: a small tree
-        // takes a short one (filling all 64 entries was 6% of the Cornell box's rays).
-        if self.depth < SHALLOW_STACK {
-            self.traverse_with::<SHALLOW_STACK>(ray, t_max, visit)
-        } else {
-            self.traverse_with::<{ MAX_DEPTH + 4 }>(ray, t_max, visit)
-        }
-    }
-
-    /// `traverse` with a stack of `STACK` entries, at least the tree's depth.
-    #[inline(always)]
-    fn traverse_with<const STACK: usize>(
+    fn traverse(
         &self,
         ray: &Ray,
         t_max: &mut f32,
-        mut visit: impl FnMut(&Node, &mut f32) -> bool,
+        mut visit: impl FnMut(&Entry, &mut f32) -> bool,
     ) {
         if self.items.is_empty() {
             return;
         }
-        // A zero direction component becomes a tiny one of the same sign: the slab test
-        // then never computes 0·∞ = NaN, and can use plain comparisons.
-        let safe = |d: f32| {
-            if d.abs() < 1e-30 {
-                1e-30f32.copysign(d)
-            } else {
-                d
-            }
-        };
-        let inv = Vec3 {
-            x: 1.0 / safe(ray.direction.x),
-            y: 1.0 / safe(ray.direction.y),
-            z: 1.0 / safe(ray.direction.z),
-        };
-        let org = ray.origin;
+        let boxes = RayBoxes::new(ray);
         // Boxes are kept up to `BOX_REACH` beyond the current hit: see there.
         let reach = |t: f32| t * BOX_REACH;
-        let root = &self.nodes[0];
-        if slab(root, org, inv, ray.t_min, reach(*t_max)).is_none() {
-            return;
-        }
-        // Far children wait with their entry distance: a closer hit found meanwhile lets
-        // them be skipped without testing their box again.
-        let mut stack = [(0u32, 0f32); STACK];
+        // Children not taken at once wait with their entry distance: a closer hit found
+        // meanwhile lets them be skipped without testing their box again.
+        let mut stack = [ROOT; STACK];
+        let mut spilled: Vec<Entry> = Vec::new();
         let mut top = 0usize;
-        let mut current = 0u32;
+        let mut current = ROOT;
         loop {
-            let node = &self.nodes[current as usize];
-            if node.count > 0 {
-                if visit(node, t_max) {
+            if current.count > 0 {
+                if visit(&current, t_max) {
                     return;
                 }
             } else {
-                let (a, b) = (node.first, node.first + 1);
-                let da = slab(&self.nodes[a as usize], org, inv, ray.t_min, reach(*t_max));
-                let db = slab(&self.nodes[b as usize], org, inv, ray.t_min, reach(*t_max));
-                match (da, db) {
-                    (Some(x), Some(y)) => {
-                        let (near, far, far_t) = if x <= y { (a, b, y) } else { (b, a, x) };
-                        stack[top] = (far, far_t);
+                let node = &self.nodes[current.first as usize];
+                let (mut mask, near) = slab4(node, &boxes, ray.t_min, reach(*t_max));
+                if mask != 0 {
+                    let near = near.to_array();
+                    let entry = |slot: usize| Entry {
+                        first: node.first[slot],
+                        count: node.count[slot],
+                        t: near[slot],
+                    };
+                    if mask & (mask - 1) == 0 {
+                        current = entry(mask.trailing_zeros() as usize);
+                        continue;
+                    }
+                    // Two to four children: sorted nearest first by insertion, the nearest
+                    // taken now, the others pushed farthest first.
+                    let mut entered = [ROOT; WIDTH];
+                    let mut k = 0;
+                    while mask != 0 {
+                        let e = entry(mask.trailing_zeros() as usize);
+                        mask &= mask - 1;
+                        let mut j = k;
+                        while j > 0 && entered[j - 1].t > e.t {
+                            entered[j] = entered[j - 1];
+                            j -= 1;
+                        }
+                        entered[j] = e;
+                        k += 1;
+                    }
+                    for e in entered[1..k].iter().rev() {
+                        match stack.get_mut(top) {
+                            Some(slot) => *slot = *e,
+                            None => spilled.push(*e),
+                        }
                         top += 1;
-                        current = near;
-                        continue;
                     }
-                    (Some(_), None) => {
-                        current = a;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        current = b;
-                        continue;
-                    }
-                    (None, None) => {}
+                    current = entered[0];
+                    continue;
                 }
             }
             loop {
@@ -396,9 +457,12 @@ impl Bvh {
                     return;
                 }
                 top -= 1;
-                let (candidate, entry) = stack[top];
-                if entry <= reach(*t_max) {
-                    current = candidate;
+                let e = match stack.get(top) {
+                    Some(e) => *e,
+                    None => spilled.pop().expect("spilled entries are counted in top"),
+                };
+                if e.t <= reach(*t_max) {
+                    current = e;
                     break;
                 }
             }
@@ -426,9 +490,6 @@ fn keep_closest(
     }
 }
 
-/// Trees shallower than this are traversed with a stack of this many entries.
-const SHALLOW_STACK: usize = 16;
-
 /// How far beyond the current hit a box is still opened, as a factor. The slab test's entry
 /// distance is rounded otherwise than a primitive's exact t: a quad met exactly at its edge,
 /// a few ulps nearer than the hit found first, lay in a box whose computed entry was a few
@@ -437,40 +498,24 @@ const SHALLOW_STACK: usize = 16;
 /// current t still competes by the tie rule. Embree's filter keeps the same room.
 const BOX_REACH: f32 = 1.0 + 1e-5;
 
-/// Ray–box slab test. The far distance is enlarged by 2γ₃ (Ize, "Robust BVH ray traversal")
-/// so that rounding never culls a box the ray touches.
+/// Ray–box slab test of a node's four children at once: a bit per child the ray enters within
+/// `(t_min, t_max)`, and the distances at which it enters. The far distance is enlarged by 2γ₃
+/// (Ize, "Robust BVH ray traversal") so that rounding never culls a box the ray touches.
 #[inline(always)]
-fn slab(n: &Node, org: Vec3, inv: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
+fn slab4(n: &Node4, ray: &RayBoxes, t_min: f32, t_max: f32) -> (u32, Vec4) {
     const ROBUST: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
-    let tx0 = (n.min.x - org.x) * inv.x;
-    let tx1 = (n.max.x - org.x) * inv.x;
-    let ty0 = (n.min.y - org.y) * inv.y;
-    let ty1 = (n.max.y - org.y) * inv.y;
-    let tz0 = (n.min.z - org.z) * inv.z;
-    let tz1 = (n.max.z - org.z) * inv.z;
-    let near = max(max(min(tx0, tx1), min(ty0, ty1)), max(min(tz0, tz1), t_min));
-    let far = min(min(max(tx0, tx1), max(ty0, ty1)), max(tz0, tz1)) * ROBUST;
-    let far = min(far, t_max);
-    (near <= far).then_some(near)
-}
-
-/// Plain comparisons (minss/maxss); the slab test feeds them no NaN.
-#[inline(always)]
-fn min(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
-    }
-}
-
-#[inline(always)]
-fn max(a: f32, b: f32) -> f32 {
-    if a > b {
-        a
-    } else {
-        b
-    }
+    let plane = |axis: usize, row: usize| (n.bounds[row] - ray.org[axis]) * ray.inv[axis];
+    // The far plane's row is the near plane's other one: 3 apart.
+    let far_row = |axis: usize| (ray.near[axis] + 3) % 6;
+    let near = plane(0, ray.near[0])
+        .max(plane(1, ray.near[1]))
+        .max(plane(2, ray.near[2]).max(Vec4::splat(t_min)));
+    let far = plane(0, far_row(0))
+        .min(plane(1, far_row(1)))
+        .min(plane(2, far_row(2)))
+        * ROBUST;
+    let far = far.min(Vec4::splat(t_max));
+    (near.cmple(far).bitmask(), near)
 }
 
 impl Accel for Bvh {
@@ -716,52 +761,58 @@ fn partition(prims: &mut [BuildPrim], left: impl Fn(&BuildPrim) -> bool) -> usiz
     i
 }
 
-/// Writes `node` at `slot`, allocating its children as an adjacent pair, and appends each
-/// leaf's range of `prims` to `leaves` in the order their items will be stored (`item_count`
-/// items so far); returns the
-/// depth of its deepest leaf below it (0 for a leaf).
-fn flatten(
-    node: &BuildNode,
-    slot: usize,
-    prims: &[BuildPrim],
-    nodes: &mut Vec<Node>,
-    leaves: &mut Vec<std::ops::Range<usize>>,
-    item_count: &mut usize,
-) -> usize {
-    let b = node.bounds();
-    match node {
-        BuildNode::Leaf { first, count, .. } => {
-            let range = *first..first + count;
-            let items = leaf_shape(&prims[range.clone()]).0;
-            nodes[slot] = Node {
-                min: b.min,
-                first: *item_count as u32,
-                max: b.max,
-                count: items as u32,
+/// The binary tree collapsed into 4-wide nodes, and the leaves' ranges of the build's
+/// primitives in the order their items are stored.
+struct Collapse<'a> {
+    prims: &'a [BuildPrim],
+    nodes: &'a mut Vec<Node4>,
+    leaves: &'a mut Vec<std::ops::Range<usize>>,
+    /// Items of the leaves listed so far.
+    item_count: usize,
+}
+
+impl Collapse<'_> {
+    /// Appends the 4-wide nodes of the binary subtree under `node`; returns the index of its
+    /// top node. The subtree's top is opened into its two children, then the child of
+    /// largest area is opened in turn until four children are held or only leaves are left:
+    /// the children most likely to be entered are the ones tested together.
+    fn node(&mut self, node: &BuildNode) -> u32 {
+        let mut kids: Vec<&BuildNode> = match node {
+            BuildNode::Interior { children, .. } => vec![&children[0], &children[1]],
+            BuildNode::Leaf { .. } => vec![node],
+        };
+        while kids.len() < WIDTH {
+            let widest = kids
+                .iter()
+                .enumerate()
+                .filter(|(_, k)| matches!(k, BuildNode::Interior { .. }))
+                .max_by(|(_, a), (_, b)| a.bounds().area().total_cmp(&b.bounds().area()))
+                .map(|(i, _)| i);
+            let Some(i) = widest else { break };
+            let BuildNode::Interior { children, .. } = kids[i] else {
+                unreachable!("only interior nodes are opened")
             };
-            leaves.push(range);
-            *item_count += items;
-            0
+            kids[i] = &children[0];
+            kids.push(&children[1]);
         }
-        BuildNode::Interior { children, .. } => {
-            let first = nodes.len();
-            let empty = Node {
-                min: Vec3::ZERO,
-                first: 0,
-                max: Vec3::ZERO,
-                count: 0,
+        let index = self.nodes.len();
+        self.nodes.push(Node4::EMPTY);
+        for (slot, kid) in kids.into_iter().enumerate() {
+            let (first, count) = match kid {
+                BuildNode::Leaf { first, count, .. } => self.leaf(*first..first + count),
+                BuildNode::Interior { .. } => (self.node(kid), 0),
             };
-            nodes.push(empty);
-            nodes.push(empty);
-            nodes[slot] = Node {
-                min: b.min,
-                first: first as u32,
-                max: b.max,
-                count: 0,
-            };
-            let left = flatten(&children[0], first, prims, nodes, leaves, item_count);
-            let right = flatten(&children[1], first + 1, prims, nodes, leaves, item_count);
-            1 + left.max(right)
+            self.nodes[index].set_child(slot, kid.bounds(), first, count);
         }
+        index as u32
+    }
+
+    /// Lists a leaf; returns where its items will start and how many there are.
+    fn leaf(&mut self, range: std::ops::Range<usize>) -> (u32, u32) {
+        let first = self.item_count;
+        let count = leaf_shape(&self.prims[range.clone()]).0;
+        self.leaves.push(range);
+        self.item_count += count;
+        (first as u32, count as u32)
     }
 }
