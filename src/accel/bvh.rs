@@ -1,7 +1,10 @@
 //! trilux's own BVH: a binary tree built by binned SAH (in parallel near the root), then
-//! collapsed into a 4-wide tree whose nodes hold their four children's boxes side by side, so
-//! that one ray is tested against all four at once (glam's `Vec4`). Traversal is iterative and
-//! ordered: the children a ray enters are taken nearest first. Leaves hold copies of their
+//! collapsed into an 8-wide tree whose nodes hold their children's boxes side by side, so that
+//! one ray is tested against four at a time (glam's `Vec4`). Traversal is iterative and
+//! ordered: the children a ray enters are taken nearest first. On the 1M-triangle terrain a
+//! ray's time goes mostly to waiting for nodes and leaves from memory; each halving of the
+//! depth paid (BENCHMARKS.md, session 29: 4-wide nodes about +15% over the binary tree, 8-wide
+//! about +25% over 4-wide; no `std::arch` beyond SSE, which would need `unsafe`). Leaves hold copies of their
 //! primitives in leaf order, so a leaf's primitives are read from consecutive memory:
 //! triangles in packs of four tested at once (`tri4`), quads and analytic shapes one by one.
 
@@ -43,38 +46,40 @@ fn leaf_cost(triangles: u32, singles: u32) -> f32 {
     triangles.div_ceil(4) as f32 * TRI4_COST + singles as f32 * SINGLE_PRIM_COST
 }
 
-/// Children of a node of the traversed tree.
-const WIDTH: usize = 4;
+/// Children of a node of the traversed tree (a multiple of 4).
+const WIDTH: usize = 8;
+/// A node's children in groups of four, one `Vec4` lane a child.
+const GROUPS: usize = WIDTH / 4;
 
-/// One node of the 4-wide tree: its children's boxes side by side (rows: x, y, z of the
-/// minimum corners, then of the maximum ones; one lane a child), and per child either the
-/// index of its node (`count == 0`) or the range `first .. first + count` of `items`. An
-/// unused slot has the empty box (minimum +∞, maximum −∞), which no ray enters. 128 bytes,
-/// two cache lines.
+/// One node of the wide tree: its children's boxes side by side (rows: x, y, z of the
+/// minimum corners, then of the maximum ones; one lane a child, four children a group), and
+/// per child either the index of its node (`count == 0`) or the range `first .. first +
+/// count` of `items`. An unused slot has the empty box (minimum +∞, maximum −∞), which no ray
+/// enters. 256 bytes, four cache lines.
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug)]
-struct Node4 {
-    bounds: [Vec4; 6],
+struct Node {
+    bounds: [[Vec4; GROUPS]; 6],
     first: [u32; WIDTH],
     count: [u32; WIDTH],
 }
 
-impl Node4 {
-    const EMPTY: Node4 = Node4 {
+impl Node {
+    const EMPTY: Node = Node {
         bounds: [
-            Vec4::INFINITY,
-            Vec4::INFINITY,
-            Vec4::INFINITY,
-            Vec4::NEG_INFINITY,
-            Vec4::NEG_INFINITY,
-            Vec4::NEG_INFINITY,
+            [Vec4::INFINITY; GROUPS],
+            [Vec4::INFINITY; GROUPS],
+            [Vec4::INFINITY; GROUPS],
+            [Vec4::NEG_INFINITY; GROUPS],
+            [Vec4::NEG_INFINITY; GROUPS],
+            [Vec4::NEG_INFINITY; GROUPS],
         ],
         first: [0; WIDTH],
         count: [0; WIDTH],
     };
 
     fn child_bounds(&self, slot: usize) -> Bounds3 {
-        let b = |row: usize| self.bounds[row][slot];
+        let b = |row: usize| self.bounds[row][slot / 4][slot % 4];
         Bounds3 {
             min: Vec3::new(b(0), b(1), b(2)),
             max: Vec3::new(b(3), b(4), b(5)),
@@ -83,8 +88,8 @@ impl Node4 {
 
     fn set_child(&mut self, slot: usize, bounds: Bounds3, first: u32, count: u32) {
         for axis in 0..3 {
-            self.bounds[axis][slot] = bounds.min[axis];
-            self.bounds[axis + 3][slot] = bounds.max[axis];
+            self.bounds[axis][slot / 4][slot % 4] = bounds.min[axis];
+            self.bounds[axis + 3][slot / 4][slot % 4] = bounds.max[axis];
         }
         self.first[slot] = first;
         self.count[slot] = count;
@@ -108,11 +113,11 @@ const ROOT: Entry = Entry {
 };
 
 /// Entries of traversal's stack kept in an array; deeper ones spill into a vector (a node
-/// pushes up to three, and the tree may be `MAX_DEPTH` deep). The array is filled afresh for
+/// pushes up to `WIDTH` − 1, and the tree may be `MAX_DEPTH` deep). The array is filled afresh for
 /// every ray, so it is kept short: rays on small scenes cost tens of nanoseconds.
 const STACK: usize = 16;
 
-/// A ray set up for the 4-wide slab test: origin and inverse direction in every lane, and per
+/// A ray set up for the wide slab test: origin and inverse direction in every lane, and per
 /// axis which row of a node's bounds is the near plane (the minimum when the direction is
 /// positive).
 struct RayBoxes {
@@ -160,7 +165,7 @@ enum LeafItem {
 }
 
 pub struct Bvh {
-    nodes: Vec<Node4>,
+    nodes: Vec<Node>,
     /// The leaves' contents; a leaf node's `first .. first + count` indexes this.
     items: Vec<LeafItem>,
     /// How many primitives the tree holds (those with finite bounds).
@@ -244,7 +249,7 @@ impl Bvh {
         let mut leaves = Vec::new();
         if build.is_empty() {
             // An empty tree: a root whose slots are all unused.
-            nodes.push(Node4::EMPTY);
+            nodes.push(Node::EMPTY);
         } else {
             let mut collapse = Collapse {
                 prims: &build,
@@ -414,9 +419,8 @@ impl Bvh {
                 }
             } else {
                 let node = &self.nodes[current.first as usize];
-                let (mut mask, near) = slab4(node, &boxes, ray.t_min, reach(*t_max));
+                let (mut mask, near) = slab(node, &boxes, ray.t_min, reach(*t_max));
                 if mask != 0 {
-                    let near = near.to_array();
                     let entry = |slot: usize| Entry {
                         first: node.first[slot],
                         count: node.count[slot],
@@ -426,7 +430,7 @@ impl Bvh {
                         current = entry(mask.trailing_zeros() as usize);
                         continue;
                     }
-                    // Two to four children: sorted nearest first by insertion, the nearest
+                    // Two or more children: sorted nearest first by insertion, the nearest
                     // taken now, the others pushed farthest first.
                     let mut entered = [ROOT; WIDTH];
                     let mut k = 0;
@@ -498,24 +502,31 @@ fn keep_closest(
 /// current t still competes by the tie rule. Embree's filter keeps the same room.
 const BOX_REACH: f32 = 1.0 + 1e-5;
 
-/// Ray–box slab test of a node's four children at once: a bit per child the ray enters within
-/// `(t_min, t_max)`, and the distances at which it enters. The far distance is enlarged by 2γ₃
-/// (Ize, "Robust BVH ray traversal") so that rounding never culls a box the ray touches.
+/// Ray–box slab test of a node's children, four at once: a bit per child the ray enters
+/// within `(t_min, t_max)`, and the distances at which it enters. The far distance is enlarged
+/// by 2γ₃ (Ize, "Robust BVH ray traversal") so that rounding never culls a box the ray touches.
 #[inline(always)]
-fn slab4(n: &Node4, ray: &RayBoxes, t_min: f32, t_max: f32) -> (u32, Vec4) {
+fn slab(n: &Node, ray: &RayBoxes, t_min: f32, t_max: f32) -> (u32, [f32; WIDTH]) {
     const ROBUST: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
-    let plane = |axis: usize, row: usize| (n.bounds[row] - ray.org[axis]) * ray.inv[axis];
     // The far plane's row is the near plane's other one: 3 apart.
     let far_row = |axis: usize| (ray.near[axis] + 3) % 6;
-    let near = plane(0, ray.near[0])
-        .max(plane(1, ray.near[1]))
-        .max(plane(2, ray.near[2]).max(Vec4::splat(t_min)));
-    let far = plane(0, far_row(0))
-        .min(plane(1, far_row(1)))
-        .min(plane(2, far_row(2)))
-        * ROBUST;
-    let far = far.min(Vec4::splat(t_max));
-    (near.cmple(far).bitmask(), near)
+    let (t_min, t_max) = (Vec4::splat(t_min), Vec4::splat(t_max));
+    let mut mask = 0;
+    let mut entry = [0.0; WIDTH];
+    for g in 0..GROUPS {
+        let plane = |axis: usize, row: usize| (n.bounds[row][g] - ray.org[axis]) * ray.inv[axis];
+        let near = plane(0, ray.near[0])
+            .max(plane(1, ray.near[1]))
+            .max(plane(2, ray.near[2]).max(t_min));
+        let far = plane(0, far_row(0))
+            .min(plane(1, far_row(1)))
+            .min(plane(2, far_row(2)))
+            * ROBUST;
+        let far = far.min(t_max);
+        mask |= near.cmple(far).bitmask() << (4 * g);
+        entry[4 * g..4 * g + 4].copy_from_slice(&near.to_array());
+    }
+    (mask, entry)
 }
 
 impl Accel for Bvh {
@@ -761,20 +772,20 @@ fn partition(prims: &mut [BuildPrim], left: impl Fn(&BuildPrim) -> bool) -> usiz
     i
 }
 
-/// The binary tree collapsed into 4-wide nodes, and the leaves' ranges of the build's
+/// The binary tree collapsed into wide nodes, and the leaves' ranges of the build's
 /// primitives in the order their items are stored.
 struct Collapse<'a> {
     prims: &'a [BuildPrim],
-    nodes: &'a mut Vec<Node4>,
+    nodes: &'a mut Vec<Node>,
     leaves: &'a mut Vec<std::ops::Range<usize>>,
     /// Items of the leaves listed so far.
     item_count: usize,
 }
 
 impl Collapse<'_> {
-    /// Appends the 4-wide nodes of the binary subtree under `node`; returns the index of its
+    /// Appends the wide nodes of the binary subtree under `node`; returns the index of its
     /// top node. The subtree's top is opened into its two children, then the child of
-    /// largest area is opened in turn until four children are held or only leaves are left:
+    /// largest area is opened in turn until `WIDTH` children are held or only leaves are left:
     /// the children most likely to be entered are the ones tested together.
     fn node(&mut self, node: &BuildNode) -> u32 {
         let mut kids: Vec<&BuildNode> = match node {
@@ -796,7 +807,7 @@ impl Collapse<'_> {
             kids.push(&children[1]);
         }
         let index = self.nodes.len();
-        self.nodes.push(Node4::EMPTY);
+        self.nodes.push(Node::EMPTY);
         for (slot, kid) in kids.into_iter().enumerate() {
             let (first, count) = match kid {
                 BuildNode::Leaf { first, count, .. } => self.leaf(*first..first + count),
