@@ -1,6 +1,9 @@
 //! Ray sets and the measurements of `render bench-accel`: Mrays/s of closest-hit and
 //! occlusion queries, single and batched, on one thread and on all, for each backend, beside
-//! the shim's plain C loops over Embree as the baseline.
+//! the shim's plain C loops over Embree as the baseline. The backends' repetitions of a cell
+//! (and of the build) alternate, so that a slow spell of the machine falls on both: measured
+//! one backend after the other, the same binary's BVH/Embree ratio on the terrain moved
+//! between 0.48 and 0.73 from run to run (session 29).
 
 use std::time::Instant;
 
@@ -209,13 +212,28 @@ pub fn trace(accel: &dyn Accel, rays: &[Ray], query: Query, mode: Mode, parallel
 
 /// Median of `repeats` timings of `f`, in seconds.
 pub fn median_seconds(repeats: usize, mut f: impl FnMut()) -> f64 {
-    let mut times: Vec<f64> = (0..repeats.max(1))
-        .map(|_| {
-            let start = Instant::now();
-            f();
-            start.elapsed().as_secs_f64()
-        })
-        .collect();
+    median((0..repeats.max(1)).map(|_| seconds(&mut f)).collect())
+}
+
+/// Medians of `repeats` timings of each of `fs`, the functions taken in turn within each
+/// repetition; in seconds.
+fn interleaved_median_seconds<F: FnMut()>(repeats: usize, fs: &mut [F]) -> Vec<f64> {
+    let mut times = vec![Vec::new(); fs.len()];
+    for _ in 0..repeats.max(1) {
+        for (f, t) in fs.iter_mut().zip(&mut times) {
+            t.push(seconds(f));
+        }
+    }
+    times.into_iter().map(median).collect()
+}
+
+fn seconds(mut f: impl FnMut()) -> f64 {
+    let start = Instant::now();
+    f();
+    start.elapsed().as_secs_f64()
+}
+
+fn median(mut times: Vec<f64>) -> f64 {
     times.sort_by(f64::total_cmp);
     times[times.len() / 2]
 }
@@ -306,34 +324,49 @@ pub fn bench_accel(
     let chosen =
         |query: Query, mode: Mode| cells.queries.contains(&query) && cells.modes.contains(&mode);
     let mut rows = Vec::new();
-    let mut builds = Vec::new();
-    for &kind in kinds {
-        let mut built = None;
-        let build_s = median_seconds(repeats, || built = Some(accel::build(scene, kind, options)));
-        let accel = built.expect("built at least once")?;
-        builds.push((kind.to_string(), build_s));
-        for (set_name, closest_rays, occl_rays) in &sets {
-            for (query, rays) in [(Query::Closest, closest_rays), (Query::Occluded, occl_rays)] {
-                for mode in [Mode::Single, Mode::Batched] {
-                    if !chosen(query, mode) {
-                        continue;
-                    }
-                    // One thread, then all of them (once, when that is one).
-                    let runs: &[(bool, usize)] = if threads > 1 {
-                        &[(false, 1), (true, threads)]
-                    } else {
-                        &[(false, 1)]
-                    };
-                    for &(parallel, t) in runs {
-                        let s = median_seconds(repeats, || {
-                            std::hint::black_box(trace(
-                                accel.as_ref(),
-                                rays,
-                                query,
-                                mode,
-                                parallel,
-                            ));
-                        });
+    let mut built: Vec<Option<Result<Box<dyn Accel>, accel::AccelError>>> =
+        kinds.iter().map(|_| None).collect();
+    let mut build_each: Vec<_> = kinds
+        .iter()
+        .zip(&mut built)
+        .map(|(&kind, slot)| move || *slot = Some(accel::build(scene, kind, options)))
+        .collect();
+    let build_s = interleaved_median_seconds(repeats, &mut build_each);
+    drop(build_each);
+    let builds = kinds.iter().map(|k| k.to_string()).zip(build_s).collect();
+    let accels = built
+        .into_iter()
+        .map(|b| b.expect("built at least once"))
+        .collect::<Result<Vec<_>, _>>()?;
+    for (set_name, closest_rays, occl_rays) in &sets {
+        for (query, rays) in [(Query::Closest, closest_rays), (Query::Occluded, occl_rays)] {
+            for mode in [Mode::Single, Mode::Batched] {
+                if !chosen(query, mode) {
+                    continue;
+                }
+                // One thread, then all of them (once, when that is one).
+                let runs: &[(bool, usize)] = if threads > 1 {
+                    &[(false, 1), (true, threads)]
+                } else {
+                    &[(false, 1)]
+                };
+                for &(parallel, t) in runs {
+                    let mut trace_each: Vec<_> = accels
+                        .iter()
+                        .map(|a| {
+                            || {
+                                std::hint::black_box(trace(
+                                    a.as_ref(),
+                                    rays,
+                                    query,
+                                    mode,
+                                    parallel,
+                                ));
+                            }
+                        })
+                        .collect();
+                    let seconds = interleaved_median_seconds(repeats, &mut trace_each);
+                    for (&kind, s) in kinds.iter().zip(seconds) {
                         rows.push(Row {
                             backend: kind.to_string(),
                             rays: set_name,
@@ -346,52 +379,55 @@ pub fn bench_accel(
                 }
             }
         }
-        #[cfg(feature = "embree")]
-        if kind == AccelKind::Embree {
-            use crate::accel::embree::{Baseline, EmbreeAccel};
-            let e = EmbreeAccel::build(scene, options)?;
-            for (set_name, closest_rays, occl_rays) in &sets {
-                for (b, query, mode, rays) in [
-                    (
-                        Baseline::Intersect1,
-                        Query::Closest,
-                        Mode::Single,
-                        closest_rays,
-                    ),
-                    (
-                        Baseline::Occluded1,
-                        Query::Occluded,
-                        Mode::Single,
-                        occl_rays,
-                    ),
-                    (
-                        Baseline::Intersect8,
-                        Query::Closest,
-                        Mode::Batched,
-                        closest_rays,
-                    ),
-                    (
-                        Baseline::Occluded8,
-                        Query::Occluded,
-                        Mode::Batched,
-                        occl_rays,
-                    ),
-                ] {
-                    if !chosen(query, mode) {
-                        continue;
-                    }
-                    let s = median_seconds(repeats, || {
-                        std::hint::black_box(e.baseline(rays, b));
-                    });
-                    rows.push(Row {
-                        backend: "embree C loop".into(),
-                        rays: set_name,
-                        query: query.name(),
-                        mode: mode.name(),
-                        threads: 1,
-                        mrays_per_s: rays.len() as f64 / s / 1e6,
-                    });
+    }
+    // The table lists each backend's rows together, in the order the backends were asked for.
+    rows.sort_by_key(|r| kinds.iter().position(|k| k.to_string() == r.backend));
+    // The shim's plain C loops over Embree, after Embree's rows.
+    #[cfg(feature = "embree")]
+    if kinds.contains(&AccelKind::Embree) {
+        use crate::accel::embree::{Baseline, EmbreeAccel};
+        let e = EmbreeAccel::build(scene, options)?;
+        for (set_name, closest_rays, occl_rays) in &sets {
+            for (b, query, mode, rays) in [
+                (
+                    Baseline::Intersect1,
+                    Query::Closest,
+                    Mode::Single,
+                    closest_rays,
+                ),
+                (
+                    Baseline::Occluded1,
+                    Query::Occluded,
+                    Mode::Single,
+                    occl_rays,
+                ),
+                (
+                    Baseline::Intersect8,
+                    Query::Closest,
+                    Mode::Batched,
+                    closest_rays,
+                ),
+                (
+                    Baseline::Occluded8,
+                    Query::Occluded,
+                    Mode::Batched,
+                    occl_rays,
+                ),
+            ] {
+                if !chosen(query, mode) {
+                    continue;
                 }
+                let s = median_seconds(repeats, || {
+                    std::hint::black_box(e.baseline(rays, b));
+                });
+                rows.push(Row {
+                    backend: "embree C loop".into(),
+                    rays: set_name,
+                    query: query.name(),
+                    mode: mode.name(),
+                    threads: 1,
+                    mrays_per_s: rays.len() as f64 / s / 1e6,
+                });
             }
         }
     }
