@@ -391,10 +391,10 @@ impl Bvh {
         }
     }
 
-    /// Walks the tree, the children a ray enters nearest first. `visit` tests a leaf and
-    /// returns true to stop.
+    /// Walks the tree, the children a ray enters nearest first when `ORDERED`, else in slot
+    /// order. `visit` tests a leaf and returns true to stop.
     #[inline(always)]
-    fn traverse(
+    fn traverse<const ORDERED: bool>(
         &self,
         ray: &Ray,
         t_max: &mut f32,
@@ -430,15 +430,16 @@ impl Bvh {
                         current = entry(mask.trailing_zeros() as usize);
                         continue;
                     }
-                    // Two or more children: sorted nearest first by insertion, the nearest
-                    // taken now, the others pushed farthest first.
+                    // Two or more children: sorted nearest first by insertion (for closest
+                    // hits; any hit ends an occlusion query, so it takes them as they come),
+                    // the first taken now, the others pushed last first.
                     let mut entered = [ROOT; WIDTH];
                     let mut k = 0;
                     while mask != 0 {
                         let e = entry(mask.trailing_zeros() as usize);
                         mask &= mask - 1;
                         let mut j = k;
-                        while j > 0 && entered[j - 1].t > e.t {
+                        while ORDERED && j > 0 && entered[j - 1].t > e.t {
                             entered[j] = entered[j - 1];
                             j -= 1;
                         }
@@ -539,7 +540,7 @@ impl Accel for Bvh {
         let pack_ray = Tri4Ray::new(ray, &shear);
         let mut t_max = ray.t_max;
         let mut best = None;
-        self.traverse(ray, &mut t_max, |node, t_max| {
+        self.traverse::<true>(ray, &mut t_max, |node, t_max| {
             self.leaf_closest(node, (ray, &shear, &pack_ray), t_max, &mut best);
             false
         });
@@ -557,7 +558,7 @@ impl Accel for Bvh {
         let pack_ray = Tri4Ray::new(ray, &shear);
         let mut t_max = ray.t_max;
         let mut hit = false;
-        self.traverse(ray, &mut t_max, |node, t_max| {
+        self.traverse::<false>(ray, &mut t_max, |node, t_max| {
             hit = self.leaf(node).iter().any(|item| match item {
                 LeafItem::Triangles(pack) => {
                     pack.intersect(&pack_ray, ray, &shear, *t_max).mask != 0
