@@ -12,6 +12,7 @@ use rayon::prelude::*;
 
 use glam::Vec4;
 
+use super::pages::HugePageArray;
 use super::tri4::{Tri4, Tri4Ray};
 use super::{Accel, AccelError, PackedPrim};
 use crate::geometry::{
@@ -57,7 +58,7 @@ const GROUPS: usize = WIDTH / 4;
 /// count` of `items`. An unused slot has the empty box (minimum +∞, maximum −∞), which no ray
 /// enters. 256 bytes, four cache lines.
 #[repr(C, align(64))]
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct Node {
     bounds: [[Vec4; GROUPS]; 6],
     first: [u32; WIDTH],
@@ -157,17 +158,62 @@ struct LeafPrim {
 }
 
 /// What a leaf holds, in leaf order: its triangles in packs of four, then its other
-/// primitives one by one.
-#[derive(Clone, Copy, Debug)]
-enum LeafItem {
-    Triangles(Tri4),
+/// primitives one to an item. Either way an item is a pack's 160 bytes of plain data, so that
+/// the leaves can live in huge pages (`pages`): a single primitive's vertices and normal lie
+/// in the lanes' first 15 floats, and the kind of the first reference tells the two apart.
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(transparent)]
+struct LeafItem(Tri4);
+
+/// A leaf item as it is tested.
+enum ItemView<'a> {
+    Triangles(&'a Tri4),
     Single(LeafPrim),
 }
 
+/// Floats of a single primitive's item: four vertices and a normal.
+const SINGLE_FLOATS: usize = 15;
+
+impl LeafItem {
+    fn triangles(pack: Tri4) -> LeafItem {
+        LeafItem(pack)
+    }
+
+    fn single(p: &LeafPrim) -> LeafItem {
+        let mut floats = [0f32; SINGLE_FLOATS];
+        for (k, v) in p.v.iter().chain([&p.normal]).enumerate() {
+            floats[3 * k..3 * k + 3].copy_from_slice(&v.to_array());
+        }
+        LeafItem(Tri4::holding(&floats, p.prim))
+    }
+
+    #[inline(always)]
+    fn view(&self) -> ItemView<'_> {
+        if self.0.prim(0).kind() == PrimKind::Triangle {
+            return ItemView::Triangles(&self.0);
+        }
+        let f = self.0.floats();
+        let vec = |k: usize| Vec3::new(f[3 * k], f[3 * k + 1], f[3 * k + 2]);
+        ItemView::Single(LeafPrim {
+            v: [vec(0), vec(1), vec(2), vec(3)],
+            normal: vec(4),
+            prim: self.0.prim(0),
+        })
+    }
+
+    /// The primitives the item holds.
+    fn prims(&self) -> Vec<PackedPrim> {
+        match self.view() {
+            ItemView::Triangles(pack) => pack.triangles().map(|(_, prim)| prim).collect(),
+            ItemView::Single(p) => vec![p.prim],
+        }
+    }
+}
+
 pub struct Bvh {
-    nodes: Vec<Node>,
+    nodes: HugePageArray<Node>,
     /// The leaves' contents; a leaf node's `first .. first + count` indexes this.
-    items: Vec<LeafItem>,
+    items: HugePageArray<LeafItem>,
     /// How many primitives the tree holds (those with finite bounds).
     prim_count: usize,
     shapes: Vec<AnalyticShape>,
@@ -265,8 +311,8 @@ impl Bvh {
             .flat_map_iter(|leaf| leaf_items(scene, &build[leaf.clone()]))
             .collect();
         Ok(Bvh {
-            nodes,
-            items,
+            nodes: HugePageArray::new(nodes),
+            items: HugePageArray::new(items),
             prim_count: build.len(),
             shapes: scene.shapes.iter().map(|s| s.shape).collect(),
             one_sided_quads: !scene.two_sided_quads,
@@ -352,16 +398,16 @@ impl Bvh {
                 Some(_) => t_max.next_up(),
                 None => *t_max,
             };
-            match item {
-                LeafItem::Triangles(pack) => {
+            match item.view() {
+                ItemView::Triangles(pack) => {
                     let hits = pack.intersect(pack_ray, ray, shear, limit);
                     for i in (0..4).filter(|i| hits.mask >> i & 1 != 0) {
                         let hit = (pack.prim(i), hits.t[i], hits.u[i], hits.v[i]);
                         keep_closest(best, t_max, hit);
                     }
                 }
-                LeafItem::Single(p) => {
-                    if let Some((t, u, v)) = self.hit_single(p, ray, shear, limit) {
+                ItemView::Single(p) => {
+                    if let Some((t, u, v)) = self.hit_single(&p, ray, shear, limit) {
                         keep_closest(best, t_max, (p.prim, t, u, v));
                     }
                 }
@@ -559,11 +605,11 @@ impl Accel for Bvh {
         let mut t_max = ray.t_max;
         let mut hit = false;
         self.traverse::<false>(ray, &mut t_max, |node, t_max| {
-            hit = self.leaf(node).iter().any(|item| match item {
-                LeafItem::Triangles(pack) => {
+            hit = self.leaf(node).iter().any(|item| match item.view() {
+                ItemView::Triangles(pack) => {
                     pack.intersect(&pack_ray, ray, &shear, *t_max).mask != 0
                 }
-                LeafItem::Single(p) => self.hit_single(p, ray, &shear, *t_max).is_some(),
+                ItemView::Single(p) => self.hit_single(&p, ray, &shear, *t_max).is_some(),
             });
             hit
         });
@@ -590,16 +636,6 @@ fn prim_bounds(scene: &Scene, prim: PrimRef) -> Bounds3 {
     }
 }
 
-impl LeafItem {
-    /// The primitives the item holds.
-    fn prims(&self) -> Vec<PackedPrim> {
-        match self {
-            LeafItem::Triangles(pack) => pack.triangles().map(|(_, prim)| prim).collect(),
-            LeafItem::Single(p) => vec![p.prim],
-        }
-    }
-}
-
 /// A leaf's contents: its triangles in packs of four, then its other primitives.
 fn leaf_items(scene: &Scene, leaf: &[BuildPrim]) -> Vec<LeafItem> {
     let triangles: Vec<([Vec3; 3], PackedPrim)> = leaf
@@ -617,7 +653,7 @@ fn leaf_items(scene: &Scene, leaf: &[BuildPrim]) -> Vec<LeafItem> {
             PrimKind::Quad => (scene.quads[i].vertices, scene.quads[i].normal),
             PrimKind::Shape => ([Vec3::ZERO; 4], Vec3::ZERO),
         };
-        Some(LeafItem::Single(LeafPrim {
+        Some(LeafItem::single(&LeafPrim {
             v,
             normal,
             prim: PackedPrim::new(p.prim),
@@ -625,7 +661,7 @@ fn leaf_items(scene: &Scene, leaf: &[BuildPrim]) -> Vec<LeafItem> {
     });
     triangles
         .chunks(4)
-        .map(|pack| LeafItem::Triangles(Tri4::new(pack)))
+        .map(|pack| LeafItem::triangles(Tri4::new(pack)))
         .chain(singles)
         .collect()
 }

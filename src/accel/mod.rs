@@ -5,6 +5,7 @@ pub mod bvh;
 #[cfg(feature = "embree")]
 #[allow(unsafe_code)]
 pub mod embree;
+mod pages;
 mod tri4;
 
 use std::fmt;
@@ -139,7 +140,8 @@ pub fn build(
 /// Primitive references packed in 32 bits: the kind in the top `KIND_BITS` bits, the index
 /// below. A kind that does not fit stops the build (the assertion below), rather than being
 /// decoded as another.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(transparent)]
 pub(crate) struct PackedPrim(u32);
 
 /// Bits of a packed primitive that hold its kind.

@@ -12,7 +12,8 @@ use crate::geometry::{intersect_triangle_sheared, Ray, RayShear, Vec3};
 
 /// Four triangles: `v[k][a]` holds coordinate `a` (x, y, z) of vertex `k` of each. A pack of
 /// fewer than four repeats its last triangle, which can only give the same hit again.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub(super) struct Tri4 {
     v: [[Vec4; 3]; 3],
     prims: [PackedPrim; 4],
@@ -77,6 +78,23 @@ impl Tri4 {
                     |k: usize| Vec3::new(self.v[k][0][i], self.v[k][1][i], self.v[k][2][i]);
                 ([vertex(0), vertex(1), vertex(2)], self.prims[i])
             })
+    }
+
+    /// The pack's 160 bytes put to another use: `floats` (at most 36) in its lanes and `prim`
+    /// in every reference (see the BVH's `LeafItem`).
+    pub fn holding(floats: &[f32], prim: PackedPrim) -> Tri4 {
+        let mut lanes = [0f32; 36];
+        lanes[..floats.len()].copy_from_slice(floats);
+        Tri4 {
+            v: bytemuck::cast(lanes),
+            prims: [prim; 4],
+        }
+    }
+
+    /// The lanes as 36 floats, as `holding` wrote them.
+    #[inline(always)]
+    pub fn floats(&self) -> &[f32; 36] {
+        bytemuck::cast_ref(&self.v)
     }
 
     #[inline(always)]
