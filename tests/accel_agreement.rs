@@ -282,3 +282,48 @@ fn shadow_rays_from_next_to_a_light_reach_it() {
         assert_eq!(count, 0, "{kind}: {count} of {} rays blocked", rays.len());
     }
 }
+
+/// A pile of coincident triangles (all centroids equal: the build splits by count, and a ray
+/// enters every child of every node, so traversal's stack overflows its array into the
+/// vector), beside a few stacked quads: every backend answers as brute force, the tie going to
+/// the smallest reference, and the BVH's invariants hold.
+#[test]
+fn a_pile_of_coincident_triangles_is_walked_to_its_smallest_reference() {
+    let mut text = String::from("material\ndiffuse 1 1 1\nm 0\n");
+    for k in 0..5 {
+        let z = 0.5 + 0.1 * k as f32;
+        let i = 4 * k + 1;
+        text.push_str(&format!(
+            "v 2 -1 {z}\nv 4 -1 {z}\nv 4 1 {z}\nv 2 1 {z}\nf {i} {} {} {}\n",
+            i + 1,
+            i + 2,
+            i + 3
+        ));
+    }
+    let mut scene = Scene::parse_dialect(std::path::Path::new("pile.obj"), &text).expect("parses");
+    let o = trilux::geometry::vec3;
+    scene.triangles = trilux::scene::TriangleMesh {
+        positions: vec![o(-1.0, -1.0, 0.0), o(1.0, -1.0, 0.0), o(0.0, 1.0, 0.0)],
+        indices: vec![[0, 1, 2]; 3000],
+        materials: vec![0; 3000],
+        ..Default::default()
+    };
+    let bvh = trilux::accel::bvh::Bvh::build(&scene).expect("builds");
+    bvh.validate(&scene).expect("invariants hold");
+    let rays = incoherent_rays(&scene, 20_000, 5);
+    let shadow = occlusion_rays(&scene, &rays, 6);
+    let oracle = BruteForce { scene: &scene };
+    let down = Ray::new(
+        trilux::geometry::vec3(0.1, -0.2, 3.0),
+        trilux::geometry::vec3(0.0, 0.0, -1.0),
+    );
+    for kind in backends() {
+        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+        check_against(&scene, &oracle, accel.as_ref(), &rays, &shadow, "pile");
+        let hit = accel.intersect(&down).expect("the pile is hit");
+        assert_eq!(
+            hit.prim.index, 0,
+            "{kind}: the smallest reference wins the tie"
+        );
+    }
+}
