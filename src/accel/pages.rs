@@ -25,27 +25,37 @@ enum Storage<T> {
 }
 
 impl<T: Pod> HugePageArray<T> {
+    /// The array holding `data`.
     pub fn new(data: Vec<T>) -> HugePageArray<T> {
-        let bytes: &[u8] = bytemuck::cast_slice(&data);
-        let storage = match bytes.len() >= HUGE_PAGE {
+        HugePageArray::filled(data.len(), |array| array.copy_from_slice(&data))
+    }
+
+    /// An array of `len` elements, zeroed, then written by `fill` (in place: a large array is
+    /// not built elsewhere and copied).
+    pub fn filled(len: usize, fill: impl FnOnce(&mut [T])) -> HugePageArray<T> {
+        let bytes = len * size_of::<T>();
+        let mut storage = match bytes >= HUGE_PAGE {
             true => match mapped(bytes) {
                 Some(map) => Storage::Mapped(map),
-                None => Storage::Heap(data),
+                None => Storage::Heap(vec![T::zeroed(); len]),
             },
-            false => Storage::Heap(data),
+            false => Storage::Heap(vec![T::zeroed(); len]),
         };
+        fill(match &mut storage {
+            Storage::Mapped(map) => bytemuck::cast_slice_mut(map),
+            Storage::Heap(v) => v,
+        });
         HugePageArray { storage }
     }
 }
 
-/// A mapping holding `bytes`, advised for huge pages before it is written (the pages are
+/// A zeroed mapping of `bytes`, advised for huge pages before it is written (the pages are
 /// chosen when first touched); None when the system gives no anonymous mapping.
-fn mapped(bytes: &[u8]) -> Option<MmapMut> {
-    let mut map = MmapMut::map_anon(bytes.len()).ok()?;
+fn mapped(bytes: usize) -> Option<MmapMut> {
+    let map = MmapMut::map_anon(bytes).ok()?;
     // Only advice: where the kernel has no transparent huge pages, 4 KiB pages serve.
     #[cfg(target_os = "linux")]
     let _ = map.advise(memmap2::Advice::HugePage);
-    map.copy_from_slice(bytes);
     Some(map)
 }
 
@@ -64,6 +74,19 @@ impl<T: Pod> Deref for HugePageArray<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn arrays_filled_in_place_read_back_as_written() {
+        let array = HugePageArray::<u64>::filled(1 << 20, |a| {
+            for (i, x) in a.iter_mut().enumerate() {
+                *x = i as u64 * 3;
+            }
+        });
+        assert!(matches!(array.storage, Storage::Mapped(_)));
+        assert!(array.iter().enumerate().all(|(i, &x)| x == i as u64 * 3));
+        let small = HugePageArray::<u64>::filled(5, |a| a[4] = 9);
+        assert_eq!(&small[..], &[0, 0, 0, 0, 9]);
+    }
 
     #[test]
     fn small_and_large_arrays_read_back_as_written() {
