@@ -4,9 +4,10 @@
 //! ordered: the children a ray enters are taken nearest first. On the 1M-triangle terrain a
 //! ray's time goes mostly to waiting for nodes and leaves from memory; each halving of the
 //! depth paid (BENCHMARKS.md, session 29: 4-wide nodes about +15% over the binary tree, 8-wide
-//! about +25% over 4-wide; no `std::arch` beyond SSE, which would need `unsafe`). Leaves hold copies of their
-//! primitives in leaf order, so a leaf's primitives are read from consecutive memory:
-//! triangles in packs of four tested at once (`tri4`), quads and analytic shapes one by one.
+//! about +25% over 4-wide; no `std::arch` beyond SSE, which would need `unsafe`). Leaves hold
+//! copies of their primitives in leaf order, so a leaf's primitives are read from consecutive
+//! memory: triangles in packs of four tested at once (`tri4`), quads and analytic shapes one
+//! by one.
 
 use rayon::prelude::*;
 
@@ -114,8 +115,8 @@ const ROOT: Entry = Entry {
 };
 
 /// Entries of traversal's stack kept in an array; deeper ones spill into a vector (a node
-/// pushes up to `WIDTH` − 1, and the tree may be `MAX_DEPTH` deep). The array is filled afresh for
-/// every ray, so it is kept short: rays on small scenes cost tens of nanoseconds.
+/// pushes up to `WIDTH` − 1, and the tree may be `MAX_DEPTH` deep). The array is filled afresh
+/// for every ray, so it is kept short: rays on small scenes cost tens of nanoseconds.
 const STACK: usize = 16;
 
 /// A ray set up for the wide slab test: origin and inverse direction in every lane, and per
@@ -662,17 +663,21 @@ fn write_leaf_items(scene: &Scene, leaf: &[BuildPrim], out: &mut [LeafItem]) {
     let mut out = out.iter_mut();
     let mut pack = [([Vec3::ZERO; 3], leaf[0].prim); 4];
     let mut in_pack = 0;
-    let triangles = leaf.iter().filter(|p| p.is_triangle());
-    let count = triangles.clone().count();
-    for (k, p) in triangles.enumerate() {
+    let mut write_pack = |pack: &[([Vec3; 3], PackedPrim)]| {
+        let item = out.next().expect("the leaf's items were counted");
+        *item = LeafItem::triangles(Tri4::new(pack));
+    };
+    for p in leaf.iter().filter(|p| p.is_triangle()) {
         let vertices = scene.triangles.vertices(p.prim.index() as usize);
         pack[in_pack] = (vertices, p.prim);
         in_pack += 1;
-        if in_pack == 4 || k + 1 == count {
-            let item = out.next().expect("the leaf's items were counted");
-            *item = LeafItem::triangles(Tri4::new(&pack[..in_pack]));
+        if in_pack == 4 {
+            write_pack(&pack);
             in_pack = 0;
         }
+    }
+    if in_pack > 0 {
+        write_pack(&pack[..in_pack]);
     }
     for p in leaf {
         let i = p.prim.index() as usize;

@@ -73,11 +73,14 @@ impl Tri4 {
     pub fn triangles(&self) -> impl Iterator<Item = ([Vec3; 3], PackedPrim)> + '_ {
         (0..4)
             .filter(|&i| i == 0 || self.prims[i] != self.prims[i - 1])
-            .map(|i| {
-                let vertex =
-                    |k: usize| Vec3::new(self.v[k][0][i], self.v[k][1][i], self.v[k][2][i]);
-                ([vertex(0), vertex(1), vertex(2)], self.prims[i])
-            })
+            .map(|i| (self.triangle(i), self.prims[i]))
+    }
+
+    /// The vertices of the triangle in `lane`.
+    fn triangle(&self, lane: usize) -> [Vec3; 3] {
+        std::array::from_fn(|k| {
+            Vec3::new(self.v[k][0][lane], self.v[k][1][lane], self.v[k][2][lane])
+        })
     }
 
     /// The pack's 160 bytes put to another use: `floats` (at most 36) in its lanes and `prim`
@@ -161,9 +164,8 @@ impl Tri4 {
         hits: &mut Tri4Hits,
     ) {
         for i in (0..4).filter(|i| lanes >> i & 1 != 0) {
-            let vertex = |k: usize| Vec3::new(self.v[k][0][i], self.v[k][1][i], self.v[k][2][i]);
-            let hit =
-                intersect_triangle_sheared(ray, shear, limit, vertex(0), vertex(1), vertex(2));
+            let [a, b, c] = self.triangle(i);
+            let hit = intersect_triangle_sheared(ray, shear, limit, a, b, c);
             if let Some((t, u, v)) = hit {
                 hits.mask |= 1 << i;
                 hits.t[i] = t;
