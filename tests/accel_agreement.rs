@@ -327,3 +327,46 @@ fn a_pile_of_coincident_triangles_is_walked_to_its_smallest_reference() {
         );
     }
 }
+
+/// Batched occlusion tests a quad against four rays at once and hands a lane whose edge
+/// function is exactly zero to the scalar test. Packets of rays that run along the plane of a
+/// square's diagonal and meet it there (both of its triangles see an edge function of zero),
+/// and rays aimed at points of its edges: every one of the diagonal's rays meets the square
+/// inside, so each is blocked, one by one and in packets; the edge rays answer alike either
+/// way.
+#[test]
+fn packets_aimed_at_a_quads_diagonal_and_edges_answer_as_single_rays() {
+    use trilux::geometry::vec3;
+    let text = "material\ndiffuse 1 1 1\nm 0\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3 4\n";
+    let scene = Scene::parse_dialect(std::path::Path::new("square.obj"), text).expect("parses");
+    let mut diagonal = Vec::new();
+    let mut edges = Vec::new();
+    for i in 0..64 {
+        let s = i as f32 / 16.0 - 2.0;
+        for j in 0..8 {
+            let t = j as f32 / 8.0 - 0.4375;
+            diagonal.push(Ray::new(vec3(s, s, 5.0), vec3(t - s, t - s, -5.0)));
+            let along = j as f32 / 4.0 - 0.875;
+            let to = [vec3(along, -1.0, 0.0), vec3(1.0, along, 0.0)][i % 2];
+            let from = vec3(s * 0.25, 0.5, 5.0);
+            edges.push(Ray::new(from, to - from));
+        }
+    }
+    for kind in backends() {
+        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+        for (rays, what) in [(&diagonal, "diagonal"), (&edges, "edges")] {
+            let mut batched = vec![false; rays.len()];
+            accel.occluded_batch(rays, &mut batched);
+            let single: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
+            let differ = batched.iter().zip(&single).filter(|(b, s)| b != s).count();
+            assert_eq!(
+                differ, 0,
+                "{kind}: {what}: batched and single differ on {differ} rays"
+            );
+            if what == "diagonal" {
+                let open = single.iter().filter(|&&b| !b).count();
+                assert_eq!(open, 0, "{kind}: {open} rays pass through the square");
+            }
+        }
+    }
+}

@@ -21,6 +21,7 @@ pub(super) struct Tri4 {
 
 /// The ray in the form the pack test wants, made once per ray: its origin and shear in every
 /// lane, axes already permuted so that z is the direction's dominant axis.
+#[derive(Default)]
 pub(super) struct Tri4Ray {
     org: [Vec4; 3],
     sx: Vec4,
@@ -112,42 +113,21 @@ impl Tri4 {
         // Vertex k relative to the origin, on the permuted axes.
         let rel = |k: usize| {
             let v = &self.v[k];
-            (v[kx] - r.org[0], v[ky] - r.org[1], v[kz] - r.org[2])
+            [v[kx] - r.org[0], v[ky] - r.org[1], v[kz] - r.org[2]]
         };
-        let (a_x, a_y, a_z) = rel(0);
-        let (b_x, b_y, b_z) = rel(1);
-        let (c_x, c_y, c_z) = rel(2);
-        let ax = a_x - r.sx * a_z;
-        let ay = a_y - r.sy * a_z;
-        let bx = b_x - r.sx * b_z;
-        let by = b_y - r.sy * b_z;
-        let cx = c_x - r.sx * c_z;
-        let cy = c_y - r.sy * c_z;
-        let u = cx * by - cy * bx;
-        let v = ax * cy - ay * cx;
-        let w = bx * ay - by * ax;
-        let zero = Vec4::ZERO;
-        let on_edge = u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero);
-        let outside = (u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero))
-            & (u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero));
-        let det = u + v + w;
-        let t_scaled = u * (r.sz * a_z) + v * (r.sz * b_z) + w * (r.sz * c_z);
-        let inv = Vec4::ONE / det;
-        let t = t_scaled * inv;
-        let hit = !outside
-            & det.cmpne(zero)
-            & det.abs().cmplt(Vec4::INFINITY)
-            & t.cmpgt(r.t_min)
-            & t.cmplt(Vec4::splat(limit));
+        let lanes = sheared_lanes(
+            [rel(0), rel(1), rel(2)],
+            [r.sx, r.sy, r.sz],
+            (r.t_min, Vec4::splat(limit)),
+        );
         let mut hits = Tri4Hits {
-            mask: (hit & !on_edge).bitmask(),
-            t: t.to_array(),
-            u: (v * inv).to_array(),
-            v: (w * inv).to_array(),
+            mask: lanes.hit,
+            t: lanes.t.to_array(),
+            u: lanes.u.to_array(),
+            v: lanes.v.to_array(),
         };
-        let on_edge = on_edge.bitmask();
-        if on_edge != 0 {
-            self.settle_on_edge(on_edge, ray, shear, limit, &mut hits);
+        if lanes.on_edge != 0 {
+            self.settle_on_edge(lanes.on_edge, ray, shear, limit, &mut hits);
         }
         hits
     }
@@ -173,6 +153,138 @@ impl Tri4 {
                 hits.v[i] = v;
             }
         }
+    }
+}
+
+/// What the watertight test decides in four lanes.
+struct Lanes {
+    /// Lanes hit, of those without an edge function exactly zero.
+    hit: u32,
+    /// Lanes with an edge function exactly zero, which the scalar test redoes in f64.
+    on_edge: u32,
+    t: Vec4,
+    u: Vec4,
+    v: Vec4,
+}
+
+/// `intersect_triangle_sheared`'s operations, in its order, in four lanes, each lane a
+/// triangle and a ray: `rel[k]` holds vertex k relative to the ray's origin on the ray's
+/// permuted axes, `shear` the ray's shear factors, `range` its `(t_min, t_max)`.
+#[inline(always)]
+fn sheared_lanes(rel: [[Vec4; 3]; 3], shear: [Vec4; 3], range: (Vec4, Vec4)) -> Lanes {
+    let [[a_x, a_y, a_z], [b_x, b_y, b_z], [c_x, c_y, c_z]] = rel;
+    let [sx, sy, sz] = shear;
+    let ax = a_x - sx * a_z;
+    let ay = a_y - sy * a_z;
+    let bx = b_x - sx * b_z;
+    let by = b_y - sy * b_z;
+    let cx = c_x - sx * c_z;
+    let cy = c_y - sy * c_z;
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let zero = Vec4::ZERO;
+    let on_edge = u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero);
+    let outside = (u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero))
+        & (u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero));
+    let det = u + v + w;
+    let t_scaled = u * (sz * a_z) + v * (sz * b_z) + w * (sz * c_z);
+    let inv = Vec4::ONE / det;
+    let t = t_scaled * inv;
+    let hit = !outside
+        & det.cmpne(zero)
+        & det.abs().cmplt(Vec4::INFINITY)
+        & t.cmpgt(range.0)
+        & t.cmplt(range.1);
+    Lanes {
+        hit: (hit & !on_edge).bitmask(),
+        on_edge: on_edge.bitmask(),
+        t,
+        u: v * inv,
+        v: w * inv,
+    }
+}
+
+/// Four rays whose directions share their dominant axis and its sign (so one permutation of
+/// the axes serves them all), set up to be tested against one triangle at once: one lane a
+/// ray. The batched occlusion query tests quads so, where a packet's rays run alike.
+pub(super) struct Rays4 {
+    /// Origins on the permuted axes.
+    org: [Vec4; 3],
+    /// Directions on the scene's axes (for `faces`).
+    dir: [Vec4; 3],
+    shear: [Vec4; 3],
+    range: (Vec4, Vec4),
+    axes: [usize; 3],
+}
+
+impl Rays4 {
+    /// The four rays in lanes, or `None` when their permutations differ.
+    #[inline(always)]
+    pub fn new(rays: [(&Ray, &RayShear); 4]) -> Option<Rays4> {
+        let axes = rays[0].1.axes();
+        if rays.iter().any(|(_, s)| s.axes() != axes) {
+            return None;
+        }
+        // Rows: origin (permuted), direction, shear, t_min, t_max.
+        let mut rows = [[0f32; 4]; 11];
+        for (i, (ray, shear)) in rays.iter().enumerate() {
+            let (sx, sy, sz) = shear.factors();
+            let lane = [
+                ray.origin[axes[0]],
+                ray.origin[axes[1]],
+                ray.origin[axes[2]],
+                ray.direction.x,
+                ray.direction.y,
+                ray.direction.z,
+                sx,
+                sy,
+                sz,
+                ray.t_min,
+                ray.t_max,
+            ];
+            for (row, value) in rows.iter_mut().zip(lane) {
+                row[i] = value;
+            }
+        }
+        let row = |k: usize| Vec4::from_array(rows[k]);
+        Some(Rays4 {
+            org: [row(0), row(1), row(2)],
+            dir: [row(3), row(4), row(5)],
+            shear: [row(6), row(7), row(8)],
+            range: (row(9), row(10)),
+            axes,
+        })
+    }
+
+    /// The lanes that hit the triangle `tri` in their `(t_min, t_max)` (bits), and those
+    /// whose edge functions the scalar test must decide.
+    #[inline(always)]
+    pub fn hit(&self, tri: [Vec3; 3]) -> (u32, u32) {
+        let rel = |v: Vec3| {
+            let [x, y, z] = self.axes.map(|a| v[a]);
+            [
+                Vec4::splat(x) - self.org[0],
+                Vec4::splat(y) - self.org[1],
+                Vec4::splat(z) - self.org[2],
+            ]
+        };
+        let lanes = sheared_lanes(
+            [rel(tri[0]), rel(tri[1]), rel(tri[2])],
+            self.shear,
+            self.range,
+        );
+        (lanes.hit, lanes.on_edge)
+    }
+
+    /// The lanes whose ray a one-sided surface of front normal `n` faces, as `faces_ray`
+    /// decides each (its products summed in its order).
+    #[inline(always)]
+    pub fn faces(&self, n: Vec3) -> u32 {
+        let dot = Vec4::splat(n.x) * self.dir[0]
+            + Vec4::splat(n.y) * self.dir[1]
+            + Vec4::splat(n.z) * self.dir[2];
+        dot.cmplt(Vec4::ZERO).bitmask()
     }
 }
 
@@ -279,6 +391,69 @@ mod tests {
     }
 
     /// `triangles()` gives back what was packed, without the padding.
+    /// Four rays against one triangle (`Rays4`, the batched occlusion's quad test): every
+    /// lane not handed back as on an edge decides as `intersect_triangle_sheared` does, and
+    /// `faces` as `faces_ray`. The rays start near one point and aim at the triangle's
+    /// vertices, edges, inside and around it, with t ranges that cut some hits off.
+    #[test]
+    fn four_rays_answer_as_the_scalar_test() {
+        use crate::geometry::faces_ray;
+        let mut rng = Rng::new(11, 0, 0);
+        let point = |rng: &mut Rng| {
+            Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE
+        };
+        let (mut checked, mut hits, mut on_edges, mut apart) = (0, 0, 0, 0);
+        for case in 0..4000u32 {
+            let tri = [point(&mut rng), point(&mut rng), point(&mut rng)];
+            let eye = point(&mut rng) * 3.0;
+            let rays: Vec<Ray> = (0..4)
+                .map(|i| {
+                    let [a, b, c] = tri;
+                    let target = match (case as usize + i) % 5 {
+                        0 => a,
+                        1 => (b + c) * 0.5,
+                        2 => point(&mut rng),
+                        3 => (a + b + c) / 3.0,
+                        _ => a + (a - b) * 0.01,
+                    };
+                    let origin = eye + point(&mut rng) * 0.05;
+                    let mut ray = Ray::new(origin, target - origin);
+                    ray.t_max = [f32::INFINITY, 1.0, 0.999, 0.5][(case as usize + i) % 4];
+                    ray
+                })
+                .collect();
+            let shears: Vec<RayShear> = rays.iter().map(RayShear::new).collect();
+            let lanes = std::array::from_fn(|i| (&rays[i], &shears[i]));
+            let Some(rays4) = Rays4::new(lanes) else {
+                assert!(shears.iter().any(|s| s.axes() != shears[0].axes()));
+                apart += 1;
+                continue;
+            };
+            let (hit, on_edge) = rays4.hit(tri);
+            let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+            let facing = rays4.faces(n);
+            for (i, (ray, shear)) in rays.iter().zip(&shears).enumerate() {
+                let want =
+                    intersect_triangle_sheared(ray, shear, ray.t_max, tri[0], tri[1], tri[2]);
+                if on_edge >> i & 1 == 0 {
+                    assert_eq!(hit >> i & 1 == 1, want.is_some(), "case {case}, lane {i}");
+                } else {
+                    on_edges += 1;
+                }
+                assert_eq!(facing >> i & 1 == 1, faces_ray(n, ray.direction));
+                checked += 1;
+                hits += want.is_some() as u32;
+            }
+        }
+        println!("{hits} hits of {checked}, {on_edges} on an edge, {apart} apart");
+        assert!(
+            hits > 1000 && checked - hits > 1000,
+            "{hits} hits of {checked}"
+        );
+        assert!(on_edges > 100, "{on_edges} lanes on an edge");
+        assert!(apart < 2000, "{apart} cases of rays with different axes");
+    }
+
     #[test]
     fn a_pack_gives_back_its_triangles() {
         let tris: Vec<([Vec3; 3], PackedPrim)> = (0..3)

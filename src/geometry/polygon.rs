@@ -7,7 +7,7 @@ use super::Vec3;
 
 /// The per-ray constants of the watertight ray–triangle test of Woop, Benthin and Wald
 /// (JCGT 2013): the ray's dominant axis and the shear that maps its direction to +z.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct RayShear {
     kx: usize,
     ky: usize,
