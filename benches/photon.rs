@@ -110,22 +110,16 @@ fn nearest_50_of_2m(c: &mut Criterion) {
     let mut group = c.benchmark_group("nearest_50_of_2m");
     group.throughput(Throughput::Elements(QUERIES as u64));
     group.sample_size(10);
-    group.bench_function("ours", |b| {
-        b.iter(|| {
-            queries
-                .iter()
-                .map(|q| ours.nearest(*q, 50, r2).len())
-                .sum::<usize>()
-        })
-    });
-    group.bench_function("ours_indexed", |b| {
-        b.iter(|| {
-            queries
-                .iter()
-                .map(|q| indexed.nearest(*q, 50, r2).len())
-                .sum::<usize>()
-        })
-    });
+    for (name, tree) in [("ours", &ours), ("ours_indexed", &indexed)] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                queries
+                    .iter()
+                    .map(|q| tree.nearest(*q, 50, r2).len())
+                    .sum::<usize>()
+            })
+        });
+    }
     for sorted in [true, false] {
         let name = if sorted {
             "kiddo_sorted"

@@ -3,7 +3,8 @@
 //! watertight test as `intersect_triangle_sheared` in all four lanes. Every lane performs that
 //! function's operations in its order, so a lane's hit, t and barycentrics are bit for bit the
 //! scalar test's; the rare lane with an edge function exactly zero (where the scalar test
-//! recomputes in f64) is handed to the scalar test itself.
+//! recomputes in f64) is handed to the scalar test itself. The same lanes serve the other way
+//! round too (`Rays4`): one triangle against four rays, for the BVH's packets of rays.
 
 use glam::Vec4;
 
