@@ -13,6 +13,8 @@
 //! Cornell box (seven primitives under one node, where a ray's own work is all) that took
 //! camera occlusion from 0.8 to 1.3 times Embree's packets (BENCHMARKS.md, session 30).
 
+use std::cell::OnceCell;
+
 use rayon::prelude::*;
 
 use glam::Vec4;
@@ -765,7 +767,7 @@ impl Bvh {
             while let Some((entry, entered)) = stack.pop() {
                 let entered = entered & open;
                 if entry.count > 0 {
-                    open &= !self.leaf_blocks(&entry, entered, packet, &one);
+                    open &= !self.leaf_blocks(&entry, entered, (packet, rays));
                 } else if entered.count_ones() <= PACKET_SWITCH {
                     for i in bits(entered) {
                         if self.occluded_below(entry, one(i)) {
@@ -801,13 +803,8 @@ impl Bvh {
     /// blocks. A quad is tested against four rays at once where they share their axes (the
     /// packet's rays run alike: camera rays, shadow rays to a small light, rays between two
     /// patches), every other primitive ray by ray.
-    fn leaf_blocks<'a>(
-        &self,
-        leaf: &Entry,
-        entered: u32,
-        packet: &Packet,
-        one: &impl Fn(usize) -> OneRay<'a>,
-    ) -> u32 {
+    fn leaf_blocks(&self, leaf: &Entry, entered: u32, (packet, rays): (&Packet, &[Ray])) -> u32 {
+        let one = |i: usize| packet.one(rays, i);
         let mut blocked = 0;
         for item in self.leaf(leaf) {
             let open = entered & !blocked;
@@ -818,14 +815,15 @@ impl Bvh {
                 ItemView::Single(p) if p.prim.kind() == PrimKind::Quad => Some(p),
                 _ => None,
             };
-            for (g, rays4) in packet.groups.iter().enumerate() {
+            for g in 0..PACKET / 4 {
                 let lanes = open >> (4 * g) & 0xf;
-                let hit = match (&quad, rays4) {
-                    _ if lanes == 0 => 0,
-                    (Some(p), Some(rays4)) if lanes.count_ones() > 1 => {
-                        self.quad_blocks(p, rays4, lanes, |i| one(4 * g + i))
-                    }
-                    _ => bits(lanes)
+                let four = match &quad {
+                    Some(p) if lanes.count_ones() > 1 => packet.rays4(rays, g).map(|r| (p, r)),
+                    _ => None,
+                };
+                let hit = match four {
+                    Some((p, rays4)) => self.quad_blocks(p, rays4, lanes, |i| one(4 * g + i)),
+                    None => bits(lanes)
                         .filter(|&i| self.item_blocks(item, one(4 * g + i)))
                         .fold(0, |m, i| m | 1 << i),
                 };
@@ -875,8 +873,9 @@ struct Packet {
     shears: [RayShear; PACKET],
     pack_rays: [Tri4Ray; PACKET],
     boxes: PacketBoxes,
-    /// Each group of four rays set up for quads, if they share their axes.
-    groups: [Option<Rays4>; PACKET / 4],
+    /// Each group of four rays set up for quads (if they share their axes), made when a
+    /// quad first needs it: scenes of triangles never do.
+    groups: [OnceCell<Option<Rays4>>; PACKET / 4],
 }
 
 impl Packet {
@@ -887,10 +886,20 @@ impl Packet {
             self.pack_rays[i] = Tri4Ray::new(ray(i), &self.shears[i]);
             self.boxes.set(i, ray(i));
         }
-        for g in 0..PACKET / 4 {
-            let lane = |i: usize| (ray(4 * g + i), &self.shears[4 * g + i]);
-            self.groups[g] = Rays4::new([lane(0), lane(1), lane(2), lane(3)]);
-        }
+        self.groups = Default::default();
+    }
+
+    /// Group `g` of `rays` (the rays loaded) set up for quads, if its rays share their axes.
+    fn rays4(&self, rays: &[Ray], g: usize) -> Option<&Rays4> {
+        self.groups[g]
+            .get_or_init(|| {
+                let lane = |i: usize| {
+                    let i = (4 * g + i).min(rays.len() - 1);
+                    (&rays[i], &self.shears[i])
+                };
+                Rays4::new([lane(0), lane(1), lane(2), lane(3)])
+            })
+            .as_ref()
     }
 
     /// Ray `i` of `rays` (the rays loaded) with its shear and pack form.
