@@ -12,8 +12,6 @@
 //! (seed, pixel, sample). The background colour is seen, not a light: a path that leaves the
 //! scene after a diffuse bounce brings nothing back.
 
-use std::collections::HashMap;
-
 use super::engine::{Budget, Engine, EngineKind, RenderSettings, Rendered};
 use super::scattering::{diffuse_sample, power_heuristic, reflect, Dielectric, GlossyLobe};
 use crate::accel::{closest_surface, Accel};
@@ -24,7 +22,7 @@ use crate::render::{render_pixels, Counts, RenderStats};
 use crate::sampling::{LightSampling, Rng};
 use crate::scene::medium::{Flight, Medium};
 use crate::scene::sky::Sky;
-use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
+use crate::scene::{Color, Scene, SurfaceHit};
 
 /// Vertices after which Russian roulette may end a path: Mitsuba 3's `rr_depth`. From the
 /// third (as until session 22) the Cornell box's relMSE at 64 paths a pixel was 22–24% higher
@@ -49,7 +47,6 @@ pub struct PathTracer<'a> {
     lights: Vec<Light>,
     /// Cumulative light-selection probabilities (∝ emitted power: max(Le) × area).
     cdf: Vec<f32>,
-    light_of: HashMap<PrimRef, usize>,
     /// Scatterings a path may take (`--max-depth`; default `MAX_VERTICES`, which roulette
     /// never lets a path reach).
     max_depth: u32,
@@ -84,13 +81,11 @@ impl PathTracer<'_> {
         if total > 0.0 {
             cdf.iter_mut().for_each(|c| *c /= total);
         }
-        let light_of = Light::index_by_prim(&lights);
         PathTracer {
             scene,
             accel,
             lights,
             cdf,
-            light_of,
             max_depth: MAX_VERTICES,
             by_area: false,
         }
@@ -363,8 +358,8 @@ impl PathTracer<'_> {
             let m = &self.scene.materials[s.material as usize];
             let (front, n) = s.facing(ray.direction);
             if self.scene.sees_emission(&s, ray.direction) {
-                let weight = match (previous.bsdf_pdf, self.light_of.get(&s.prim)) {
-                    (Some(bsdf_pdf), Some(&k)) => {
+                let weight = match (previous.bsdf_pdf, Light::index_of(&self.lights, s.prim)) {
+                    (Some(bsdf_pdf), Some(k)) => {
                         let light_pdf = self.light_pdf(k, &previous, &s);
                         power_heuristic(bsdf_pdf, light_pdf)
                     }

@@ -22,8 +22,7 @@ use crate::render::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
 use crate::render::{render_pixels, Ambient, CameraSampler, Counts, IndirectLight, RenderStats};
 use crate::sampling::{LightSampling, Rng, Strata};
 use crate::scene::medium::Medium;
-use crate::scene::{Camera, Color, PrimRef, Scene, SurfaceHit};
-use std::collections::HashMap;
+use crate::scene::{Camera, Color, Scene, SurfaceHit};
 
 /// Branches of the ray tree whose weight falls below this are not traced: their
 /// contribution cannot reach 1e-4 of the pixel.
@@ -36,8 +35,6 @@ struct Tracer<'a> {
     accel: &'a dyn Accel,
     settings: &'a RenderSettings,
     lights: Vec<Light>,
-    /// The index in `lights` of each emitting primitive.
-    light_of: HashMap<PrimRef, usize>,
     /// Where the N points on each light go (`--light-sampling`, `-num_shadow_samples`).
     light_strata: Strata,
     /// The rays traced, when recording a ray tree (`--ray-tree`); None while rendering.
@@ -70,14 +67,12 @@ impl<'a> Tracer<'a> {
         tree: Option<std::sync::Mutex<Vec<Segment>>>,
     ) -> Tracer<'a> {
         let lights = Light::collect(scene);
-        let light_of = Light::index_by_prim(&lights);
         Tracer {
             indirect,
             scene,
             accel,
             settings,
             lights,
-            light_of,
             light_strata: Strata::new(
                 settings.light_sampling.pattern(),
                 settings.num_shadow_samples,
@@ -263,7 +258,7 @@ impl Tracer<'_> {
         let Arrival::Glossy { from, normal, pdf } = arrival else {
             return 1.0;
         };
-        let Some(&k) = self.light_of.get(&s.prim) else {
+        let Some(k) = Light::index_of(&self.lights, s.prim) else {
             return 1.0;
         };
         let light_pdf = self.lights[k].pdf_towards(from, normal, s.point, s.geometric_normal);

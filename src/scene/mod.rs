@@ -141,8 +141,8 @@ pub struct ShapePrim {
     pub material: u32,
 }
 
-/// The kinds of primitive a ray can hit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// The kinds of primitive a ray can hit, ordered as a scene lists them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum PrimKind {
     Quad,
     Triangle,
@@ -155,8 +155,8 @@ impl PrimKind {
     pub const ALL: [PrimKind; 3] = [PrimKind::Quad, PrimKind::Triangle, PrimKind::Shape];
 }
 
-/// One primitive of a scene: its kind and its index in that kind's list.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// One primitive of a scene: its kind and its index in that kind's list (ordered by both).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct PrimRef {
     pub kind: PrimKind,
     pub index: u32,
@@ -400,7 +400,7 @@ impl Scene {
     pub fn albedo(&self, hit: &SurfaceHit) -> Color {
         let m = &self.materials[hit.material as usize];
         match (m.texture, &m.procedural) {
-            (Some(t), _) => self.textures[t].lookup(hit.tex_coords),
+            (Some(t), _) => self.textures[t].lookup(self.tex_coords(hit)),
             (None, Some(p)) => p.albedo(
                 hit.point,
                 self.footprint.half_widths(hit.point, hit.geometric_normal),

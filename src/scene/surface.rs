@@ -82,10 +82,11 @@ pub struct SurfaceHit {
     pub shading_normal: Vec3,
     /// Bound on the absolute error of `point` in each coordinate (see `offset_ray_origin`).
     pub error: f32,
-    /// The primitive's own parameters in [0,1]².
-    pub uv: (f32, f32),
-    /// Texture coordinates (the primitive's `vt`, or its parameters when it has none).
-    pub tex_coords: Vec2,
+    /// A polygon's own parameters in [0,1]² (a quad's (u, v), a triangle's barycentric
+    /// (b1, b2)); (0, 0) on an analytic shape, whose parameters take inverse trigonometric
+    /// functions that most hits never need. Read them with `Scene::parameters`, texture
+    /// coordinates with `Scene::tex_coords`.
+    pub(in crate::scene) uv: (f32, f32),
     pub prim: PrimRef,
     /// The part of an analytic shape the point lies on (see `Shape`); 0 on polygons.
     pub part: u32,
@@ -149,7 +150,7 @@ impl Scene {
                         v: s.uv.1,
                         exact: false,
                     };
-                    let tc = self.flat_surface(&probe, &near).tex_coords;
+                    let tc = self.tex_coords(&self.flat_surface(&probe, &near));
                     let h = map.lookup(tc);
                     (h.x + h.y + h.z) / 3.0
                 };
@@ -158,6 +159,37 @@ impl Scene {
             BumpSource::File { map: None, .. } => return s.shading_normal,
         };
         bumped_normal(n, tangents, dh, bump.amplitude, 2.0 * step)
+    }
+
+    /// The primitive's own parameters at a hit, in [0,1]²: a quad's (u, v), a triangle's
+    /// barycentric (b1, b2), an analytic shape's (`Shape::uv_at`) on the hit's part.
+    pub fn parameters(&self, hit: &SurfaceHit) -> (f32, f32) {
+        match hit.prim.kind {
+            PrimKind::Shape => self.shapes[hit.prim.index as usize]
+                .shape
+                .uv_at(hit.point, hit.part),
+            PrimKind::Quad | PrimKind::Triangle => hit.uv,
+        }
+    }
+
+    /// The texture coordinates at a hit: interpolated from the primitive's `vt` where it has
+    /// them, else its parameters.
+    pub fn tex_coords(&self, hit: &SurfaceHit) -> Vec2 {
+        let i = hit.prim.index as usize;
+        let (u, v) = self.parameters(hit);
+        match hit.prim.kind {
+            PrimKind::Quad => match &self.quads[i].tex_coords {
+                Some(tc) => bilinear(tc, u, v),
+                None => vec2(u, v),
+            },
+            PrimKind::Triangle if !self.triangles.tex_coords.is_empty() => {
+                let mesh = &self.triangles;
+                let [a, b, c] = mesh.indices[i].map(|k| mesh.tex_coords[k as usize]);
+                let b0 = 1.0 - u - v;
+                vec2(a.x * b0 + b.x * u + c.x * v, a.y * b0 + b.y * u + c.y * v)
+            }
+            PrimKind::Triangle | PrimKind::Shape => vec2(u, v),
+        }
     }
 
     /// The size of a primitive: the longest side of its bounding box.
@@ -187,10 +219,6 @@ impl Scene {
                 } else {
                     vs[2] + (vs[3] - vs[2]) * (1.0 - u) + (vs[1] - vs[2]) * (1.0 - v)
                 };
-                let tex_coords = match &q.tex_coords {
-                    Some(tc) => bilinear(tc, u, v),
-                    None => vec2(u, v),
-                };
                 SurfaceHit {
                     t,
                     point,
@@ -198,7 +226,6 @@ impl Scene {
                     geometric_normal: q.normal,
                     shading_normal: q.normal,
                     uv: (u, v),
-                    tex_coords,
                     prim: PrimRef {
                         kind: PrimKind::Quad,
                         index: index as u32,
@@ -209,7 +236,6 @@ impl Scene {
             }
             PrimKind::Triangle => {
                 let mesh = &self.triangles;
-                let [a, b, c] = mesh.indices[i].map(|k| k as usize);
                 let [p0, p1, p2] = mesh.vertices(i);
                 // An exact hit is the routine's own answer: testing again would give it back.
                 let (t, b1, b2) = if hit.exact {
@@ -218,18 +244,8 @@ impl Scene {
                     crate::geometry::intersect_triangle(ray, t_max, p0, p1, p2)
                         .unwrap_or((hit.t, hit.u, hit.v))
                 };
-                let b0 = 1.0 - b1 - b2;
                 let point = p0 + (p1 - p0) * b1 + (p2 - p0) * b2;
                 let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-                let tex_coords = if mesh.tex_coords.is_empty() {
-                    vec2(b1, b2)
-                } else {
-                    let (ta, tb, tc) = (mesh.tex_coords[a], mesh.tex_coords[b], mesh.tex_coords[c]);
-                    vec2(
-                        ta.x * b0 + tb.x * b1 + tc.x * b2,
-                        ta.y * b0 + tb.y * b1 + tc.y * b2,
-                    )
-                };
                 SurfaceHit {
                     t,
                     point,
@@ -237,7 +253,6 @@ impl Scene {
                     geometric_normal: ng,
                     shading_normal: ng,
                     uv: (b1, b2),
-                    tex_coords,
                     prim: hit.prim,
                     part: 0,
                     material: mesh.materials[i],
@@ -251,15 +266,13 @@ impl Scene {
                     .unwrap_or_else(|| (hit.t, shape.nearest_part(ray.at(hit.t))));
                 // Moved onto the surface: the point's error is then that of the shape's size.
                 let (point, n) = shape.project(ray.at(t), part);
-                let uv = shape.uv_at(point, part);
                 SurfaceHit {
                     t,
                     point,
                     error: point_error(shape.magnitude()),
                     geometric_normal: n,
                     shading_normal: n,
-                    uv,
-                    tex_coords: vec2(uv.0, uv.1),
+                    uv: (0.0, 0.0),
                     prim: hit.prim,
                     part,
                     material: prim.material,

@@ -395,18 +395,20 @@ impl Solution {
         } else {
             0
         };
+        let parameters = scene.parameters(hit);
         let (u, v, part) = match hit.prim.kind {
             PrimKind::Quad => {
                 let q = &scene.quads[hit.prim.index as usize];
-                let (u, v) = inverse_bilinear(&q.vertices, q.normal, hit.point).unwrap_or(hit.uv);
+                let (u, v) =
+                    inverse_bilinear(&q.vertices, q.normal, hit.point).unwrap_or(parameters);
                 (u, v, side)
             }
             PrimKind::Triangle => {
-                let (b1, b2) = hit.uv;
+                let (b1, b2) = parameters;
                 let u = if b2 < 1.0 { b1 / (1.0 - b2) } else { 0.0 };
                 (u, b2, side)
             }
-            PrimKind::Shape => (hit.uv.0, hit.uv.1, hit.part),
+            PrimKind::Shape => (parameters.0, parameters.1, hit.part),
         };
         let (face, s, t) = self.mesh.locate(hit.prim, part, u, v)?;
         let k = self.patch_of_face[face as usize];
