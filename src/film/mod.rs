@@ -157,15 +157,30 @@ impl Film {
                 }
             }
             ImageFormat::Exr => {
-                let data: Vec<f32> = self.pixels.iter().flat_map(|c| c.to_array()).collect();
-                let img = image::Rgb32FImage::from_raw(self.width, self.height, data).ok_or_else(
-                    || OutputError::Encode {
-                        path: path.to_path_buf(),
-                        message: "pixel count does not match the size".into(),
-                    },
-                )?;
-                img.write_to(w, image::ImageFormat::OpenExr)
-                    .map_err(encode_err)
+                // The `image` crate's encoding (run-length, tiles of 64²) with the tiles in
+                // increasing order: left unspecified, as `image` leaves it, the tiles compressed
+                // in parallel were written as they finished, so two renders of one image gave
+                // different files.
+                use exr::prelude::WritableImage;
+                let encoding = exr::prelude::Encoding {
+                    line_order: exr::prelude::LineOrder::Increasing,
+                    ..exr::prelude::Encoding::FAST_LOSSLESS
+                };
+                let width = self.width as usize;
+                let channels = exr::prelude::SpecificChannels::rgb(|p: exr::math::Vec2<usize>| {
+                    self.pixels[p.y() * width + p.x()].to_array().into()
+                });
+                exr::prelude::Image::from_encoded_channels(
+                    (width, self.height as usize),
+                    encoding,
+                    channels,
+                )
+                .write()
+                .to_buffered(w)
+                .map_err(|e| OutputError::Encode {
+                    path: path.to_path_buf(),
+                    message: e.to_string(),
+                })
             }
             ImageFormat::Pfm => {
                 // PFM: little-endian (negative scale), rows from the bottom up.
