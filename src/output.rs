@@ -30,6 +30,14 @@ impl OutputError {
             source,
         }
     }
+
+    /// The error of an encoder's failure on `path`: `map_err(OutputError::encode(path))`.
+    pub fn encode<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> OutputError + '_ {
+        move |e| OutputError::Encode {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        }
+    }
 }
 
 /// Writes `text` to `path` atomically (temporary file, then rename).

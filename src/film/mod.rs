@@ -132,14 +132,6 @@ impl Film {
         w: &mut BufWriter<File>,
         path: &Path,
     ) -> Result<(), OutputError> {
-        let encode_err = |e: image::ImageError| OutputError::Encode {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        };
-        let io_err = |source| OutputError::Io {
-            path: path.to_path_buf(),
-            source,
-        };
         match format {
             ImageFormat::Png | ImageFormat::Jpeg => {
                 let img = image::RgbImage::from_raw(self.width, self.height, self.to_srgb8())
@@ -148,12 +140,13 @@ impl Film {
                         message: "pixel count does not match the size".into(),
                     })?;
                 if format == ImageFormat::Png {
-                    img.write_to(w, image::ImageFormat::Png).map_err(encode_err)
+                    img.write_to(w, image::ImageFormat::Png)
+                        .map_err(OutputError::encode(path))
                 } else {
                     // Quality 95: the 8-bit sRGB image with no visible blocking.
                     image::codecs::jpeg::JpegEncoder::new_with_quality(w, JPEG_QUALITY)
                         .encode_image(&img)
-                        .map_err(encode_err)
+                        .map_err(OutputError::encode(path))
                 }
             }
             ImageFormat::Exr => {
@@ -177,18 +170,17 @@ impl Film {
                 )
                 .write()
                 .to_buffered(w)
-                .map_err(|e| OutputError::Encode {
-                    path: path.to_path_buf(),
-                    message: e.to_string(),
-                })
+                .map_err(OutputError::encode(path))
             }
             ImageFormat::Pfm => {
                 // PFM: little-endian (negative scale), rows from the bottom up.
-                write!(w, "PF\n{} {}\n-1.0\n", self.width, self.height).map_err(io_err)?;
+                write!(w, "PF\n{} {}\n-1.0\n", self.width, self.height)
+                    .map_err(OutputError::io(path))?;
                 for row in (0..self.height).rev() {
                     for i in 0..self.width {
                         for v in self.get(i, row).to_array() {
-                            w.write_all(&v.to_le_bytes()).map_err(io_err)?;
+                            w.write_all(&v.to_le_bytes())
+                                .map_err(OutputError::io(path))?;
                         }
                     }
                 }

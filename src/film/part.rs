@@ -222,10 +222,7 @@ pub fn write(
         image
             .write()
             .to_buffered(w)
-            .map_err(|e| OutputError::Encode {
-                path: path.to_path_buf(),
-                message: e.to_string(),
-            })
+            .map_err(OutputError::encode(path))
     })
 }
 
