@@ -43,6 +43,18 @@ impl RayShear {
         [self.kx, self.ky, self.kz]
     }
 
+    /// The point `p` relative to `origin` in the sheared frame: (x, y) across the ray, and
+    /// z along it scaled by `sz`.
+    #[inline(always)]
+    pub fn project(&self, origin: Vec3, p: Vec3) -> [f32; 3] {
+        let a = (p - origin).to_array();
+        [
+            a[self.kx] - self.sx * a[self.kz],
+            a[self.ky] - self.sy * a[self.kz],
+            self.sz * a[self.kz],
+        ]
+    }
+
     /// The shear factors `(sx, sy, sz)`.
     #[inline]
     pub fn factors(&self) -> (f32, f32, f32) {
@@ -76,17 +88,57 @@ pub fn intersect_triangle_sheared(
     v1: Vec3,
     v2: Vec3,
 ) -> Option<(f32, f32, f32)> {
-    let (kx, ky, kz) = (shear.kx, shear.ky, shear.kz);
-    let a = (v0 - ray.origin).to_array();
-    let b = (v1 - ray.origin).to_array();
-    let c = (v2 - ray.origin).to_array();
-    let ax = a[kx] - shear.sx * a[kz];
-    let ay = a[ky] - shear.sy * a[kz];
-    let bx = b[kx] - shear.sx * b[kz];
-    let by = b[ky] - shear.sy * b[kz];
-    let cx = c[kx] - shear.sx * c[kz];
-    let cy = c[ky] - shear.sy * c[kz];
-    let mut u = cx * by - cy * bx;
+    let [a, b, c] = [v0, v1, v2].map(|p| shear.project(ray.origin, p));
+    sheared_triangle_hit(ray, t_max, [a, b, c], c[0] * b[1] - c[1] * b[0])
+}
+
+/// A planar quad `v0 v1 v2 v3` (counter-clockwise around its front normal), tested as the two
+/// triangles `(v0, v1, v3)` and `(v2, v3, v1)` — the split Embree uses. Returns `(t, u, v)`
+/// with `(u, v)` the quad's own parameters: `(0,0)` at v0, `(1,0)` at v1, `(1,1)` at v2,
+/// `(0,1)` at v3. One-sidedness is the caller's test (see `faces_ray`). The triangle test is
+/// watertight, so no ray slips through the diagonal between the halves.
+#[inline]
+pub fn intersect_quad(ray: &Ray, t_max: f32, v: &[Vec3; 4]) -> Option<(f32, f32, f32)> {
+    intersect_quad_sheared(ray, &RayShear::new(ray), t_max, v)
+}
+
+/// `intersect_quad` with the ray's shear computed once.
+///
+/// The answer, bit for bit, of `intersect_triangle_sheared` on `(v0, v1, v3)` and then, if
+/// that misses, on `(v2, v3, v1)` with its parameters turned to the quad's. The second half
+/// shares two vertices and the diagonal with the first: their sheared coordinates are taken
+/// over, and its diagonal's edge function is the first's negated, which is exact (the two are
+/// the same two products subtracted the other way round; where either is zero the f64 test
+/// recomputes all three anyway).
+#[inline(always)]
+pub fn intersect_quad_sheared(
+    ray: &Ray,
+    shear: &RayShear,
+    t_max: f32,
+    v: &[Vec3; 4],
+) -> Option<(f32, f32, f32)> {
+    let project = |p: Vec3| shear.project(ray.origin, p);
+    let (p0, p1, p3) = (project(v[0]), project(v[1]), project(v[3]));
+    let diagonal = p3[0] * p1[1] - p3[1] * p1[0];
+    if let Some(first) = sheared_triangle_hit(ray, t_max, [p0, p1, p3], diagonal) {
+        return Some(first);
+    }
+    sheared_triangle_hit(ray, t_max, [project(v[2]), p3, p1], -diagonal)
+        .map(|(t, a, b)| (t, 1.0 - a, 1.0 - b))
+}
+
+/// The watertight test of the triangle `[a, b, c]` of sheared vertices (`RayShear::project`),
+/// given its edge function `u` of the edge b–c (which a quad's second half takes over from
+/// its first).
+#[inline(always)]
+fn sheared_triangle_hit(
+    ray: &Ray,
+    t_max: f32,
+    [a, b, c]: [[f32; 3]; 3],
+    u: f32,
+) -> Option<(f32, f32, f32)> {
+    let (ax, ay, bx, by, cx, cy) = (a[0], a[1], b[0], b[1], c[0], c[1]);
+    let mut u = u;
     let mut v = ax * cy - ay * cx;
     let mut w = bx * ay - by * ax;
     if u == 0.0 || v == 0.0 || w == 0.0 {
@@ -104,35 +156,10 @@ pub fn intersect_triangle_sheared(
     if det == 0.0 || !det.is_finite() {
         return None;
     }
-    let t_scaled = u * (shear.sz * a[kz]) + v * (shear.sz * b[kz]) + w * (shear.sz * c[kz]);
+    let t_scaled = u * a[2] + v * b[2] + w * c[2];
     let inv = 1.0 / det;
     let t = t_scaled * inv;
     (t > ray.t_min && t < t_max).then_some((t, v * inv, w * inv))
-}
-
-/// A planar quad `v0 v1 v2 v3` (counter-clockwise around its front normal), tested as the two
-/// triangles `(v0, v1, v3)` and `(v2, v3, v1)` — the split Embree uses. Returns `(t, u, v)`
-/// with `(u, v)` the quad's own parameters: `(0,0)` at v0, `(1,0)` at v1, `(1,1)` at v2,
-/// `(0,1)` at v3. One-sidedness is the caller's test (see `faces_ray`). The triangle test is
-/// watertight, so no ray slips through the diagonal between the halves.
-#[inline]
-pub fn intersect_quad(ray: &Ray, t_max: f32, v: &[Vec3; 4]) -> Option<(f32, f32, f32)> {
-    intersect_quad_sheared(ray, &RayShear::new(ray), t_max, v)
-}
-
-/// `intersect_quad` with the ray's shear computed once.
-#[inline(always)]
-pub fn intersect_quad_sheared(
-    ray: &Ray,
-    shear: &RayShear,
-    t_max: f32,
-    v: &[Vec3; 4],
-) -> Option<(f32, f32, f32)> {
-    if let Some(first) = intersect_triangle_sheared(ray, shear, t_max, v[0], v[1], v[3]) {
-        return Some(first);
-    }
-    intersect_triangle_sheared(ray, shear, t_max, v[2], v[3], v[1])
-        .map(|(t, a, b)| (t, 1.0 - a, 1.0 - b))
 }
 
 /// The front normal of a planar quad (unnormalised): cross product of its diagonals.
@@ -146,4 +173,60 @@ pub fn quad_normal(v: &[Vec3; 4]) -> Vec3 {
 #[inline]
 pub fn faces_ray(n: Vec3, dir: Vec3) -> bool {
     n.x * dir.x + n.y * dir.y + n.z * dir.z < 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    /// The quad test as two calls of the triangle test: what `intersect_quad_sheared` must
+    /// answer bit for bit.
+    fn two_triangles(ray: &Ray, t_max: f32, v: &[Vec3; 4]) -> Option<(f32, f32, f32)> {
+        let shear = RayShear::new(ray);
+        intersect_triangle_sheared(ray, &shear, t_max, v[0], v[1], v[3]).or_else(|| {
+            intersect_triangle_sheared(ray, &shear, t_max, v[2], v[3], v[1])
+                .map(|(t, a, b)| (t, 1.0 - a, 1.0 - b))
+        })
+    }
+
+    fn bits(hit: Option<(f32, f32, f32)>) -> Option<[u32; 3]> {
+        hit.map(|(t, u, v)| [t.to_bits(), u.to_bits(), v.to_bits()])
+    }
+
+    /// Rays at random points of random planar quads, at points of their diagonal, edges and
+    /// corners (where the edge functions are zero or nearly), and past them: two million
+    /// rays, every answer the same bits as the two triangle tests'.
+    #[test]
+    fn quad_test_is_the_two_triangle_tests_bit_for_bit() {
+        let mut rng = Rng::new(7, 0, 0);
+        let mut r = || rng.next_f32() * 2.0 - 1.0;
+        let mut hits = 0;
+        for case in 0..2_000_000u32 {
+            let origin = Vec3::new(r(), r(), r()) * 10.0;
+            let corner = Vec3::new(r(), r(), r()) * 3.0;
+            let (e1, e2) = (Vec3::new(r(), r(), r()), Vec3::new(r(), r(), r()));
+            // A parallelogram or a trapezoid, planar either way.
+            let stretch = 1.0 + 0.5 * r();
+            let v = [corner, corner + e1, corner + e1 * stretch + e2, corner + e2];
+            let target = match case % 5 {
+                0 => v[1] + (v[3] - v[1]) * rng_unit(r()),
+                1 => v[0] + (v[1] - v[0]) * rng_unit(r()),
+                2 => v[(case as usize / 5) % 4],
+                3 => v[0] + e1 * rng_unit(r()) + e2 * rng_unit(r()),
+                _ => v[0] + e1 * (2.0 * r()) + e2 * (2.0 * r()),
+            };
+            let ray = Ray::new(origin, target - origin);
+            let t_max = if case % 7 == 0 { 0.999 } else { f32::INFINITY };
+            let want = two_triangles(&ray, t_max, &v);
+            let got = intersect_quad_sheared(&ray, &RayShear::new(&ray), t_max, &v);
+            assert_eq!(bits(got), bits(want), "case {case}: {ray:?} {v:?}");
+            hits += want.is_some() as u32;
+        }
+        assert!(hits > 500_000, "{hits} hits");
+    }
+
+    fn rng_unit(x: f32) -> f32 {
+        0.5 * (x + 1.0)
+    }
 }
