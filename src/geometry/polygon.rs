@@ -135,10 +135,9 @@ fn sheared_triangle_hit(
     ray: &Ray,
     t_max: f32,
     [a, b, c]: [[f32; 3]; 3],
-    u: f32,
+    mut u: f32,
 ) -> Option<(f32, f32, f32)> {
     let (ax, ay, bx, by, cx, cy) = (a[0], a[1], b[0], b[1], c[0], c[1]);
-    let mut u = u;
     let mut v = ax * cy - ay * cx;
     let mut w = bx * ay - by * ax;
     if u == 0.0 || v == 0.0 || w == 0.0 {
