@@ -413,14 +413,22 @@ impl PathTracer<'_> {
                 break;
             }
             let choice = rng.next_f32() * total;
+            let (diffuse, reflects) = (choice < d, choice >= d && choice < d + r);
+            // The branch's albedo over the probability of taking it.
+            throughput *= if diffuse {
+                albedo * (total / d)
+            } else if reflects {
+                m.reflective * (total / r)
+            } else {
+                m.transmitted * (total / t)
+            };
+            // A path this bounce turns black ends here (see `survives_roulette`), before it
+            // spends a shadow ray on a sample it would weigh by zero.
+            if throughput.max_element() == 0.0 {
+                break;
+            }
             let dir;
-            if choice < d {
-                let lobe = albedo * (total / d);
-                // A path this bounce turns black ends here (see `survives_roulette`), before
-                // it spends a shadow ray on a sample it would weigh by zero.
-                if (throughput * lobe).max_element() == 0.0 {
-                    break;
-                }
+            if diffuse {
                 // The light sample's numbers come first in the path's sequence, but the next
                 // direction is computed before the light sample: its long chain (a division,
                 // sincos) then runs while the shadow ray is traced, not after it (0.95× the
@@ -429,14 +437,12 @@ impl PathTracer<'_> {
                 let sky_draw = self.draw_sky(rng);
                 let (sampled, pdf) = diffuse_sample(n, rng.next_f32(), rng.next_f32());
                 radiance += throughput
-                    * lobe
                     * (self.sample_light(&s, n, None, medium, light_draw, counts)
                         + self.sample_sky(&s, n, None, medium, sky_draw, counts));
                 if m.bump.is_some() && !s.leaves_on_side_of(n, sampled) {
                     break;
                 }
                 dir = sampled;
-                throughput *= lobe;
                 diffuse_bounce = true;
                 previous = Previous {
                     point: s.point,
@@ -444,11 +450,7 @@ impl PathTracer<'_> {
                     bsdf_pdf: Some(pdf),
                     in_medium: false,
                 };
-            } else if choice < d + r {
-                throughput *= m.reflective * (total / r);
-                if throughput.max_element() == 0.0 {
-                    break;
-                }
+            } else if reflects {
                 match GlossyLobe::new(ray.direction, n, m.roughness) {
                     // A mirror: a delta no light sample finds.
                     None => {
@@ -473,7 +475,6 @@ impl PathTracer<'_> {
                 }
             } else {
                 dir = Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng);
-                throughput *= m.transmitted * (total / t);
                 previous.bsdf_pdf = None;
                 // Through the boundary (n faces the side the ray came from): into a closed
                 // object from its front, out of it from its back.
