@@ -488,9 +488,14 @@ impl ApplicationHandler<Report> for App {
                     event_loop.exit();
                 }
             }
-            WindowEvent::KeyboardInput { event, .. }
-                if event.state == ElementState::Pressed && !event.repeat =>
-            {
+            // Synthetic presses are winit's replay, on focus in, of the keys the server holds
+            // down at the time it reads the focus event: a key pressed just after the focus
+            // change would arrive twice, as the replay and as its own event.
+            WindowEvent::KeyboardInput {
+                event,
+                is_synthetic: false,
+                ..
+            } if event.state == ElementState::Pressed && !event.repeat => {
                 match &event.logical_key {
                     Key::Character(c) => self.key(&c.to_lowercase(), event_loop),
                     Key::Named(NamedKey::Space) => self.key(" ", event_loop),
