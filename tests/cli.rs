@@ -933,7 +933,7 @@ fn photon_files_made_otherwise_are_refused() {
 
 /// `render report` on the course Cornell box with the path tracer alone, small and quick:
 /// it writes the CSV, the plot and the summary, and the path tracer's relMSE falls with
-/// slope close to −1 against time.
+/// slope close to −1.1 against time (a little faster than independent samples' −1).
 #[test]
 fn report_writes_csv_plot_and_summary_with_the_path_tracers_slope() {
     let dir = common::own_scene_dir();
@@ -995,10 +995,13 @@ fn report_writes_csv_plot_and_summary_with_the_path_tracers_slope() {
             .next()
             .and_then(|s| s.trim().parse().ok())
             .expect("a fitted slope");
-        // An unbiased estimator's relMSE falls as 1/time. Measured over eight runs: −0.98 to
-        // −1.03 (σ 0.017). The slope is fitted against wall time, which the other tests
-        // running beside this one disturb, so the bound allows ±0.2, twelve of those σ.
-        assert!((slope + 1.0).abs() < 0.2, "slope {slope}: {line}");
+        // An unbiased estimator of independent samples has its relMSE fall as 1/time
+        // (−0.98 to −1.03 over eight runs, σ 0.017, until session 32). The path tracer's
+        // paths are stratified across the pixel (Sobol points, `sampling::sobol`), and fall
+        // faster: −1.09 to −1.11 over six fits of three quiet runs in session 33, −1.21 with
+        // the other tests running beside it. The slope is fitted against wall time, which
+        // those tests disturb, so the bound allows ±0.2 about −1.1.
+        assert!((slope + 1.1).abs() < 0.2, "slope {slope}: {line}");
     }
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -10,8 +10,10 @@
 //! throughput from the sixth vertex on (`ROULETTE_FROM`), which keeps the estimate unbiased,
 //! and at once when their throughput turns black.
 //! `-num_antialias_samples` is the number of paths per pixel; every random number comes from
-//! (seed, pixel, sample). The background colour is seen, not a light: a path that leaves the
-//! scene after a diffuse bounce brings nothing back.
+//! (seed, pixel, sample): after the camera ray, each draw of a path from a dimension of its
+//! own of the pixel's scrambled Sobol points (`PathSamples`), so that a pixel's paths spread
+//! their light points and bounce directions evenly. The background colour is seen, not a
+//! light: a path that leaves the scene after a diffuse bounce brings nothing back.
 
 use super::engine::{Budget, Engine, EngineKind, RenderSettings, Rendered};
 use super::scattering::{diffuse_sample, power_heuristic, reflect, Dielectric, GlossyLobe};
@@ -20,7 +22,7 @@ use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
 use crate::render::lights::Light;
 use crate::render::{render_pixels, Counts, RenderStats};
-use crate::sampling::{LightSampling, Rng};
+use crate::sampling::{LightSampling, PathSamples};
 use crate::scene::medium::{Flight, Medium};
 use crate::scene::sky::Sky;
 use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
@@ -142,13 +144,17 @@ impl PathTracer<'_> {
             }
     }
 
-    /// One light, chosen in proportion to its power, and its index.
-    fn choose_light(&self, rng: &mut Rng) -> Option<usize> {
+    /// One light, chosen in proportion to its power, and its index (the only light without a
+    /// draw).
+    fn choose_light(&self, samples: &mut PathSamples) -> Option<usize> {
         let total = self.cdf.last().copied().unwrap_or(0.0);
         if total <= 0.0 {
             return None;
         }
-        let x = rng.next_f32();
+        if self.lights.len() == 1 {
+            return Some(0);
+        }
+        let x = samples.next_1d();
         Some(
             self.cdf
                 .partition_point(|&c| c <= x)
@@ -166,14 +172,15 @@ impl PathTracer<'_> {
         x: Vec3,
         travel: Vec3,
         medium: &Medium,
-        rng: &mut Rng,
+        samples: &mut PathSamples,
         counts: &mut Counts,
     ) -> Color {
-        let Some(k) = self.choose_light(rng) else {
+        let Some(k) = self.choose_light(samples) else {
             return Vec3::ZERO;
         };
         let light = &self.lights[k];
-        let Some(d) = light.sample_from_medium(x, rng.next_f32(), rng.next_f32()) else {
+        let (u, v) = samples.next_2d();
+        let Some(d) = light.sample_from_medium(x, u, v) else {
             return Vec3::ZERO;
         };
         let to_light = d.point - x;
@@ -192,24 +199,18 @@ impl PathTracer<'_> {
     /// The random numbers of next-event estimation at a surface point of primitive `prim`:
     /// the light, and the point on it (None without lights, or when the light chosen is the
     /// surface itself, which draws no point).
-    fn draw_light(&self, prim: PrimRef, rng: &mut Rng) -> Option<LightDraw> {
-        let k = self.choose_light(rng)?;
+    fn draw_light(&self, prim: PrimRef, samples: &mut PathSamples) -> Option<LightDraw> {
+        let k = self.choose_light(samples)?;
         if self.lights[k].prim == prim {
             return None;
         }
-        Some(LightDraw {
-            k,
-            u: rng.next_f32(),
-            v: rng.next_f32(),
-        })
+        let (u, v) = samples.next_2d();
+        Some(LightDraw { k, u, v })
     }
 
     /// The random numbers of `sample_sky` (None without a sky).
-    fn draw_sky(&self, rng: &mut Rng) -> Option<(f32, f32)> {
-        self.scene
-            .sky
-            .as_ref()
-            .map(|_| (rng.next_f32(), rng.next_f32()))
+    fn draw_sky(&self, samples: &mut PathSamples) -> Option<(f32, f32)> {
+        self.scene.sky.as_ref().map(|_| samples.next_2d())
     }
 
     /// Next-event estimation at a diffuse point (`lobe` None) or in a glossy lobe, from the
@@ -304,16 +305,16 @@ impl PathTracer<'_> {
     }
 
     /// The radiance arriving along `ray`, from one path.
-    pub fn along(&self, ray: &Ray, rng: &mut Rng) -> Color {
+    pub fn along(&self, ray: &Ray, samples: &mut PathSamples) -> Color {
         let first = closest_surface(self.accel, self.scene, ray);
-        self.radiance(ray, first, rng, &mut Counts::default())
+        self.radiance(ray, first, samples, &mut Counts::default())
     }
 
     fn radiance(
         &self,
         camera_ray: &Ray,
         first: Option<SurfaceHit>,
-        rng: &mut Rng,
+        samples: &mut PathSamples,
         counts: &mut Counts,
     ) -> Color {
         let mut radiance = Vec3::ZERO;
@@ -340,7 +341,8 @@ impl PathTracer<'_> {
                 let t_surface = hit
                     .as_ref()
                     .map_or(f32::INFINITY, |s| s.point.distance(ray.origin));
-                match m.sample_flight(t_surface, throughput, rng.next_f32(), rng.next_f32()) {
+                let (u, v) = samples.next_2d();
+                match m.sample_flight(t_surface, throughput, u, v) {
                     // A path at its depth limit takes no more scatterings (those that pass are
                     // weighed for the ones that would not have).
                     Flight::Scattered { .. } if vertex >= self.max_depth => break,
@@ -348,8 +350,9 @@ impl PathTracer<'_> {
                         throughput *= weight;
                         let x = ray.origin + travel * t;
                         radiance +=
-                            throughput * self.sample_light_in_medium(x, travel, m, rng, counts);
-                        let (dir, pdf) = m.sample_phase(travel, rng.next_f32(), rng.next_f32());
+                            throughput * self.sample_light_in_medium(x, travel, m, samples, counts);
+                        let (u, v) = samples.next_2d();
+                        let (dir, pdf) = m.sample_phase(travel, u, v);
                         // The phase function's value equals its density: the throughput
                         // keeps what the flight gave it.
                         previous = Previous {
@@ -359,7 +362,7 @@ impl PathTracer<'_> {
                             in_medium: true,
                         };
                         diffuse_bounce = true;
-                        if !survives_roulette(vertex, &mut throughput, rng) {
+                        if !survives_roulette(vertex, &mut throughput, samples) {
                             break;
                         }
                         ray = Ray::new(x, dir);
@@ -412,7 +415,13 @@ impl PathTracer<'_> {
             if total <= 0.0 {
                 break;
             }
-            let choice = rng.next_f32() * total;
+            // A material with one lobe takes it without a draw.
+            let lobes = (d > 0.0) as u32 + (r > 0.0) as u32 + (t > 0.0) as u32;
+            let choice = if lobes > 1 {
+                samples.next_1d() * total
+            } else {
+                0.0
+            };
             let (diffuse, reflects) = (choice < d, choice >= d && choice < d + r);
             // The branch's albedo over the probability of taking it.
             throughput *= if diffuse {
@@ -433,9 +442,10 @@ impl PathTracer<'_> {
                 // direction is computed before the light sample: its long chain (a division,
                 // sincos) then runs while the shadow ray is traced, not after it (0.95× the
                 // time on the Cornell box; the same numbers, so the same image).
-                let light_draw = self.draw_light(s.prim, rng);
-                let sky_draw = self.draw_sky(rng);
-                let (sampled, pdf) = diffuse_sample(n, rng.next_f32(), rng.next_f32());
+                let light_draw = self.draw_light(s.prim, samples);
+                let sky_draw = self.draw_sky(samples);
+                let (u, v) = samples.next_2d();
+                let (sampled, pdf) = diffuse_sample(n, u, v);
                 radiance += throughput
                     * (self.sample_light(&s, n, None, medium, light_draw, counts)
                         + self.sample_sky(&s, n, None, medium, sky_draw, counts));
@@ -458,12 +468,13 @@ impl PathTracer<'_> {
                         previous.bsdf_pdf = None;
                     }
                     Some(glossy) => {
-                        let light_draw = self.draw_light(s.prim, rng);
-                        let sky_draw = self.draw_sky(rng);
+                        let light_draw = self.draw_light(s.prim, samples);
+                        let sky_draw = self.draw_sky(samples);
                         radiance += throughput
                             * (self.sample_light(&s, n, Some(&glossy), medium, light_draw, counts)
                                 + self.sample_sky(&s, n, Some(&glossy), medium, sky_draw, counts));
-                        let (sampled, pdf) = glossy.sample(rng.next_f32(), rng.next_f32());
+                        let (u, v) = samples.next_2d();
+                        let (sampled, pdf) = glossy.sample(u, v);
                         dir = sampled;
                         previous = Previous {
                             point: s.point,
@@ -474,7 +485,8 @@ impl PathTracer<'_> {
                     }
                 }
             } else {
-                dir = Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng);
+                dir = Dielectric::at(m, front, ray.direction, n)
+                    .sample(ray.direction, n, || samples.next_1d());
                 previous.bsdf_pdf = None;
                 // Through the boundary (n faces the side the ray came from): into a closed
                 // object from its front, out of it from its back.
@@ -486,7 +498,7 @@ impl PathTracer<'_> {
                     };
                 }
             }
-            if !survives_roulette(vertex, &mut throughput, rng) {
+            if !survives_roulette(vertex, &mut throughput, samples) {
                 break;
             }
             ray = s.spawn_ray(dir);
@@ -528,7 +540,7 @@ fn sky_pdf(sky: &Sky, n: Vec3, towards: Vec3) -> f32 {
 /// at any vertex, as Mitsuba's does: all it could still bring is zero (on the Cornell box,
 /// a bounce off the red wall and then the blue one), and its random numbers are its own, so
 /// the image is the same without its rays.
-fn survives_roulette(vertex: u32, throughput: &mut Color, rng: &mut Rng) -> bool {
+fn survives_roulette(vertex: u32, throughput: &mut Color, samples: &mut PathSamples) -> bool {
     let largest = throughput.max_element();
     if largest == 0.0 {
         return false;
@@ -537,7 +549,7 @@ fn survives_roulette(vertex: u32, throughput: &mut Color, rng: &mut Rng) -> bool
         return true;
     }
     let survive = largest.min(MAX_SURVIVAL);
-    if rng.next_f32() >= survive {
+    if samples.next_1d() >= survive {
         return false;
     }
     *throughput *= survive.recip();
@@ -554,7 +566,7 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (F
         accel,
         &settings.image(),
         "path",
-        |ray, hit, rng, counts| tracer.radiance(ray, hit, rng, counts),
+        |ray, hit, _, id, counts| tracer.radiance(ray, hit, &mut PathSamples::sobol(id), counts),
     )
 }
 

@@ -706,7 +706,7 @@ pub fn render_with(
         accel,
         &settings.image(),
         "raytrace",
-        |ray, hit, rng, counts| tracer.shade(ray, hit, Branch::primary(scene), rng, counts),
+        |ray, hit, rng, _, counts| tracer.shade(ray, hit, Branch::primary(scene), rng, counts),
     )
 }
 

@@ -12,7 +12,6 @@
 //! images stay as they were; one mapping for both is a change of images to make on purpose.
 
 use crate::geometry::Vec3;
-use crate::sampling::Rng;
 pub use crate::sampling::{orthonormal_basis, sample_cone};
 use crate::scene::sky::Sky;
 use crate::scene::Material;
@@ -68,10 +67,10 @@ impl Dielectric {
 
     /// One branch chosen with the Fresnel probability: the refracted direction with
     /// probability 1 − F, else the mirror direction (always under total internal reflection,
-    /// where no random number is drawn).
-    pub fn sample(&self, d: Vec3, n: Vec3, rng: &mut Rng) -> Vec3 {
+    /// where no random number is drawn). `next` draws the number in [0, 1).
+    pub fn sample(&self, d: Vec3, n: Vec3, next: impl FnOnce() -> f32) -> Vec3 {
         match refract(d, n, self.eta_i, self.eta_t) {
-            Some(t) if rng.next_f32() >= self.reflectance => t.normalize_or_zero(),
+            Some(t) if next() >= self.reflectance => t.normalize_or_zero(),
             _ => reflect(d, n),
         }
     }

@@ -20,7 +20,7 @@ use crate::color::Color;
 use crate::film::part::{SampleSums, Window};
 use crate::film::Film;
 use crate::geometry::Ray;
-use crate::sampling::{Pattern, Rng, Strata};
+use crate::sampling::{Pattern, Rng, SampleId, Strata};
 use crate::scene::{Camera, Scene, SurfaceHit, View};
 
 /// What the pixel loop and the camera read: the image, its samples, the lens, the seed.
@@ -156,6 +156,19 @@ impl CameraSampler {
         }
     }
 
+    /// What the numbers of the path from camera sample `k` of pixel (i, j) are drawn from
+    /// (`PathSamples`): the sample's index among the pixel's `-num_antialias_samples` (all of
+    /// them, also in a part of a split render), none under `--time-limit`.
+    #[inline]
+    pub fn sample_id(&self, (i, j): (u32, u32), k: u32) -> SampleId {
+        SampleId {
+            seed: self.seed,
+            pixel: j as u64 * self.width as u64 + i as u64,
+            index: k,
+            count: (!self.open_ended).then_some(self.spp),
+        }
+    }
+
     /// Camera ray `k` of pixel (i, j) (j from the bottom) and the generator that the rest of
     /// its path draws from: both depend only on (seed, pixel, sample).
     #[inline]
@@ -206,7 +219,7 @@ pub fn render_pixels(
     accel: &dyn Accel,
     settings: &ImageSettings,
     label: &str,
-    radiance: impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, &mut Counts) -> Color + Sync,
+    radiance: impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, SampleId, &mut Counts) -> Color + Sync,
 ) -> (Film, RenderStats) {
     let camera = CameraSampler::new(scene, settings);
     let window = settings.window();
@@ -321,7 +334,7 @@ fn take_samples(
     stats: &RenderStats,
     bar: &indicatif::ProgressBar,
     keep: bool,
-    radiance: &(impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, &mut Counts) -> Color + Sync),
+    radiance: &(impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, SampleId, &mut Counts) -> Color + Sync),
 ) -> Vec<Vec<PixelSum>> {
     let (w, h) = (film.width, film.height);
     let spp = samples.len();
@@ -351,12 +364,14 @@ fn take_samples(
                 }
                 let first = window.x0 + (c * chunk) as u32;
                 let mut rngs = Vec::with_capacity(pixels.len() * spp);
+                let mut ids = Vec::with_capacity(pixels.len() * spp);
                 let mut rays = Vec::with_capacity(pixels.len() * spp);
                 for i in first..first + pixels.len() as u32 {
                     for k in samples.clone() {
                         let (ray, rng) = camera.sample((i, j), k);
                         rays.push(ray);
                         rngs.push(rng);
+                        ids.push(camera.sample_id((i, j), k));
                     }
                 }
                 let mut hits = vec![None; rays.len()];
@@ -370,7 +385,7 @@ fn take_samples(
                     for idx in i * spp..(i + 1) * spp {
                         let ray = &rays[idx];
                         let hit = hits[idx].map(|h| scene.surface(ray, &h));
-                        let l = radiance(ray, hit, &mut rngs[idx], &mut counts);
+                        let l = radiance(ray, hit, &mut rngs[idx], ids[idx], &mut counts);
                         if l.is_finite() {
                             for (s, c) in sum.iter_mut().zip(l.to_array()) {
                                 *s += c as f64;

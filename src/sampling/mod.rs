@@ -4,6 +4,9 @@
 
 use crate::geometry::Vec3;
 
+mod sobol;
+pub use sobol::{PathSamples, SampleId};
+
 /// SplitMix64's finaliser: a strong 64-bit mix.
 #[inline]
 pub fn mix64(mut z: u64) -> u64 {

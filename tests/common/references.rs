@@ -10,7 +10,7 @@ use trilux::engines::radiosity::patch::Patch;
 use trilux::engines::radiosity::{RadiositySettings, Solution, SolverKind};
 use trilux::engines::RenderSettings;
 use trilux::geometry::{Ray, Vec3};
-use trilux::sampling::{Pattern, Rng, Strata};
+use trilux::sampling::{PathSamples, Pattern, Rng, Strata};
 use trilux::scene::Scene;
 
 use super::backends;
@@ -138,7 +138,11 @@ pub fn path_traced_patches(
     let tracer = PathTracer::new(scene, accel.as_ref());
     let step = arrival_step(scene);
     patch_means(solution, paths, seed, |p, x, rng| {
-        tracer.along(&arriving(p, x, step), rng)
+        // The sample's generator, not used after this: its numbers drive the path.
+        tracer.along(
+            &arriving(p, x, step),
+            &mut PathSamples::independent(rng.clone()),
+        )
     })
 }
 

@@ -321,7 +321,7 @@ fn visible_point(
             )
         } else {
             throughput *= m.transmitted * (total / t);
-            Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, &mut rng)
+            Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, || rng.next_f32())
         };
         if bounce >= 3 {
             let survive = throughput.max_element().min(0.999);

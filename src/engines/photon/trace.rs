@@ -527,7 +527,8 @@ fn follow(
             )
         } else if xi < pd + pr + pt {
             power = power * m.transmitted * pt.recip();
-            let dir = Dielectric::at(m, front, ray.direction, n).sample(ray.direction, n, rng);
+            let dir = Dielectric::at(m, front, ray.direction, n)
+                .sample(ray.direction, n, || rng.next_f32());
             if dir.dot(n) < 0.0 {
                 // Refracted: into an object (its interior medium), or out of one (the fog).
                 medium = if front { scene.interior_medium(m) } else { fog };

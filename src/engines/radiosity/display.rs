@@ -66,7 +66,7 @@ pub fn render_solution(
         accel,
         &settings.image(),
         "display",
-        |ray, hit, _rng, _counts| {
+        |ray, hit, _rng, _id, _counts| {
             // Through a fog, what the camera sees is attenuated over the ray's length (and
             // nothing beyond the scene gets through); the light the fog scatters in is the
             // other engines' (`--plan` says so).
