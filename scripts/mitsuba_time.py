@@ -1,6 +1,6 @@
 """Renders the course Cornell box with the diffuse sphere in Mitsuba 3 and prints the wall time.
 
-    python3 scripts/mitsuba_time.py SPP OUT.exr [RES] [SEED]
+    python3 scripts/mitsuba_time.py SPP OUT.exr [RES] [SEED]   (MITSUBA_SAMPLER=ldsampler: another sampler)
 
 The scene is ../shared/peers/mitsuba_cornell.py's (our conventions: one-sided emitter, box
 filter, camera through the front face). One render at the same sample count comes first and is
@@ -21,7 +21,13 @@ import mitsuba_cornell  # noqa: E402
 spp, out = int(sys.argv[1]), sys.argv[2]
 res = int(sys.argv[3]) if len(sys.argv) > 3 else 256
 seed = int(sys.argv[4]) if len(sys.argv) > 4 else 0
-scene = mi.load_dict(mitsuba_cornell.cornell(True, res=res))
+setup = mitsuba_cornell.cornell(True, res=res)
+# MITSUBA_SAMPLER: another of Mitsuba's samplers in place of the peer's `independent`.
+# The count as rendered, which such samplers want at load (a square power of two for
+# `ldsampler`, which warns on stdout otherwise); `mi.render(spp=...)` sets it anyway.
+setup["sensor"]["sampler"]["type"] = os.environ.get("MITSUBA_SAMPLER", "independent")
+setup["sensor"]["sampler"]["sample_count"] = spp
+scene = mi.load_dict(setup)
 mi.Bitmap(mi.render(scene, spp=spp, seed=seed + 7919))  # the untimed first render
 start = time.perf_counter()
 image = mi.render(scene, spp=spp, seed=seed)

@@ -9,7 +9,13 @@
 # one) and then each of our RENDER binaries with `--engine path --light-sampling random`
 # (light sampling by area, as Mitsuba's) and `--accel ACCEL`, so that every binary and backend
 # meets the same machine. Prints, per setting, the times, their median and the ratio of that
-# median to Mitsuba's. No reference image is needed: the error side is scripts/vs-mitsuba.sh's.
+# median to Mitsuba's.
+#
+# REFERENCE=FILE.exr (a converged image of the scene, e.g. Mitsuba at 16k spp averaged) adds
+# each image's relMSE against it (`render compare`, of the first RENDER), its median, its ratio
+# to Mitsuba's and the ratio of time × relMSE, which is the time each needs for equal error.
+# MITSUBA_SAMPLERS="independent ldsampler" times Mitsuba with each of those samplers (default:
+# independent, as ../shared/peers/mitsuba_cornell.py sets it; the ratios are to the first).
 # Needs `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH (set here from
 # ldconfig when unset).
 set -euo pipefail
@@ -27,30 +33,54 @@ cp "$here/../scenes/cornell_box_diffuse_sphere.obj" "$scene"
 echo "background_color 0 0 0" >>"$scene" # Mitsuba's scene has no background light either
 
 csv=$work/times.csv
+samplers=(${MITSUBA_SAMPLERS:-independent})
+first=${1%:*}
+relmse() { # the image's relMSE against REFERENCE, or 0 without one
+  if [ -n "${REFERENCE:-}" ]; then
+    "$first" compare "$1" "$REFERENCE" | awk '/^relmse/ { print $2 }'
+  else
+    echo 0
+  fi
+}
 for r in $(seq "$repeats"); do
   for spp in 64 256; do
-    t=$(python3 "$here/mitsuba_time.py" "$spp" "$work/mitsuba.exr" 256 "$r")
-    echo "mitsuba,$spp,$t" >>"$csv"
+    for sampler in "${samplers[@]}"; do
+      name=mitsuba
+      [ "$sampler" = "${samplers[0]}" ] || name=mitsuba-$sampler
+      t=$(MITSUBA_SAMPLER=$sampler python3 "$here/mitsuba_time.py" "$spp" "$work/mitsuba.exr" 256 "$r")
+      echo "$name,$spp,$t,$(relmse "$work/mitsuba.exr")" >>"$csv"
+    done
     for who in "$@"; do
       render=${who%:*} accel=${who##*:}
       start=$(date +%s.%N)
       "$render" -input "$scene" --engine path -num_antialias_samples "$spp" \
         --light-sampling random --accel "$accel" --seed "$r" --quiet -o "$work/ours.exr"
       end=$(date +%s.%N)
-      echo "$who,$spp,$(echo "$end - $start" | bc -l)" >>"$csv"
+      echo "$who,$spp,$(echo "$end - $start" | bc -l),$(relmse "$work/ours.exr")" >>"$csv"
     done
   done
 done
 
-python3 - "$csv" <<'PY'
+python3 - "$csv" "${REFERENCE:-}" <<'PY'
 import collections, csv, statistics, sys
 times = collections.defaultdict(list)
-for who, spp, t in csv.reader(open(sys.argv[1])):
+errors = collections.defaultdict(list)
+for who, spp, t, e in csv.reader(open(sys.argv[1])):
     times[(who, int(spp))].append(float(t))
-print("| renderer | spp | times (s) | median (s) | / Mitsuba |")
-print("|---|---|---|---|---|")
+    errors[(who, int(spp))].append(float(e))
+with_error = bool(sys.argv[2])
+head = "| renderer | spp | times (s) | median (s) | / Mitsuba |"
+if with_error:
+    head += " median relMSE | / Mitsuba | time × relMSE / Mitsuba's |"
+print(head)
+print("|---" * (head.count("|") - 1) + "|")
 for (who, spp), ts in sorted(times.items(), key=lambda item: item[0][1]):
     m = statistics.median(ts)
-    ratio = m / statistics.median(times[("mitsuba", spp)])
-    print(f"| {who} | {spp} | {' '.join(f'{t:.3f}' for t in ts)} | {m:.3f} | {ratio:.2f} |")
+    mitsuba_t = statistics.median(times[("mitsuba", spp)])
+    row = f"| {who} | {spp} | {' '.join(f'{t:.3f}' for t in ts)} | {m:.3f} | {m / mitsuba_t:.2f} |"
+    if with_error:
+        e = statistics.median(errors[(who, spp)])
+        mitsuba_e = statistics.median(errors[("mitsuba", spp)])
+        row += f" {e:.3e} | {e / mitsuba_e:.3f} | {m * e / (mitsuba_t * mitsuba_e):.2f} |"
+    print(row)
 PY
