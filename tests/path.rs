@@ -7,7 +7,7 @@ use common::{backends, furnace, square_light};
 use trilux::accel::{self, AccelOptions};
 use trilux::engines::{path, RenderSettings};
 use trilux::geometry::Vec3;
-use trilux::sampling::LightSampling;
+use trilux::sampling::{LightSampling, PathSampler};
 
 /// The furnace with the lights sampled by solid angle (the default) and by area
 /// (`--light-sampling random`; every wall is a light, so next-event estimation reaches it
@@ -122,4 +122,56 @@ fn square_light_matches_the_closed_form() {
             );
         }
     }
+}
+
+/// Stratified paths (`--sampler sobol`, the default) against independent ones on the floor
+/// under a square light (a penumbra-free soft light, and a diffuse bounce off the floor): at
+/// 64 paths a pixel their pixels' squared error against a 16,384-path reference is well
+/// below independent paths' — the light points and bounce directions of a pixel's paths cover
+/// the square evenly, and this light, seen unoccluded, is a smooth integrand. Measured 0.015×
+/// over seeds 1–4 (session 33); were the draws' dimensions misaligned between a pixel's
+/// paths, it would be 1×. (Unbiased all the same: the ρ = 0.9 furnace over seeds 0–9 came out
+/// at +0.028% ± 0.050% with Sobol paths, +0.035% ± 0.045% with independent ones.)
+#[test]
+fn stratified_paths_have_less_error_than_independent_ones() {
+    let scene = square_light(10.0, 0.6);
+    let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
+    let render = |sampler: PathSampler, paths: u32, seed: u64| {
+        let settings = RenderSettings {
+            width: 16,
+            height: 16,
+            num_antialias_samples: paths,
+            ambient_light: Vec3::ZERO,
+            light_sampling: LightSampling::Random,
+            path_sampler: sampler,
+            seed,
+            quiet: true,
+            ..RenderSettings::default()
+        };
+        path::render(&scene, accel.as_ref(), &settings).0.pixels
+    };
+    let reference = render(PathSampler::Independent, 16_384, 99);
+    let squared_error = |sampler: PathSampler| -> f64 {
+        (1..=4)
+            .map(|seed| {
+                render(sampler, 64, seed)
+                    .iter()
+                    .zip(&reference)
+                    .map(|(p, r)| (*p - *r).length_squared() as f64)
+                    .sum::<f64>()
+            })
+            .sum()
+    };
+    let (sobol, independent) = (
+        squared_error(PathSampler::Sobol),
+        squared_error(PathSampler::Independent),
+    );
+    println!(
+        "squared error at 64 paths: sobol {sobol:.4e}, independent {independent:.4e} ({:.3}×)",
+        sobol / independent
+    );
+    assert!(
+        sobol < 0.1 * independent,
+        "sobol {sobol} against independent {independent}"
+    );
 }

@@ -18,7 +18,7 @@ use crate::engines::radiosity::{
 use crate::engines::{EngineKind, IndirectKind, RenderSettings};
 use crate::film::part::Window;
 use crate::geometry::{vec3, Vec3};
-use crate::sampling::LightSampling;
+use crate::sampling::{LightSampling, PathSampler};
 use crate::scene::{Camera, Projection};
 
 fn rs() -> RenderSettings {
@@ -135,6 +135,11 @@ pub struct PathArgs {
     /// [default: no limit; Russian roulette ends paths without bias].
     #[arg(long, value_name = "N")]
     pub max_depth: Option<u32>,
+    /// Where a path's numbers come from: sobol stratifies a pixel's paths together (each
+    /// light point and bounce direction of the pixel's paths spread over the square),
+    /// independent draws every number on its own (Mitsuba 3's default sampler).
+    #[arg(long, value_enum, default_value_t = rs().path_sampler)]
+    pub sampler: PathSampler,
 }
 
 /// The SPPM engine's flags (its passes are -num_antialias_samples).
@@ -600,6 +605,7 @@ impl RenderArgs {
             num_shadow_samples: self.ray_trace.num_shadow_samples,
             num_antialias_samples: self.camera.num_antialias_samples,
             max_depth: self.path.max_depth,
+            path_sampler: self.path.sampler,
             ambient_light: self
                 .ray_trace
                 .ambient_light

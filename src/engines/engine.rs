@@ -232,6 +232,8 @@ pub struct RenderSettings {
     pub photon: photon::PhotonSettings,
     /// Placement of points on lights (`--light-sampling`, default solid-angle).
     pub light_sampling: crate::sampling::LightSampling,
+    /// Where the path tracer's numbers come from (`--sampler`, default sobol).
+    pub path_sampler: crate::sampling::PathSampler,
     /// Levels of splitting with `--light-sampling adaptive` (`--adaptive-depth`, default 2:
     /// up to 5×5 points on a light).
     pub adaptive_depth: u32,
@@ -267,6 +269,7 @@ impl Default for RenderSettings {
             indirect: IndirectKind::Ambient,
             photon: Default::default(),
             light_sampling: crate::sampling::LightSampling::SolidAngle,
+            path_sampler: crate::sampling::PathSampler::Sobol,
             adaptive_depth: 2,
             aperture: 0.0,
             focus_distance: None,

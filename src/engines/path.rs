@@ -566,7 +566,10 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (F
         accel,
         &settings.image(),
         "path",
-        |ray, hit, _, id, counts| tracer.radiance(ray, hit, &mut PathSamples::sobol(id), counts),
+        |ray, hit, rng, id, counts| {
+            let mut samples = PathSamples::new(settings.path_sampler, id, rng.clone());
+            tracer.radiance(ray, hit, &mut samples, counts)
+        },
     )
 }
 

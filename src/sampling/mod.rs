@@ -5,7 +5,7 @@
 use crate::geometry::Vec3;
 
 mod sobol;
-pub use sobol::{PathSamples, SampleId};
+pub use sobol::{PathSampler, PathSamples, SampleId};
 
 /// SplitMix64's finaliser: a strong 64-bit mix.
 #[inline]

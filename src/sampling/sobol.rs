@@ -13,6 +13,18 @@
 
 use super::{mix64, Rng, UNIT_24};
 
+/// Where the path tracer's numbers come from (`--sampler`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum PathSampler {
+    /// A pixel's paths stratified together: each draw from a dimension of its own of the
+    /// pixel's scrambled Sobol points (pbrt-v4's default sampler is of this kind).
+    #[default]
+    Sobol,
+    /// Independent uniform numbers for every path (Mitsuba 3's `independent` sampler, and
+    /// this renderer's until session 33).
+    Independent,
+}
+
 /// Which camera sample a path belongs to: what its numbers are drawn from.
 #[derive(Clone, Copy, Debug)]
 pub struct SampleId {
@@ -66,6 +78,15 @@ impl PathSamples {
                 },
                 dimension: 0,
             },
+        }
+    }
+
+    /// The numbers of camera sample `id` by `sampler`; `rng` is the sample's own generator
+    /// (what `Independent` draws from).
+    pub fn new(sampler: PathSampler, id: SampleId, rng: Rng) -> PathSamples {
+        match sampler {
+            PathSampler::Sobol => PathSamples::sobol(id),
+            PathSampler::Independent => PathSamples::independent(rng),
         }
     }
 
