@@ -367,6 +367,7 @@ impl PathTracer<'_> {
                         }
                         ray = Ray::new(x, dir);
                         counts.secondary += 1;
+                        samples.prepare();
                         hit = closest_surface(self.accel, self.scene, &ray);
                         continue;
                     }
@@ -503,6 +504,7 @@ impl PathTracer<'_> {
             }
             ray = s.spawn_ray(dir);
             counts.secondary += 1;
+            samples.prepare();
             hit = closest_surface(self.accel, self.scene, &ray);
         }
         radiance
