@@ -5,7 +5,7 @@
 //! 2-D draw — a point on the light, a bounce direction — as a (0, m, 2)-net: one point in each
 //! of the 2^m elementary intervals of every shape, where independent numbers leave clumps and
 //! holes. Every point is still uniform in the square, so the estimate stays unbiased. On the
-//! Cornell box at 64 samples a pixel the error falls to 0.65× at 1.1× the time
+//! Cornell box at 64 samples a pixel the relMSE falls to 0.64× at 1.04–1.06× the time
 //! (BENCHMARKS.md, session 33).
 //!
 //! Everything is a hash of (seed, pixel, dimension) and the sample's index, as `Rng` is: an
