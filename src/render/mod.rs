@@ -156,6 +156,12 @@ impl CameraSampler {
         }
     }
 
+    /// Pixel (i, j)'s number, row-major from the bottom row: what its numbers hash.
+    #[inline]
+    fn pixel_number(&self, (i, j): (u32, u32)) -> u64 {
+        j as u64 * self.width as u64 + i as u64
+    }
+
     /// What the numbers of the path from camera sample `k` of pixel (i, j) are drawn from
     /// (`PathSamples`): the sample's index among the pixel's `-num_antialias_samples` (all of
     /// them, also in a part of a split render), none under `--time-limit`.
@@ -163,7 +169,7 @@ impl CameraSampler {
     pub fn sample_id(&self, (i, j): (u32, u32), k: u32) -> SampleId {
         SampleId {
             seed: self.seed,
-            pixel: j as u64 * self.width as u64 + i as u64,
+            pixel: self.pixel_number((i, j)),
             index: k,
             count: (!self.open_ended).then_some(self.spp),
         }
@@ -174,7 +180,7 @@ impl CameraSampler {
     #[inline]
     pub fn sample(&self, (i, j): (u32, u32), k: u32) -> (Ray, Rng) {
         let (w, h) = (self.width, self.height);
-        let pixel = j as u64 * w as u64 + i as u64;
+        let pixel = self.pixel_number((i, j));
         let mut rng = Rng::new(self.seed, pixel, k as u64);
         let (dx, dy) = if self.open_ended {
             // The R2 sequence's steps are the inverse powers of the plastic number.
