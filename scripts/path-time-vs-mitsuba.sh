@@ -16,6 +16,9 @@
 # to Mitsuba's and the ratio of time × relMSE, which is the time each needs for equal error.
 # MITSUBA_SAMPLERS="independent ldsampler" times Mitsuba with each of those samplers (default:
 # independent, as ../shared/peers/mitsuba_cornell.py sets it; the ratios are to the first).
+# MITSUBA_WIDTHS="8 4" also times Mitsuba (the first sampler) with its kernels built for AVX2
+# with 8 or 4 lanes instead of for the host (scripts/mitsuba_time.py, MITSUBA_VECTOR_WIDTH);
+# rows `mitsuba-w8`, `mitsuba-w4`.
 # Needs `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH (set here from
 # ldconfig when unset).
 set -euo pipefail
@@ -49,6 +52,11 @@ for r in $(seq "$repeats"); do
       [ "$sampler" = "${samplers[0]}" ] || name=mitsuba-$sampler
       t=$(MITSUBA_SAMPLER=$sampler python3 "$here/mitsuba_time.py" "$spp" "$work/mitsuba.exr" 256 "$r")
       echo "$name,$spp,$t,$(relmse "$work/mitsuba.exr")" >>"$csv"
+    done
+    for width in ${MITSUBA_WIDTHS:-}; do
+      t=$(MITSUBA_SAMPLER=${samplers[0]} MITSUBA_VECTOR_WIDTH=$width \
+        python3 "$here/mitsuba_time.py" "$spp" "$work/mitsuba.exr" 256 "$r")
+      echo "mitsuba-w$width,$spp,$t,$(relmse "$work/mitsuba.exr")" >>"$csv"
     done
     for who in "$@"; do
       render=${who%:*} accel=${who##*:}
