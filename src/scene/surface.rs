@@ -261,9 +261,16 @@ impl Scene {
             PrimKind::Shape => {
                 let prim = &self.shapes[i];
                 let shape = &prim.shape;
-                let (t, part) = shape
-                    .intersect(ray, t_max)
-                    .unwrap_or_else(|| (hit.t, shape.nearest_part(ray.at(hit.t))));
+                // An exact hit is the routine's own t (its roots do not depend on the limit it
+                // was called with); only a shape of several parts needs the test again, for
+                // the part.
+                let (t, part) = if hit.exact && shape.part_count() == 1 {
+                    (hit.t, 0)
+                } else {
+                    shape
+                        .intersect(ray, t_max)
+                        .unwrap_or_else(|| (hit.t, shape.nearest_part(ray.at(hit.t))))
+                };
                 // Moved onto the surface: the point's error is then that of the shape's size.
                 let (point, n) = shape.project(ray.at(t), part);
                 SurfaceHit {
