@@ -370,14 +370,12 @@ fn take_samples(
                 }
                 let first = window.x0 + (c * chunk) as u32;
                 let mut rngs = Vec::with_capacity(pixels.len() * spp);
-                let mut ids = Vec::with_capacity(pixels.len() * spp);
                 let mut rays = Vec::with_capacity(pixels.len() * spp);
                 for i in first..first + pixels.len() as u32 {
                     for k in samples.clone() {
                         let (ray, rng) = camera.sample((i, j), k);
                         rays.push(ray);
                         rngs.push(rng);
-                        ids.push(camera.sample_id((i, j), k));
                     }
                 }
                 let mut hits = vec![None; rays.len()];
@@ -388,10 +386,12 @@ fn take_samples(
                     // to infinity; their mean is again a finite f32.
                     let mut sum = [0.0f64; 3];
                     let mut good = 0u32;
-                    for idx in i * spp..(i + 1) * spp {
+                    let x = first + i as u32;
+                    for (idx, k) in (i * spp..(i + 1) * spp).zip(samples.clone()) {
                         let ray = &rays[idx];
                         let hit = hits[idx].map(|h| scene.surface(ray, &h));
-                        let l = radiance(ray, hit, &mut rngs[idx], ids[idx], &mut counts);
+                        let id = camera.sample_id((x, j), k);
+                        let l = radiance(ray, hit, &mut rngs[idx], id, &mut counts);
                         if l.is_finite() {
                             for (s, c) in sum.iter_mut().zip(l.to_array()) {
                                 *s += c as f64;
