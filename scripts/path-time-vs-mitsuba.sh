@@ -45,18 +45,20 @@ relmse() { # the image's relMSE against REFERENCE, or 0 without one
     echo 0
   fi
 }
+mitsuba() { # NAME SAMPLER WIDTH SPP SEED: one timed Mitsuba render as a row (WIDTH empty: the host's)
+  local t
+  t=$(MITSUBA_SAMPLER=$2 MITSUBA_VECTOR_WIDTH=$3 python3 "$here/mitsuba_time.py" "$4" "$work/mitsuba.exr" 256 "$5")
+  echo "$1,$4,$t,$(relmse "$work/mitsuba.exr")" >>"$csv"
+}
 for r in $(seq "$repeats"); do
   for spp in 64 256; do
     for sampler in "${samplers[@]}"; do
       name=mitsuba
       [ "$sampler" = "${samplers[0]}" ] || name=mitsuba-$sampler
-      t=$(MITSUBA_SAMPLER=$sampler python3 "$here/mitsuba_time.py" "$spp" "$work/mitsuba.exr" 256 "$r")
-      echo "$name,$spp,$t,$(relmse "$work/mitsuba.exr")" >>"$csv"
+      mitsuba "$name" "$sampler" "" "$spp" "$r"
     done
     for width in ${MITSUBA_WIDTHS:-}; do
-      t=$(MITSUBA_SAMPLER=${samplers[0]} MITSUBA_VECTOR_WIDTH=$width \
-        python3 "$here/mitsuba_time.py" "$spp" "$work/mitsuba.exr" 256 "$r")
-      echo "mitsuba-w$width,$spp,$t,$(relmse "$work/mitsuba.exr")" >>"$csv"
+      mitsuba "mitsuba-w$width" "${samplers[0]}" "$width" "$spp" "$r"
     done
     for who in "$@"; do
       render=${who%:*} accel=${who##*:}
