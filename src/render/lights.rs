@@ -80,6 +80,7 @@ impl Parallelogram {
     /// perpendicular (a parallelogram that is no rectangle: sampled by area), or when it
     /// subtends less than `MIN_SOLID_ANGLE`. The first sampling axis runs along the longer
     /// edge, as in `sample`.
+    #[inline]
     pub fn spherical_rectangle(&self, x: Vec3) -> Option<SphericalRectangle> {
         if (x - self.origin).dot(self.normal) <= 0.0 {
             return None;
@@ -330,6 +331,7 @@ impl Light {
     /// The light seen from `x`, to be sampled by solid angle: a rectangle (seen from its
     /// front, subtending at least `MIN_SOLID_ANGLE`) or a sphere seen from outside (likewise);
     /// None for the rest, which are sampled by area.
+    #[inline]
     pub fn solid_angle_sampler(&self, x: Vec3) -> Option<SolidAngleSampler> {
         match self.shape {
             LightShape::Parallelogram(quad) => quad

@@ -42,9 +42,10 @@ pub struct SphericalRectangle {
     y1: f64,
     z0: f64,
     /// The z components of the normals of the planes through the origin and the edges at
-    /// y0 and at y1.
+    /// y0 and at y1, and 1 − b0².
     b0: f64,
     b1: f64,
+    one_less_b0_squared: f64,
     /// 2π less the spherical rectangle's angles at the edge x0.
     k: f64,
     solid_angle: f64,
@@ -53,6 +54,7 @@ pub struct SphericalRectangle {
 impl SphericalRectangle {
     /// The rectangle with corner `corner` and perpendicular edges `edge_u`, `edge_v`, seen from
     /// `origin`; None when `origin` lies in its plane (it subtends nothing) or it has no area.
+    #[inline]
     pub fn new(origin: Vec3, corner: Vec3, edge_u: Vec3, edge_v: Vec3) -> Option<Self> {
         let (origin, corner) = (origin.as_dvec3(), corner.as_dvec3());
         let (eu, ev) = (edge_u.as_dvec3(), edge_v.as_dvec3());
@@ -85,6 +87,7 @@ impl SphericalRectangle {
         let (g0, g1, g2, g3) = (angle(n0, n1), angle(n1, n2), angle(n2, n3), angle(n3, n0));
         let k = std::f64::consts::TAU - g2 - g3;
         let solid_angle = g0 + g1 - k;
+        let (b0, b1) = (n0.z, n2.z);
         (solid_angle.is_finite() && solid_angle > 0.0).then_some(SphericalRectangle {
             origin,
             x,
@@ -95,8 +98,9 @@ impl SphericalRectangle {
             y0,
             y1,
             z0,
-            b0: n0.z,
-            b1: n2.z,
+            b0,
+            b1,
+            one_less_b0_squared: 1.0 - b0 * b0,
             k,
             solid_angle,
         })
@@ -173,10 +177,14 @@ impl SphericalRectangle {
     /// The x coordinate (along the first edge) whose slab [x0, x] encloses a share u of the
     /// solid angle.
     fn x_at(&self, u: f64) -> f64 {
-        let au = u * self.solid_angle + self.k;
-        let fu = (au.cos() * self.b0 - self.b1) / au.sin();
-        let cu = (fu.signum() / (fu * fu + self.b0 * self.b0).sqrt()).clamp(-1.0, 1.0);
-        (-(cu * self.z0) / (1.0 - cu * cu).max(0.0).sqrt()).clamp(self.x0, self.x1)
+        // Ureña et al.'s fu = (cos au · b0 − b1) / sin au, cu = sign(fu) / √(fu² + b0²) and
+        // x = −cu·z0 / √(1 − cu²), multiplied out: one root and one division.
+        let (sin, cos) = (u * self.solid_angle + self.k).sin_cos();
+        let n = cos * self.b0 - self.b1;
+        let root = (n * n - self.one_less_b0_squared * sin * sin)
+            .max(0.0)
+            .sqrt();
+        (-(sin * self.z0) * n.signum() / root).clamp(self.x0, self.x1)
     }
 
     /// The line of the rectangle at x = `xu`, as the sines of the elevation of its ends.
