@@ -1,8 +1,8 @@
 //! Next-event estimation's point on a rectangular light, as the path tracer, the ray tracer
 //! and SPPM make it from a shading point: by solid angle (`SphericalRectangle::new` and
 //! `sample_cosine`, the default), the density MIS asks of it (`pdf_cosine`), and by area
-//! (`--light-sampling random`) for scale. Shading points and normals are spread through the
-//! course's Cornell box under its ceiling light, as its paths' vertices are.
+//! (`--light-sampling random`) for scale. Shading points are spread over the course's Cornell
+//! box's walls, as its paths' vertices are, and the light is its wall at z = 1.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use trilux::geometry::{vec3, Vec3};
@@ -19,26 +19,29 @@ fn u(i: u64) -> f32 {
     (x >> 40) as f32 / (1u64 << 24) as f32
 }
 
-/// Shading points in the box below the light, each with a unit normal on the light's side,
-/// and a (u, v) for its sample.
+/// Shading points on the box's five other walls, each with the wall's inward normal, and a
+/// (u, v) for its sample.
 fn places() -> Vec<(Vec3, Vec3, f32, f32)> {
     (0..N as u64)
         .map(|k| {
             let r = |c: u64| u(k * 16 + c) * 2.0 - 1.0;
-            let point = vec3(r(0), r(1) * 0.99, r(2));
-            let mut normal = vec3(r(3), r(4), r(5)).normalize_or(Vec3::Y);
-            if normal.y < 0.0 {
-                normal.y = -normal.y;
-            }
+            let (a, b) = (r(0), r(1));
+            let (point, normal) = match k % 5 {
+                0 => (vec3(a, b, -1.0), Vec3::Z),
+                1 => (vec3(a, -1.0, b), Vec3::Y),
+                2 => (vec3(a, 1.0, b), Vec3::NEG_Y),
+                3 => (vec3(-1.0, a, b), Vec3::X),
+                _ => (vec3(1.0, a, b), Vec3::NEG_X),
+            };
             (point, normal, u(k * 16 + 6), u(k * 16 + 7))
         })
         .collect()
 }
 
-/// The course box's light: a 0.5 × 0.5 square in the ceiling (y = 1), facing down.
-const CORNER: Vec3 = vec3(-0.25, 1.0, -0.25);
-const EDGE_U: Vec3 = vec3(0.5, 0.0, 0.0);
-const EDGE_V: Vec3 = vec3(0.0, 0.0, 0.5);
+/// The course box's light: the whole wall at z = 1, facing into the box.
+const CORNER: Vec3 = vec3(-1.0, -1.0, 1.0);
+const EDGE_U: Vec3 = vec3(2.0, 0.0, 0.0);
+const EDGE_V: Vec3 = vec3(0.0, 2.0, 0.0);
 
 fn lights(c: &mut Criterion) {
     let places = places();
@@ -76,9 +79,9 @@ fn lights(c: &mut Criterion) {
                 let w = p - x;
                 let r2 = w.length_squared();
                 let cos = n.dot(w) / r2.sqrt();
-                let cos_light = w.y / r2.sqrt();
+                let cos_light = w.z / r2.sqrt();
                 if cos > 0.0 && cos_light > 0.0 {
-                    sum += cos * cos_light * 0.25 / (std::f32::consts::PI * r2);
+                    sum += cos * cos_light * 4.0 / (std::f32::consts::PI * r2);
                 }
             }
             sum
