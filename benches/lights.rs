@@ -7,25 +7,17 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use trilux::geometry::{vec3, Vec3};
 use trilux::render::solid_angle::SphericalRectangle;
+use trilux::sampling::Rng;
 
 const N: usize = 4096;
-
-/// Hash-based uniform numbers in [0, 1).
-fn u(i: u64) -> f32 {
-    let mut x = i.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x2545_f491_4f6c_dd1d;
-    x ^= x >> 33;
-    x = x.wrapping_mul(0xff51_afd7_ed55_8ccd);
-    x ^= x >> 33;
-    (x >> 40) as f32 / (1u64 << 24) as f32
-}
 
 /// Shading points on the box's five other walls, each with the wall's inward normal, and a
 /// (u, v) for its sample.
 fn places() -> Vec<(Vec3, Vec3, f32, f32)> {
     (0..N as u64)
         .map(|k| {
-            let r = |c: u64| u(k * 16 + c) * 2.0 - 1.0;
-            let (a, b) = (r(0), r(1));
+            let mut rng = Rng::new(1, k, 0);
+            let (a, b) = (rng.next_f32() * 2.0 - 1.0, rng.next_f32() * 2.0 - 1.0);
             let (point, normal) = match k % 5 {
                 0 => (vec3(a, b, -1.0), Vec3::Z),
                 1 => (vec3(a, -1.0, b), Vec3::Y),
@@ -33,7 +25,7 @@ fn places() -> Vec<(Vec3, Vec3, f32, f32)> {
                 3 => (vec3(-1.0, a, b), Vec3::X),
                 _ => (vec3(1.0, a, b), Vec3::NEG_X),
             };
-            (point, normal, u(k * 16 + 6), u(k * 16 + 7))
+            (point, normal, rng.next_f32(), rng.next_f32())
         })
         .collect()
 }
