@@ -35,32 +35,35 @@ const CORNER: Vec3 = vec3(-1.0, -1.0, 1.0);
 const EDGE_U: Vec3 = vec3(2.0, 0.0, 0.0);
 const EDGE_V: Vec3 = vec3(0.0, 2.0, 0.0);
 
+/// The sum over `places` of what `f` makes of each.
+fn total(
+    places: &[(Vec3, Vec3, f32, f32)],
+    f: impl Fn(Vec3, Vec3, f32, f32) -> Option<f64>,
+) -> f64 {
+    places
+        .iter()
+        .filter_map(|&(x, n, u, v)| f(x, n, u, v))
+        .sum()
+}
+
 fn lights(c: &mut Criterion) {
     let places = places();
     let mut g = c.benchmark_group("rectangle_light");
     g.throughput(Throughput::Elements(N as u64));
+    let rectangle = |x: Vec3| SphericalRectangle::new(x, CORNER, EDGE_U, EDGE_V);
     g.bench_function("solid_angle_sample", |b| {
         b.iter(|| {
-            let mut sum = 0.0f64;
-            for &(x, n, u, v) in &places {
-                let rect = SphericalRectangle::new(x, CORNER, EDGE_U, EDGE_V);
-                if let Some(s) = rect.and_then(|r| r.sample_cosine(n, u, v)) {
-                    sum += s.weight + s.pdf + s.point.x as f64;
-                }
-            }
-            sum
+            total(&places, |x, n, u, v| {
+                let s = rectangle(x)?.sample_cosine(n, u, v)?;
+                Some(s.weight + s.pdf + s.point.x as f64)
+            })
         })
     });
     g.bench_function("solid_angle_pdf", |b| {
         b.iter(|| {
-            let mut sum = 0.0f64;
-            for &(x, n, u, v) in &places {
-                let p = CORNER + EDGE_U * u + EDGE_V * v;
-                if let Some(r) = SphericalRectangle::new(x, CORNER, EDGE_U, EDGE_V) {
-                    sum += r.pdf_cosine(n, p);
-                }
-            }
-            sum
+            total(&places, |x, n, u, v| {
+                Some(rectangle(x)?.pdf_cosine(n, CORNER + EDGE_U * u + EDGE_V * v))
+            })
         })
     });
     g.bench_function("area_sample", |b| {

@@ -45,10 +45,9 @@ pub struct SphericalRectangle {
     y1: f64,
     z0: f64,
     /// The z components of the normals of the planes through the origin and the edges at
-    /// y0 and at y1, and 1 − b0².
+    /// y0 and at y1.
     b0: f64,
     b1: f64,
-    one_less_b0_squared: f64,
     /// The cosine and sine of k, 2π less the spherical rectangle's angles at the edge x0.
     k_cos: f64,
     k_sin: f64,
@@ -117,7 +116,6 @@ impl SphericalRectangle {
             z0,
             b0,
             b1,
-            one_less_b0_squared: 1.0 - b0 * b0,
             k_cos: last_two.re / last_two_length,
             k_sin: -last_two.im / last_two_length,
             solid_angle,
@@ -202,7 +200,7 @@ impl SphericalRectangle {
         let sin = sin_u * self.k_cos + cos_u * self.k_sin;
         let cos = cos_u * self.k_cos - sin_u * self.k_sin;
         let n = cos * self.b0 - self.b1;
-        let root = (n * n - self.one_less_b0_squared * sin * sin)
+        let root = (n * n - (1.0 - self.b0 * self.b0) * sin * sin)
             .max(0.0)
             .sqrt();
         (-(sin * self.z0) * n.signum() / root).clamp(self.x0, self.x1)
