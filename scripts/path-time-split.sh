@@ -13,7 +13,8 @@
 # whose samples are CPU time at 999 a second on each thread. Ray casting is, in Mitsuba, Embree
 # (libembree3) and the sphere's intersection callbacks Embree calls (Mitsuba's `ray_intersect`
 # and `ray_test` and its packet wrappers); in ours, the BVH's traversal and tests (symbols of
-# `accel::bvh`, or Embree's and our shim's with `--accel embree`). Prints, per renderer, the
+# `accel::bvh`, or Embree's, our shim's (sys/shim.c) and the exact tests it calls back with
+# `--accel embree`). Prints, per renderer, the
 # medians of ray casting, the rest, and their sum in CPU seconds a render, and ours over
 # Mitsuba's.
 # Needs linux-perf (Debian), `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH
@@ -40,7 +41,11 @@ split() {
     2>/dev/null | python3 -c '
 import re, sys
 name, renders = sys.argv[1], int(sys.argv[2])
-casting = re.compile(r"libembree|embree_(intersect|occluded)|::ray_(intersect|test)|accel::bvh|accel::embree|trilux_embree")
+casting = re.compile(
+    r"libembree|embree_(intersect|occluded)|::ray_(intersect|test)|accel::bvh|accel::embree"
+    # our C shim (sys/shim.c) around Embree: its calls and the callbacks Embree makes
+    r"|^(tx_\w+|\w+_filter|user_(intersect|occluded)|exact_occludes|offer|best_of|load_ray|init_ray(hit)?)$"
+)
 cast = rest = 0
 for line in sys.stdin:
     m = re.match(r"\s*[\d.]+%\s+(\d+)\s+(.+?)\s+\[[.k]\]\s+(.*)", line)
