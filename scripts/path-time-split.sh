@@ -18,22 +18,17 @@
 # medians of ray casting, the rest, and their sum in CPU seconds a render, and ours over
 # Mitsuba's.
 # Needs linux-perf (Debian), `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH
-# (set here from ldconfig when unset).
+# (set by scripts/mitsuba-common.sh from ldconfig when unset).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 repeats=$1 spp=$2 who=$3
 render=${who%:*}
 accel=bvh
 [ "$who" = "$render" ] || accel=${who##*:}
-if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
-  DRJIT_LIBLLVM_PATH=$(ldconfig -p | awk '/libLLVM.so.19/ { print $NF; exit }')
-  export DRJIT_LIBLLVM_PATH
-fi
+source "$here/mitsuba-common.sh"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-scene=$work/cornell_box_diffuse_sphere.obj
-cp "$here/../scenes/cornell_box_diffuse_sphere.obj" "$scene"
-echo "background_color 0 0 0" >>"$scene" # Mitsuba's scene has no background light either
+scene=$(scene_for_mitsuba cornell_box_diffuse_sphere.obj "$work")
 
 # split NAME RENDERS PERF_DATA: a CSV row of CPU seconds (casting, rest) a render.
 split() {

@@ -19,21 +19,16 @@
 # MITSUBA_WIDTHS="8 4" also times Mitsuba (the first sampler) with its kernels built for AVX2
 # with 8 or 4 lanes instead of for the host (scripts/mitsuba_time.py, MITSUBA_VECTOR_WIDTH);
 # rows `mitsuba-w8`, `mitsuba-w4`.
-# Needs `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH (set here from
-# ldconfig when unset).
+# Needs `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH (set by
+# scripts/mitsuba-common.sh from ldconfig when unset).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 repeats=$1
 shift
-if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
-  DRJIT_LIBLLVM_PATH=$(ldconfig -p | awk '/libLLVM.so.19/ { print $NF; exit }')
-  export DRJIT_LIBLLVM_PATH
-fi
+source "$here/mitsuba-common.sh"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-scene=$work/cornell_box_diffuse_sphere.obj
-cp "$here/../scenes/cornell_box_diffuse_sphere.obj" "$scene"
-echo "background_color 0 0 0" >>"$scene" # Mitsuba's scene has no background light either
+scene=$(scene_for_mitsuba cornell_box_diffuse_sphere.obj "$work")
 
 csv=$work/times.csv
 samplers=(${MITSUBA_SAMPLERS:-independent})

@@ -20,8 +20,8 @@
 # VS_SCENE=caustic measures scenes/glass_sphere_caustic.obj instead (Mitsuba's side:
 # scripts/mitsuba_caustic.py, which also makes its reference), with -num_bounces 6 for the
 # engines that trace glass by recursion.
-# Needs `pip install mitsuba numpy`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH (set here from
-# ldconfig when unset). Writes its images and a CSV into a temporary folder it names.
+# Needs `pip install mitsuba numpy`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH (set by
+# scripts/mitsuba-common.sh from ldconfig when unset). Writes its images and a CSV into a temporary folder it names.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 reference=$(realpath "$1")
@@ -31,10 +31,7 @@ accel=()
 if [ -n "${VS_ACCEL:-}" ]; then
   accel=(--accel "$VS_ACCEL")
 fi
-if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
-  DRJIT_LIBLLVM_PATH=$(ldconfig -p | awk '/libLLVM.so.19/ { print $NF; exit }')
-  export DRJIT_LIBLLVM_PATH
-fi
+source "$here/mitsuba-common.sh"
 work=$(mktemp -d)
 echo "vs-mitsuba: images and CSV in $work"
 if [ "${VS_SCENE:-cornell}" = caustic ]; then
@@ -42,9 +39,7 @@ if [ "${VS_SCENE:-cornell}" = caustic ]; then
 else
   name=cornell_box_diffuse_sphere.obj mitsuba=mitsuba_time.py bounces=""
 fi
-scene=$work/$name
-cp "$here/../scenes/$name" "$scene"
-echo "background_color 0 0 0" >>"$scene"
+scene=$(scene_for_mitsuba "$name" "$work")
 
 relmse() { "$render" compare "$1" "$reference" | awk '/^relmse/ { print $2 }'; }
 seconds() { # runs the command, prints its wall time
