@@ -14,9 +14,8 @@
 # (libembree3) and the sphere's intersection callbacks Embree calls (Mitsuba's `ray_intersect`
 # and `ray_test` and its packet wrappers); in ours, the BVH's traversal and tests (symbols of
 # `accel::bvh`, or Embree's, our shim's (sys/shim.c) and the exact tests it calls back with
-# `--accel embree`). Prints, per renderer, the
-# medians of ray casting, the rest, and their sum in CPU seconds a render, and ours over
-# Mitsuba's.
+# `--accel embree`). Prints, per renderer, the medians of ray casting, the rest, and their sum
+# in CPU seconds a render, and ours over Mitsuba's.
 # Needs linux-perf (Debian), `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH
 # (set by scripts/mitsuba-common.sh from ldconfig when unset).
 set -euo pipefail
@@ -30,8 +29,8 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 scene=$(scene_for_mitsuba cornell_box_diffuse_sphere.obj "$work")
 
-# split NAME RENDERS PERF_DATA: a CSV row of CPU seconds (casting, rest) a render.
-split() {
+# cpu_split NAME RENDERS PERF_DATA: a CSV row of CPU seconds (casting, rest) a render.
+cpu_split() {
   perf report -i "$3" --no-children --sort dso,sym --stdio -n -g none --percent-limit 0 \
     2>/dev/null | python3 -c '
 import re, sys
@@ -46,7 +45,7 @@ for line in sys.stdin:
     m = re.match(r"\s*[\d.]+%\s+(\d+)\s+(.+?)\s+\[[.k]\]\s+(.*)", line)
     if not m:
         continue
-    n, dso, sym = int(m.group(1)), m.group(2), m.group(3)
+    n, dso, sym = int(m.group(1)), m.group(2), m.group(3).strip()
     if casting.search(dso) or casting.search(sym):
         cast += n
     else:
@@ -59,12 +58,12 @@ csv=$work/split.csv
 for r in $(seq "$repeats"); do
   perf record -q -F 999 -o "$work/mitsuba.data" \
     python3 "$here/mitsuba_time.py" "$spp" "$work/mitsuba.exr" 256 "$r" >/dev/null 2>&1
-  split mitsuba 2 "$work/mitsuba.data" >>"$csv"
+  cpu_split mitsuba 2 "$work/mitsuba.data" >>"$csv"
   perf record -q -F 999 -o "$work/ours.data" \
     "$render" -input "$scene" --engine path -num_antialias_samples "$spp" \
     --light-sampling random --accel "$accel" --seed "$r" --quiet -o "$work/ours.exr" \
     >/dev/null 2>&1
-  split "trilux ($accel)" 1 "$work/ours.data" >>"$csv"
+  cpu_split "trilux ($accel)" 1 "$work/ours.data" >>"$csv"
 done
 
 python3 - "$csv" "$spp" <<'PY'

@@ -21,7 +21,8 @@
 # scripts/mitsuba_caustic.py, which also makes its reference), with -num_bounces 6 for the
 # engines that trace glass by recursion.
 # Needs `pip install mitsuba numpy`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH (set by
-# scripts/mitsuba-common.sh from ldconfig when unset). Writes its images and a CSV into a temporary folder it names.
+# scripts/mitsuba-common.sh from ldconfig when unset). Writes its images and a CSV into a
+# temporary folder it names.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 reference=$(realpath "$1")
