@@ -18,6 +18,7 @@ use crate::scene::Material;
 
 /// A cosine-distributed direction about the unit normal `n`, from (u, v) in [0,1)², and its
 /// density in solid angle, cos θ / π.
+#[inline(always)]
 pub fn diffuse_sample(n: Vec3, u: f32, v: f32) -> (Vec3, f32) {
     let (x, y) = crate::sampling::sample_disk(u, v);
     let cos = (1.0 - x * x - y * y).max(0.0).sqrt();
@@ -166,6 +167,7 @@ impl GlossyLobe {
 
 /// The power heuristic's weight (β = 2) for a sample drawn with density `a` when another
 /// strategy would have drawn it with density `b`.
+#[inline(always)]
 pub fn power_heuristic(a: f32, b: f32) -> f32 {
     let (a2, b2) = (a * a, b * b);
     if a2 + b2 > 0.0 {

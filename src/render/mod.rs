@@ -227,6 +227,38 @@ pub fn render_pixels(
     label: &str,
     radiance: impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, SampleId, &mut Counts) -> Color + Sync,
 ) -> (Film, RenderStats) {
+    render_pixel_batches(scene, accel, settings, label, |batch, counts, out| {
+        for (k, l) in out.iter_mut().enumerate() {
+            *l = radiance(
+                &batch.rays[k],
+                batch.hits[k],
+                &mut batch.rngs[k],
+                batch.ids[k],
+                counts,
+            );
+        }
+    })
+}
+
+/// One batch of camera samples (a chunk of a row): their rays, closest hits, generators and
+/// ids, in the same order.
+pub struct CameraBatch<'a> {
+    pub rays: &'a [Ray],
+    pub hits: &'a [Option<SurfaceHit>],
+    pub rngs: &'a mut [Rng],
+    pub ids: &'a [SampleId],
+}
+
+/// `render_pixels` for engines that follow a chunk's camera samples together (the path
+/// tracer's wavefront): `radiance` writes the radiance along each of the batch's rays into
+/// `out`, in the batch's order.
+pub fn render_pixel_batches(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &ImageSettings,
+    label: &str,
+    radiance: impl Fn(CameraBatch, &mut Counts, &mut [Color]) + Sync,
+) -> (Film, RenderStats) {
     let camera = CameraSampler::new(scene, settings);
     let window = settings.window();
     let stats = RenderStats::default();
@@ -340,7 +372,7 @@ fn take_samples(
     stats: &RenderStats,
     bar: &indicatif::ProgressBar,
     keep: bool,
-    radiance: &(impl Fn(&Ray, Option<SurfaceHit>, &mut Rng, SampleId, &mut Counts) -> Color + Sync),
+    radiance: &(impl Fn(CameraBatch, &mut Counts, &mut [Color]) + Sync),
 ) -> Vec<Vec<PixelSum>> {
     let (w, h) = (film.width, film.height);
     let spp = samples.len();
@@ -371,27 +403,37 @@ fn take_samples(
                 let first = window.x0 + (c * chunk) as u32;
                 let mut rngs = Vec::with_capacity(pixels.len() * spp);
                 let mut rays = Vec::with_capacity(pixels.len() * spp);
+                let mut ids = Vec::with_capacity(pixels.len() * spp);
                 for i in first..first + pixels.len() as u32 {
                     for k in samples.clone() {
                         let (ray, rng) = camera.sample((i, j), k);
                         rays.push(ray);
                         rngs.push(rng);
+                        ids.push(camera.sample_id((i, j), k));
                     }
                 }
-                let mut hits = vec![None; rays.len()];
-                accel.intersect_batch(&rays, &mut hits);
+                let mut prim_hits = vec![None; rays.len()];
+                accel.intersect_batch(&rays, &mut prim_hits);
                 counts.camera += rays.len() as u64;
+                let hits: Vec<_> = rays
+                    .iter()
+                    .zip(&prim_hits)
+                    .map(|(ray, h)| h.map(|h| scene.surface(ray, &h)))
+                    .collect();
+                let mut radiances = vec![Color::ZERO; rays.len()];
+                let batch = CameraBatch {
+                    rays: &rays,
+                    hits: &hits,
+                    rngs: &mut rngs,
+                    ids: &ids,
+                };
+                radiance(batch, &mut counts, &mut radiances);
                 for (i, pixel) in pixels.iter_mut().enumerate() {
                     // Summed in f64: finite samples near f32's largest value must not add up
                     // to infinity; their mean is again a finite f32.
                     let mut sum = [0.0f64; 3];
                     let mut good = 0u32;
-                    let x = first + i as u32;
-                    for (idx, k) in (i * spp..(i + 1) * spp).zip(samples.clone()) {
-                        let ray = &rays[idx];
-                        let hit = hits[idx].map(|h| scene.surface(ray, &h));
-                        let id = camera.sample_id((x, j), k);
-                        let l = radiance(ray, hit, &mut rngs[idx], id, &mut counts);
+                    for &l in &radiances[i * spp..(i + 1) * spp] {
                         if l.is_finite() {
                             for (s, c) in sum.iter_mut().zip(l.to_array()) {
                                 *s += c as f64;

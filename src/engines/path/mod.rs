@@ -15,13 +15,15 @@
 //! their light points and bounce directions evenly. The background colour is seen, not a
 //! light: a path that leaves the scene after a diffuse bounce brings nothing back.
 
+mod wavefront;
+
 use super::engine::{Budget, Engine, EngineKind, RenderSettings, Rendered};
 use super::scattering::{diffuse_sample, power_heuristic, reflect, Dielectric, GlossyLobe};
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
-use crate::render::lights::Light;
-use crate::render::{render_pixels, Counts, RenderStats};
+use crate::render::lights::{DirectSample, Light};
+use crate::render::{render_pixel_batches, render_pixels, Counts, RenderStats};
 use crate::sampling::{LightSampling, PathSamples};
 use crate::scene::medium::{Flight, Medium};
 use crate::scene::sky::Sky;
@@ -41,6 +43,10 @@ const ROULETTE_FROM: u32 = 5;
 /// only keeps a perfectly white closed room finite. (A cap of 0.95 let throughput grow as
 /// (ρ/0.95)^k: the ρ = 0.99 furnace came out at 90.4 instead of 100 with 4096 paths a pixel.)
 const MAX_SURVIVAL: f32 = 0.999;
+/// Paths the wavefront follows together (`wavefront.rs`): on the Cornell box 256 took 0.88×
+/// the time of 4096 (the whole chunk of camera samples of `render_pixels`), whose state no
+/// longer fits the caches, and 16 took 1.18× (session 37, without the vertex kernel).
+const WAVEFRONT_PATHS: usize = 256;
 /// A hard bound on path length, far beyond what roulette lets through (reached with
 /// probability 0.999^20000 < 1e-8 even in a closed white room).
 const MAX_VERTICES: u32 = 20_000;
@@ -62,6 +68,8 @@ pub struct PathTracer<'a> {
     /// rectangles and spheres (the default): on the Cornell box about 0.6× the time a path
     /// for 1.5× the relMSE at equal paths, and no bound on a sample's weight near a light.
     by_area: bool,
+    /// The widest SIMD instructions this processor has (the wavefront's vertex kernel).
+    arch: pulp::Arch,
 }
 
 /// The random numbers of one light sample (`PathTracer::draw_light`): the light's index and
@@ -71,6 +79,23 @@ struct LightDraw {
     k: usize,
     u: f32,
     v: f32,
+}
+
+/// The lobes of a material a path may scatter in.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Lobe {
+    Diffuse,
+    /// A mirror or a glossy lobe.
+    Reflective,
+    /// Glass.
+    Transmitted,
+}
+
+/// A light sample before its shadow ray is traced: the ray, and the radiance the sample
+/// brings (weighted) if nothing blocks it.
+struct ShadowedSample {
+    shadow_ray: Ray,
+    radiance: Color,
 }
 
 /// What the previous vertex of a path tells the next: where it was and with what density the
@@ -104,6 +129,7 @@ impl PathTracer<'_> {
             cdf,
             max_depth: MAX_VERTICES,
             by_area: false,
+            arch: pulp::Arch::new(),
         }
     }
 
@@ -213,21 +239,33 @@ impl PathTracer<'_> {
         self.scene.sky.as_ref().map(|_| samples.next_2d())
     }
 
+    /// What the light sample `sample` brings where its shadow ray is not blocked (nothing
+    /// without a sample).
+    fn unblocked(&self, sample: Option<ShadowedSample>, counts: &mut Counts) -> Color {
+        let Some(sample) = sample else {
+            return Vec3::ZERO;
+        };
+        counts.shadow += 1;
+        if self.accel.occluded(&sample.shadow_ray) {
+            return Vec3::ZERO;
+        }
+        sample.radiance
+    }
+
     /// Next-event estimation at a diffuse point (`lobe` None) or in a glossy lobe, from the
-    /// numbers `draw_light` drew: radiance reflected per unit albedo (or reflectance) from one
-    /// light sample, weighted against sampling the lobe by the power heuristic.
-    fn sample_light(
+    /// numbers `draw_light` drew, up to its shadow ray: the ray, and the radiance reflected
+    /// per unit albedo (or reflectance) from one light sample, weighted against sampling the
+    /// lobe by the power heuristic, if nothing blocks it (None: the sample brings nothing,
+    /// and casts no ray).
+    fn light_sample(
         &self,
         s: &SurfaceHit,
         n: Vec3,
         lobe: Option<&GlossyLobe>,
         medium: Option<&Medium>,
         draw: Option<LightDraw>,
-        counts: &mut Counts,
-    ) -> Color {
-        let Some(LightDraw { k, u, v }) = draw else {
-            return Vec3::ZERO;
-        };
+    ) -> Option<ShadowedSample> {
+        let LightDraw { k, u, v } = draw?;
         let light = &self.lights[k];
         // By area with `--light-sampling random`; else by solid angle for rectangles and
         // spheres that subtend enough, by area for the rest.
@@ -236,32 +274,26 @@ impl PathTracer<'_> {
         } else {
             light.sample_towards(s.point, n, u, v)
         };
-        let Some(d) = sample else {
-            return Vec3::ZERO;
-        };
+        let d = sample?;
         if !(d.weight.is_finite() && d.pdf > 0.0) {
-            return Vec3::ZERO;
+            return None;
         }
-        let light_pdf = self.selection_probability(k) * d.pdf;
         // The lobe's density in that direction, and what the sample brings unweighted:
         // diffuse, the receiver's cosine over π and the sample's weight (which is that over
         // the light's density, computed exactly); glossy, the lobe's density over the light's.
-        let (bsdf_pdf, value) = match lobe {
-            None => (d.weight * d.pdf, d.weight),
+        let against = match lobe {
+            None => diffuse_against(&d),
             Some(lobe) => lobe_against(lobe, (d.point - s.point).normalize_or_zero(), d.pdf),
         };
-        if bsdf_pdf <= 0.0 {
-            return Vec3::ZERO;
-        }
-        let mis = power_heuristic(light_pdf, bsdf_pdf);
-        counts.shadow += 1;
-        let origin = offset_ray_origin(s.point, n, s.error);
-        if self.accel.occluded(&shadow_ray(origin, d.point)) {
-            return Vec3::ZERO;
-        }
         let transmittance =
             medium.map_or(Vec3::ONE, |m| m.transmittance(s.point.distance(d.point)));
-        light.emitted * transmittance * (value * mis / self.selection_probability(k))
+        weigh_light_sample(
+            offset_ray_origin(s.point, n, s.error),
+            &d,
+            self.selection_probability(k),
+            against,
+            light.emitted * transmittance,
+        )
     }
 
     /// Next-event estimation of the sky at a diffuse point (`lobe` None) or in a glossy lobe,
@@ -302,6 +334,54 @@ impl PathTracer<'_> {
         }
         let transmittance = medium.map_or(Vec3::ONE, |m| m.transmittance(f32::INFINITY));
         sky.radiance(dir) * transmittance * (value * power_heuristic(pdf, lobe_pdf))
+    }
+
+    /// The emitted radiance a path of `throughput` arriving at `s` along `dir` from `previous`
+    /// takes in: what the surface emits towards it, weighed against next-event estimation
+    /// (which could have found the point from `previous`) by the power heuristic.
+    fn emission(&self, s: &SurfaceHit, dir: Vec3, previous: &Previous, throughput: Color) -> Color {
+        if !self.scene.sees_emission(s, dir) {
+            return Vec3::ZERO;
+        }
+        let weight = match (previous.bsdf_pdf, Light::index_of(&self.lights, s.prim)) {
+            (Some(bsdf_pdf), Some(k)) => {
+                let light_pdf = self.light_pdf(k, previous, s);
+                power_heuristic(bsdf_pdf, light_pdf)
+            }
+            _ => 1.0,
+        };
+        throughput * self.scene.materials[s.material as usize].emitted * weight
+    }
+
+    /// The lobe a path scatters in at `s`, each chosen in proportion to its largest albedo
+    /// channel (a material with one lobe takes it without a draw), and the factor the path's
+    /// throughput takes: the lobe's albedo over the probability of taking it. None where the
+    /// material reflects and transmits nothing.
+    fn choose_lobe(&self, s: &SurfaceHit, samples: &mut PathSamples) -> Option<(Lobe, Color)> {
+        let m = &self.scene.materials[s.material as usize];
+        let albedo = self.scene.albedo(s);
+        let (d, r, t) = (
+            albedo.max_element(),
+            m.reflective.max_element(),
+            m.transmitted.max_element(),
+        );
+        let total = d + r + t;
+        if total <= 0.0 {
+            return None;
+        }
+        let lobes = (d > 0.0) as u32 + (r > 0.0) as u32 + (t > 0.0) as u32;
+        let choice = if lobes > 1 {
+            samples.next_1d() * total
+        } else {
+            0.0
+        };
+        Some(if choice < d {
+            (Lobe::Diffuse, albedo * (total / d))
+        } else if choice < d + r {
+            (Lobe::Reflective, m.reflective * (total / r))
+        } else {
+            (Lobe::Transmitted, m.transmitted * (total / t))
+        })
     }
 
     /// The radiance arriving along `ray`, from one path.
@@ -393,52 +473,21 @@ impl PathTracer<'_> {
             };
             let m = &self.scene.materials[s.material as usize];
             let (front, n) = s.facing(ray.direction);
-            if self.scene.sees_emission(&s, ray.direction) {
-                let weight = match (previous.bsdf_pdf, Light::index_of(&self.lights, s.prim)) {
-                    (Some(bsdf_pdf), Some(k)) => {
-                        let light_pdf = self.light_pdf(k, &previous, &s);
-                        power_heuristic(bsdf_pdf, light_pdf)
-                    }
-                    _ => 1.0,
-                };
-                radiance += throughput * m.emitted * weight;
-            }
+            radiance += self.emission(&s, ray.direction, &previous, throughput);
             if vertex >= self.max_depth {
                 break;
             }
-            let albedo = self.scene.albedo(&s);
-            let (d, r, t) = (
-                albedo.max_element(),
-                m.reflective.max_element(),
-                m.transmitted.max_element(),
-            );
-            let total = d + r + t;
-            if total <= 0.0 {
+            let Some((lobe, weight)) = self.choose_lobe(&s, samples) else {
                 break;
-            }
-            // A material with one lobe takes it without a draw.
-            let lobes = (d > 0.0) as u32 + (r > 0.0) as u32 + (t > 0.0) as u32;
-            let choice = if lobes > 1 {
-                samples.next_1d() * total
-            } else {
-                0.0
             };
-            let (diffuse, reflects) = (choice < d, choice >= d && choice < d + r);
-            // The branch's albedo over the probability of taking it.
-            throughput *= if diffuse {
-                albedo * (total / d)
-            } else if reflects {
-                m.reflective * (total / r)
-            } else {
-                m.transmitted * (total / t)
-            };
+            throughput *= weight;
             // A path this bounce turns black ends here (see `survives_roulette`), before it
             // spends a shadow ray on a sample it would weigh by zero.
             if throughput.max_element() == 0.0 {
                 break;
             }
             let dir;
-            if diffuse {
+            if lobe == Lobe::Diffuse {
                 // The light sample's numbers come first in the path's sequence, but the next
                 // direction is computed before the light sample: its long chain (a division,
                 // sincos) then runs while the shadow ray is traced, not after it (0.95× the
@@ -448,7 +497,7 @@ impl PathTracer<'_> {
                 let (u, v) = samples.next_2d();
                 let (sampled, pdf) = diffuse_sample(n, u, v);
                 radiance += throughput
-                    * (self.sample_light(&s, n, None, medium, light_draw, counts)
+                    * (self.unblocked(self.light_sample(&s, n, None, medium, light_draw), counts)
                         + self.sample_sky(&s, n, None, medium, sky_draw, counts));
                 if m.bump.is_some() && !s.leaves_on_side_of(n, sampled) {
                     break;
@@ -461,7 +510,7 @@ impl PathTracer<'_> {
                     bsdf_pdf: Some(pdf),
                     in_medium: false,
                 };
-            } else if reflects {
+            } else if lobe == Lobe::Reflective {
                 match GlossyLobe::new(ray.direction, n, m.roughness) {
                     // A mirror: a delta no light sample finds.
                     None => {
@@ -472,8 +521,10 @@ impl PathTracer<'_> {
                         let light_draw = self.draw_light(s.prim, samples);
                         let sky_draw = self.draw_sky(samples);
                         radiance += throughput
-                            * (self.sample_light(&s, n, Some(&glossy), medium, light_draw, counts)
-                                + self.sample_sky(&s, n, Some(&glossy), medium, sky_draw, counts));
+                            * (self.unblocked(
+                                self.light_sample(&s, n, Some(&glossy), medium, light_draw),
+                                counts,
+                            ) + self.sample_sky(&s, n, Some(&glossy), medium, sky_draw, counts));
                         let (u, v) = samples.next_2d();
                         let (sampled, pdf) = glossy.sample(u, v);
                         dir = sampled;
@@ -509,6 +560,37 @@ impl PathTracer<'_> {
         }
         radiance
     }
+}
+
+/// The cosine lobe's density for the direction of the light sample `d` and what the sample
+/// brings per unit albedo (its weight): see `lobe_against`.
+#[inline(always)]
+fn diffuse_against(d: &DirectSample) -> (f32, f32) {
+    (d.weight * d.pdf, d.weight)
+}
+
+/// The light sample `d`, from a light chosen with probability `selection` and seen from
+/// `origin` (the shading point moved off its surface): its shadow ray, and what it brings if
+/// nothing blocks it. `scale` is the light's radiance as it arrives (through a medium), and
+/// `(bsdf_pdf, value)` the other strategy's density for its direction and what it brings
+/// unweighted, against which the power heuristic weighs it. None where the other strategy
+/// could not have taken the direction.
+#[inline(always)]
+fn weigh_light_sample(
+    origin: Vec3,
+    d: &DirectSample,
+    selection: f32,
+    (bsdf_pdf, value): (f32, f32),
+    scale: Color,
+) -> Option<ShadowedSample> {
+    if bsdf_pdf <= 0.0 {
+        return None;
+    }
+    let mis = power_heuristic(selection * d.pdf, bsdf_pdf);
+    Some(ShadowedSample {
+        shadow_ray: shadow_ray(origin, d.point),
+        radiance: scale * (value * mis / selection),
+    })
 }
 
 /// A glossy lobe's density for the direction `dir` that another strategy picked with density
@@ -550,8 +632,15 @@ fn survives_roulette(vertex: u32, throughput: &mut Color, samples: &mut PathSamp
     if vertex < ROULETTE_FROM {
         return true;
     }
-    let survive = largest.min(MAX_SURVIVAL);
-    if samples.next_1d() >= survive {
+    roulette(throughput, samples.next_1d())
+}
+
+/// One game of Russian roulette on a path of `throughput` (not black) with the uniform number
+/// `draw`: whether it goes on, its throughput divided by the probability that it did.
+#[inline(always)]
+fn roulette(throughput: &mut Color, draw: f32) -> bool {
+    let survive = throughput.max_element().min(MAX_SURVIVAL);
+    if draw >= survive {
         return false;
     }
     *throughput *= survive.recip();
@@ -563,6 +652,25 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (F
     let tracer = PathTracer::new(scene, accel)
         .with_max_depth(settings.max_depth)
         .with_light_sampling(settings.light_sampling);
+    if tracer.wavefront_applies() {
+        return render_pixel_batches(
+            scene,
+            accel,
+            &settings.image(),
+            "path",
+            |batch, counts, out| {
+                for (c, out) in out.chunks_mut(WAVEFRONT_PATHS).enumerate() {
+                    let paths = c * WAVEFRONT_PATHS..c * WAVEFRONT_PATHS + out.len();
+                    let samples = batch.ids[paths.clone()]
+                        .iter()
+                        .zip(&batch.rngs[paths.clone()])
+                        .map(|(&id, rng)| PathSamples::new(settings.path_sampler, id, rng.clone()));
+                    let (rays, hits) = (&batch.rays[paths.clone()], &batch.hits[paths]);
+                    tracer.radiance_batch(rays, hits, samples, counts, out);
+                }
+            },
+        );
+    }
     render_pixels(
         scene,
         accel,
