@@ -34,13 +34,11 @@ struct Path {
 }
 
 impl PathTracer<'_> {
-    /// Whether `radiance_batch` follows this tracer's paths: lights sampled by area, no
-    /// medium, no sky, and every material reflects only diffusely (or not at all), without a
-    /// bump map.
+    /// Whether `radiance_batch` follows this tracer's paths: no medium, no sky, and every
+    /// material reflects only diffusely (or not at all), without a bump map.
     pub(super) fn wavefront_applies(&self) -> bool {
         let scene = self.scene;
-        self.by_area
-            && scene.media.is_empty()
+        scene.media.is_empty()
             && scene.sky.is_none()
             && scene.materials.iter().all(|m| {
                 m.reflective.max_element() <= 0.0
@@ -103,55 +101,10 @@ impl PathTracer<'_> {
                     }
                     continue;
                 };
-                let direction = path.ray.direction;
-                let (_, n) = s.facing(direction);
-                *radiance += self.emission(&s, direction, &path.previous, path.throughput);
-                if vertex >= self.max_depth {
+                if !self.begin_vertex(vertex, &s, path, radiance, (&mut block, filled)) {
                     continue;
                 }
-                let Some((_, weight)) = self.choose_lobe(&s, &mut path.samples) else {
-                    continue;
-                };
-                path.throughput *= weight;
-                if path.throughput.max_element() == 0.0 {
-                    continue;
-                }
-                let light_draw = self.draw_light(s.prim, &mut path.samples);
-                let (du, dv) = path.samples.next_2d();
-                let roulette = vertex >= super::ROULETTE_FROM;
-                let draw = if roulette {
-                    path.samples.next_1d()
-                } else {
-                    0.0
-                };
-                let l = filled;
-                let set = |a: &mut [Lanes; 3], v: Vec3| {
-                    a[0][l] = v.x;
-                    a[1][l] = v.y;
-                    a[2][l] = v.z;
-                };
-                set(&mut block.x, s.point);
-                set(&mut block.n, n);
-                set(&mut block.ng, s.geometric_normal);
-                block.error[l] = s.error;
-                set(&mut block.throughput, path.throughput);
-                block.has_light[l] = 0.0;
-                if let Some(super::LightDraw { k, u, v }) = light_draw {
-                    let light = &self.lights[k];
-                    let q = light.sample(u, v);
-                    set(&mut block.light_point, q.point);
-                    set(&mut block.light_normal, q.normal);
-                    block.two_sided[l] = if q.one_sided { 0.0 } else { 1.0 };
-                    block.area[l] = light.area;
-                    block.selection[l] = self.selection_probability(k);
-                    set(&mut block.emitted, light.emitted);
-                    block.has_light[l] = 1.0;
-                }
-                block.du[l] = du;
-                block.dv[l] = dv;
-                block.draw[l] = draw;
-                block.roulette[l] = if roulette { 1.0 } else { 0.0 };
-                lane_path[l] = i;
+                lane_path[filled] = i;
                 filled += 1;
                 if filled == LANES {
                     self.finish_block(&block, &lane_path[..filled], &mut paths, &mut taken);
@@ -189,6 +142,77 @@ impl PathTracer<'_> {
 }
 
 impl PathTracer<'_> {
+    /// The scalar part of a vertex of `path` at the surface `s`: adds what the surface emits
+    /// to `radiance`, chooses the lobe, draws the vertex's numbers and the light point, and
+    /// writes them into lane `l` of `block` for the vertex kernel. False where the path ends
+    /// here (its depth, a black surface or a black throughput).
+    fn begin_vertex(
+        &self,
+        vertex: u32,
+        s: &SurfaceHit,
+        path: &mut Path,
+        radiance: &mut Color,
+        (block, l): (&mut VertexIn, usize),
+    ) -> bool {
+        let direction = path.ray.direction;
+        let (_, n) = s.facing(direction);
+        *radiance += self.emission(s, direction, &path.previous, path.throughput);
+        if vertex >= self.max_depth {
+            return false;
+        }
+        let Some((_, weight)) = self.choose_lobe(s, &mut path.samples) else {
+            return false;
+        };
+        path.throughput *= weight;
+        if path.throughput.max_element() == 0.0 {
+            return false;
+        }
+        // The numbers in the order `radiance` draws them.
+        let light_draw = self.draw_light(s.prim, &mut path.samples);
+        let (du, dv) = path.samples.next_2d();
+        let roulette = vertex >= super::ROULETTE_FROM;
+        let draw = if roulette {
+            path.samples.next_1d()
+        } else {
+            0.0
+        };
+        put(&mut block.x, l, s.point);
+        put(&mut block.n, l, n);
+        put(&mut block.ng, l, s.geometric_normal);
+        block.error[l] = s.error;
+        put(&mut block.throughput, l, path.throughput);
+        block.has_light[l] = 0.0;
+        if let Some(super::LightDraw { k, u, v }) = light_draw {
+            let light = &self.lights[k];
+            block.selection[l] = self.selection_probability(k);
+            put(&mut block.emitted, l, light.emitted);
+            block.has_light[l] = 1.0;
+            block.drawn[l] = 0.0;
+            if self.by_area {
+                let q = light.sample(u, v);
+                put(&mut block.light_point, l, q.point);
+                put(&mut block.light_normal, l, q.normal);
+                block.two_sided[l] = if q.one_sided { 0.0 } else { 1.0 };
+                block.area[l] = light.area;
+            } else {
+                match light.sample_towards(s.point, n, u, v) {
+                    Some(d) => {
+                        put(&mut block.light_point, l, d.point);
+                        block.drawn[l] = 1.0;
+                        block.drawn_weight[l] = d.weight;
+                        block.drawn_pdf[l] = d.pdf;
+                    }
+                    None => block.has_light[l] = 0.0,
+                }
+            }
+        }
+        block.du[l] = du;
+        block.dv[l] = dv;
+        block.draw[l] = draw;
+        block.roulette[l] = if roulette { 1.0 } else { 0.0 };
+        true
+    }
+
     /// Runs the vertex kernel on `block`, whose lanes are the paths `lanes`, and takes what
     /// it gives into `taken`.
     fn finish_block(&self, block: &VertexIn, lanes: &[u32], paths: &mut [Path], taken: &mut Taken) {
@@ -247,9 +271,10 @@ struct VertexIn {
     error: Lanes,
     /// The throughput after this vertex's albedo.
     throughput: [Lanes; 3],
-    /// The light point (by area), its normal, whether it emits from both sides (1) or one
-    /// (0), the light's area, its selection probability and its radiance; `has_light` 0
-    /// where no light point was drawn.
+    /// The light point, its normal, whether it emits from both sides (1) or one (0), the
+    /// light's area, its selection probability and its radiance; `has_light` 0 where no
+    /// light point was drawn. `drawn` 1 where the point was sampled by solid angle, with
+    /// its weight and density (else the kernel works out the point's by area).
     light_point: [Lanes; 3],
     light_normal: [Lanes; 3],
     two_sided: Lanes,
@@ -257,6 +282,9 @@ struct VertexIn {
     selection: Lanes,
     emitted: [Lanes; 3],
     has_light: Lanes,
+    drawn: Lanes,
+    drawn_weight: Lanes,
+    drawn_pdf: Lanes,
     /// The numbers of the next direction, and of roulette (`roulette` 1 where it is played).
     du: Lanes,
     dv: Lanes,
@@ -300,7 +328,7 @@ fn put(a: &mut [Lanes; 3], k: usize, v: Vec3) {
 fn vertex_lane(i: &VertexIn, o: &mut VertexOut, k: usize) {
     let (x, n, ng, error) = (get(&i.x, k), get(&i.n, k), get(&i.ng, k), i.error[k]);
     let throughput = get(&i.throughput, k);
-    // Next-event estimation by area.
+    // Next-event estimation: by area here, or the sample drawn by solid angle before.
     let p = get(&i.light_point, k);
     let w = p - x;
     let r2 = w.length_squared();
@@ -313,15 +341,22 @@ fn vertex_lane(i: &VertexIn, o: &mut VertexOut, k: usize) {
     };
     let cos = n.dot(w) / r;
     let area = i.area[k];
-    let weight = cos * cos_light * area / (std::f32::consts::PI * r2);
-    let pdf = r2 / (cos_light * area);
+    let drawn = i.drawn[k] > 0.0;
+    let weight = if drawn {
+        i.drawn_weight[k]
+    } else {
+        cos * cos_light * area / (std::f32::consts::PI * r2)
+    };
+    let pdf = if drawn {
+        i.drawn_pdf[k]
+    } else {
+        r2 / (cos_light * area)
+    };
     let selection = i.selection[k];
     let bsdf_pdf = weight * pdf;
     let mis = power_heuristic(selection * pdf, bsdf_pdf);
     let lit = i.has_light[k] > 0.0
-        && r2 > 0.0
-        && cos_light > 0.0
-        && cos > 0.0
+        && (drawn || (r2 > 0.0 && cos_light > 0.0 && cos > 0.0))
         && weight.is_finite()
         && pdf > 0.0
         && bsdf_pdf > 0.0;
@@ -371,10 +406,11 @@ mod tests {
     use crate::scene::Scene;
 
     /// On our Cornell box with the diffuse sphere (quads and a sphere, one light, paths long
-    /// enough for roulette), 64×64 pixels at 4 paths each: every path's radiance from the
-    /// wavefront has the bits of the same path followed alone by `PathTracer::radiance`
-    /// (a different draw order, a lane computing otherwise, would show in the last bits
-    /// at least), and the wavefront did follow them.
+    /// enough for roulette), 64×64 pixels at 4 paths each, with the light sampled by area
+    /// and by solid angle: every path's radiance from the wavefront has the bits of the same
+    /// path followed alone by `PathTracer::radiance` (a different draw order, a lane
+    /// computing otherwise, would show in the last bits at least), and the wavefront did
+    /// follow them.
     #[test]
     fn the_wavefront_gives_the_bits_of_one_path_at_a_time() {
         let file = concat!(
@@ -383,9 +419,33 @@ mod tests {
         );
         let scene = Scene::load(std::path::Path::new(file)).expect("loads");
         let accel = build(&scene, AccelKind::Bvh, &AccelOptions::default()).expect("builds");
-        let tracer =
-            PathTracer::new(&scene, accel.as_ref()).with_light_sampling(LightSampling::Random);
-        assert!(tracer.wavefront_applies());
+        for sampling in [LightSampling::Random, LightSampling::SolidAngle] {
+            let tracer = PathTracer::new(&scene, accel.as_ref()).with_light_sampling(sampling);
+            assert!(tracer.wavefront_applies());
+            let (alone, together, counts) = both_ways(&scene, accel.as_ref(), &tracer);
+            let paths = alone.len();
+            assert!(counts.shadow > paths as u64 && counts.secondary > paths as u64);
+            let bits = |c: &Color| c.to_array().map(f32::to_bits);
+            let differ = alone
+                .iter()
+                .zip(&together)
+                .filter(|(a, b)| bits(a) != bits(b))
+                .count();
+            assert_eq!(
+                differ, 0,
+                "{sampling:?}: paths whose radiance differs in a bit"
+            );
+            assert!(alone.iter().filter(|c| c.max_element() > 0.0).count() > paths / 2);
+        }
+    }
+
+    /// The radiance of 64×64 pixels' 4 paths each, one path at a time and by the wavefront
+    /// (in batches of 1000), and the wavefront's counts.
+    fn both_ways(
+        scene: &Scene,
+        accel: &dyn crate::accel::Accel,
+        tracer: &PathTracer,
+    ) -> (Vec<Color>, Vec<Color>, Counts) {
         let settings = ImageSettings {
             width: 64,
             height: 64,
@@ -398,10 +458,8 @@ mod tests {
             samples: None,
             deadline: None,
         };
-        let camera = CameraSampler::new(&scene, &settings);
-        let mut rays = Vec::new();
-        let mut samples = Vec::new();
-        let mut alone = Vec::new();
+        let camera = CameraSampler::new(scene, &settings);
+        let (mut rays, mut samples, mut alone) = (Vec::new(), Vec::new(), Vec::new());
         for j in 0..64 {
             for i in 0..64 {
                 for k in 0..4 {
@@ -410,14 +468,14 @@ mod tests {
                     rays.push(ray);
                     samples.push(PathSamples::new(PathSampler::Sobol, id, rng.clone()));
                     let mut own = PathSamples::new(PathSampler::Sobol, id, rng);
-                    let hit = closest_surface(accel.as_ref(), &scene, &ray);
+                    let hit = closest_surface(accel, scene, &ray);
                     alone.push(tracer.radiance(&ray, hit, &mut own, &mut Counts::default()));
                 }
             }
         }
         let hits: Vec<_> = rays
             .iter()
-            .map(|ray| closest_surface(accel.as_ref(), &scene, ray))
+            .map(|ray| closest_surface(accel, scene, ray))
             .collect();
         let mut together = vec![Vec3::ZERO; rays.len()];
         let mut counts = Counts::default();
@@ -426,14 +484,6 @@ mod tests {
             let own = samples.drain(..out.len());
             tracer.radiance_batch(&rays[range.clone()], &hits[range], own, &mut counts, out);
         }
-        assert!(counts.shadow > rays.len() as u64 && counts.secondary > rays.len() as u64);
-        let bits = |c: &Color| c.to_array().map(f32::to_bits);
-        let differ = alone
-            .iter()
-            .zip(&together)
-            .filter(|(a, b)| bits(a) != bits(b))
-            .count();
-        assert_eq!(differ, 0, "paths whose radiance differs in some bit");
-        assert!(alone.iter().filter(|c| c.max_element() > 0.0).count() > rays.len() / 2);
+        (alone, together, counts)
     }
 }
