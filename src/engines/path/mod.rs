@@ -43,9 +43,10 @@ const ROULETTE_FROM: u32 = 5;
 /// only keeps a perfectly white closed room finite. (A cap of 0.95 let throughput grow as
 /// (ρ/0.95)^k: the ρ = 0.99 furnace came out at 90.4 instead of 100 with 4096 paths a pixel.)
 const MAX_SURVIVAL: f32 = 0.999;
-/// Paths the wavefront follows together (`wavefront.rs`): on the Cornell box 256 took 0.88×
-/// the time of 4096 (the whole chunk of camera samples of `render_pixels`), whose state no
-/// longer fits the caches, and 16 took 1.18× (session 37, without the vertex kernel).
+/// Paths the wavefront follows together (`wavefront.rs`). On the Cornell box (session 37)
+/// without the vertex kernel, 256 took 0.88× the time of 4096 (the whole chunk of camera
+/// samples of `render_pixels`, whose state no longer fits the caches) and 16 took 1.18×;
+/// with it, 128, 512 and 1024 were within 3% of 256.
 const WAVEFRONT_PATHS: usize = 256;
 /// A hard bound on path length, far beyond what roulette lets through (reached with
 /// probability 0.999^20000 < 1e-8 even in a closed white room).

@@ -13,9 +13,10 @@
 //!
 //! It follows exactly the paths `PathTracer::radiance` follows, drawing the same numbers in
 //! the same order and computing with the same operations, so the image is the same bit for
-//! bit (tested below). It serves what the kernel computes: lights sampled by area
-//! (`--light-sampling random`) on scenes whose every material is diffuse (or black), without
-//! bump maps, media or sky. The rest go one path at a time.
+//! bit (tested below). It serves the scenes whose every material is diffuse (or black),
+//! without bump maps, media or sky; the rest go one path at a time. Lights sampled by area
+//! (`--light-sampling random`) are weighed in the lanes; by solid angle (the default), the
+//! point is drawn before, one path at a time, and only weighed in the lanes.
 
 use super::{roulette, PathTracer, Previous, MAX_VERTICES};
 use crate::engines::scattering::{diffuse_sample, power_heuristic};
