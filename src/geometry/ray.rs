@@ -70,11 +70,13 @@ fn ulp_offset(p: Vec3, n: Vec3) -> Vec3 {
         // started beyond the walls). INT_SCALE ulps of |p| instead, as the integer step moves
         // points farther out, floored where |p| is zero.
         let near = p + n * (INT_SCALE * f32::EPSILON * p.abs().max(FLOOR));
-        // trunc(INT_SCALE·n) as an integer without a saturating conversion (which does not
-        // vectorize): 1.5·2^23 added to an integer below 2^22 in magnitude leaves it in the
-        // low bits of the sum.
+        // trunc(INT_SCALE·n) as an integer (n is a unit normal), without a saturating
+        // conversion, which does not vectorize: 1.5·2^23 added to an integer below 2^22 in
+        // magnitude leaves it in the low bits of the sum. A NaN normal moves nothing, as the
+        // conversion's 0 did.
         const MAGIC: f32 = 12_582_912.0;
         let of_i = ((INT_SCALE * n).trunc() + MAGIC).to_bits() as i32 - MAGIC.to_bits() as i32;
+        let of_i = if n.is_nan() { 0 } else { of_i };
         let bits = p.to_bits() as i32;
         let moved = if p < 0.0 {
             bits.wrapping_sub(of_i)

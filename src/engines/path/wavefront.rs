@@ -94,7 +94,7 @@ impl PathTracer<'_> {
             taken.shadowed.clear();
             for &i in &active {
                 let (path, radiance) = (&mut paths[i as usize], &mut out[i as usize]);
-                let Some(s) = hits[i as usize] else {
+                let Some(s) = &hits[i as usize] else {
                     // Only a camera ray sees the background; a bounce that leaves the scene
                     // brings nothing.
                     if vertex == 0 {
@@ -102,7 +102,7 @@ impl PathTracer<'_> {
                     }
                     continue;
                 };
-                if !self.begin_vertex(vertex, &s, path, radiance, (&mut block, filled)) {
+                if !self.begin_vertex(vertex, s, path, radiance, (&mut block, filled)) {
                     continue;
                 }
                 lane_path[filled] = i;
