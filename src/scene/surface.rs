@@ -103,6 +103,11 @@ impl Scene {
     }
 
     /// The surface at a backend's hit, its shading normal tilted by its material's bump map.
+    ///
+    /// Inlined, with `flat_surface`, so that the hit is built where the caller keeps it: as
+    /// calls, the path tracer's wavefront copied each hit twice through the stack, and read
+    /// the copies back wider than they were written (0.98× the time inlined, session 37).
+    #[inline(always)]
     pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> SurfaceHit {
         let mut s = self.flat_surface(ray, hit);
         if let Some(bump) = &self.materials[s.material as usize].bump {
@@ -204,6 +209,7 @@ impl Scene {
     }
 
     /// The surface at a backend's hit, with the geometric normal for shading normal.
+    #[inline(always)]
     fn flat_surface(&self, ray: &Ray, hit: &PrimHit) -> SurfaceHit {
         let i = hit.prim.index as usize;
         let t_max = f32::INFINITY;
