@@ -418,7 +418,7 @@ fn take_samples(
                 let hits: Vec<_> = rays
                     .iter()
                     .zip(&prim_hits)
-                    .map(|(ray, h)| h.map(|h| scene.surface(ray, &h)))
+                    .map(|(ray, h)| h.as_ref().map(|h| scene.surface(ray, h)))
                     .collect();
                 let mut radiances = vec![Color::ZERO; rays.len()];
                 let batch = CameraBatch {

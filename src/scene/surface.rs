@@ -321,10 +321,26 @@ impl Scene {
     /// one a backend reports depends on its arithmetic and traversal order. Such hits are
     /// settled here by the shared exact routine: the smallest t among the quads sharing a
     /// vertex with quad i, ties to the lowest index, so both backends give the same surface.
+    ///
+    /// An exact hit (the BVH's, Embree's with `--embree-exact`) is its own answer, inline: as
+    /// a call, the answer came back through memory and was read wider than it was written, a
+    /// store-forwarding stall (session 37).
+    #[inline(always)]
     fn settle_quad_hit(&self, ray: &Ray, i: usize, hit: &PrimHit) -> (usize, (f32, f32, f32)) {
         if hit.exact {
             return (i, (hit.t, hit.u, hit.v));
         }
+        self.settle_inexact_quad_hit(ray, i, hit)
+    }
+
+    /// `settle_quad_hit` for a hit the backend's own arithmetic found.
+    #[inline(never)]
+    fn settle_inexact_quad_hit(
+        &self,
+        ray: &Ray,
+        i: usize,
+        hit: &PrimHit,
+    ) -> (usize, (f32, f32, f32)) {
         let exact = |k: usize, t_max: f32| {
             let q = &self.quads[k];
             if !self.two_sided_quads && !faces_ray(q.normal, ray.direction) {

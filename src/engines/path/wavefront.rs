@@ -135,7 +135,7 @@ impl PathTracer<'_> {
             prim_hits.resize(next_rays.len(), None);
             self.accel.intersect_batch(&next_rays, &mut prim_hits);
             for ((&i, ray), h) in taken.next.iter().zip(&next_rays).zip(&prim_hits) {
-                hits[i as usize] = h.map(|h| self.scene.surface(ray, &h));
+                hits[i as usize] = h.as_ref().map(|h| self.scene.surface(ray, h));
             }
             std::mem::swap(&mut active, &mut taken.next);
         }
