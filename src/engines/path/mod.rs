@@ -22,7 +22,7 @@ use super::scattering::{diffuse_sample, power_heuristic, reflect, Dielectric, Gl
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
-use crate::render::lights::{DirectSample, Light};
+use crate::render::lights::Light;
 use crate::render::{render_pixel_batches, render_pixels, Counts, RenderStats};
 use crate::sampling::{LightSampling, PathSamples};
 use crate::scene::medium::{Flight, Medium};
@@ -279,22 +279,25 @@ impl PathTracer<'_> {
         if !(d.weight.is_finite() && d.pdf > 0.0) {
             return None;
         }
+        let light_pdf = self.selection_probability(k) * d.pdf;
         // The lobe's density in that direction, and what the sample brings unweighted:
         // diffuse, the receiver's cosine over π and the sample's weight (which is that over
         // the light's density, computed exactly); glossy, the lobe's density over the light's.
-        let against = match lobe {
-            None => diffuse_against(&d),
+        let (bsdf_pdf, value) = match lobe {
+            None => (d.weight * d.pdf, d.weight),
             Some(lobe) => lobe_against(lobe, (d.point - s.point).normalize_or_zero(), d.pdf),
         };
+        if bsdf_pdf <= 0.0 {
+            return None;
+        }
+        let mis = power_heuristic(light_pdf, bsdf_pdf);
+        let origin = offset_ray_origin(s.point, n, s.error);
         let transmittance =
             medium.map_or(Vec3::ONE, |m| m.transmittance(s.point.distance(d.point)));
-        weigh_light_sample(
-            offset_ray_origin(s.point, n, s.error),
-            &d,
-            self.selection_probability(k),
-            against,
-            light.emitted * transmittance,
-        )
+        Some(ShadowedSample {
+            shadow_ray: shadow_ray(origin, d.point),
+            radiance: light.emitted * transmittance * (value * mis / self.selection_probability(k)),
+        })
     }
 
     /// Next-event estimation of the sky at a diffuse point (`lobe` None) or in a glossy lobe,
@@ -561,37 +564,6 @@ impl PathTracer<'_> {
         }
         radiance
     }
-}
-
-/// The cosine lobe's density for the direction of the light sample `d` and what the sample
-/// brings per unit albedo (its weight): see `lobe_against`.
-#[inline(always)]
-fn diffuse_against(d: &DirectSample) -> (f32, f32) {
-    (d.weight * d.pdf, d.weight)
-}
-
-/// The light sample `d`, from a light chosen with probability `selection` and seen from
-/// `origin` (the shading point moved off its surface): its shadow ray, and what it brings if
-/// nothing blocks it. `scale` is the light's radiance as it arrives (through a medium), and
-/// `(bsdf_pdf, value)` the other strategy's density for its direction and what it brings
-/// unweighted, against which the power heuristic weighs it. None where the other strategy
-/// could not have taken the direction.
-#[inline(always)]
-fn weigh_light_sample(
-    origin: Vec3,
-    d: &DirectSample,
-    selection: f32,
-    (bsdf_pdf, value): (f32, f32),
-    scale: Color,
-) -> Option<ShadowedSample> {
-    if bsdf_pdf <= 0.0 {
-        return None;
-    }
-    let mis = power_heuristic(selection * d.pdf, bsdf_pdf);
-    Some(ShadowedSample {
-        shadow_ray: shadow_ray(origin, d.point),
-        radiance: scale * (value * mis / selection),
-    })
 }
 
 /// A glossy lobe's density for the direction `dir` that another strategy picked with density

@@ -322,9 +322,13 @@ fn put(a: &mut [Lanes; 3], k: usize, v: Vec3) {
 }
 
 /// Lane `k` of the diffuse vertex kernel: the rest of `PathTracer::radiance`'s diffuse vertex
-/// once its numbers are drawn and its light point chosen, by the same functions (inlined and
-/// branch-free, so that the lanes run together in SIMD and each gives the bits the tracer
-/// gives alone).
+/// once its numbers are drawn and its light point chosen, in the same operations, so that
+/// each lane gives the bits the tracer gives alone (`the_wavefront_gives_the_bits_of_one_path_
+/// at_a_time` holds the two together). The direction, the ray origins and roulette call the
+/// tracer's own functions, inlined and branch-free. The by-area sample and its weighing are
+/// written out here: they mirror `Light::sample_by_area_towards` (with `point_towards`) and
+/// `PathTracer::light_sample`, whose chains of `Option`s kept LLVM from vectorising the lanes
+/// (session 37: 1.18× the time instead of 0.88×).
 #[inline(always)]
 fn vertex_lane(i: &VertexIn, o: &mut VertexOut, k: usize) {
     let (x, n, ng, error) = (get(&i.x, k), get(&i.n, k), get(&i.ng, k), i.error[k]);
