@@ -57,6 +57,16 @@ fn read_exr(path: &Path) -> Vec<[f32; 3]> {
     image.pixels().map(|p| [p[0], p[1], p[2]]).collect()
 }
 
+/// The largest relative difference between two images' values.
+fn worst_relative(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
+    assert_eq!(a.len(), b.len(), "images of different sizes");
+    a.iter()
+        .zip(b)
+        .flat_map(|(a, b)| (0..3).map(move |c| (a[c], b[c])))
+        .map(|(a, b)| (a - b).abs() / a.abs().max(1e-30))
+        .fold(0.0f32, f32::max)
+}
+
 /// Tiles of uneven sizes (edges at ⌈48 × 0.3⌉ = 15 and ⌈48 × 0.6⌉ = 29) and sample batches
 /// of uneven lengths.
 const TILES: [&str; 4] = ["0 0.3 0 0.6", "0.3 1 0 0.6", "0 0.3 0.6 1", "0.3 1 0.6 1"];
@@ -114,12 +124,7 @@ fn tiles_and_sample_batches_merge_into_the_single_render() {
             ok(&dir, &merge);
             let single = read_exr(&dir.join("single.exr"));
             let merged = read_exr(&dir.join("batches.exr"));
-            let worst = single
-                .iter()
-                .zip(&merged)
-                .flat_map(|(a, b)| (0..3).map(move |c| (a[c], b[c])))
-                .map(|(a, b)| (a - b).abs() / a.abs().max(1e-30))
-                .fold(0.0f32, f32::max);
+            let worst = worst_relative(&single, &merged);
             println!("{scene_name} {flags}: batches within {worst:.1e} of the single render");
             assert!(
                 worst <= 1e-6,
@@ -127,6 +132,33 @@ fn tiles_and_sample_batches_merge_into_the_single_render() {
             );
         }
     }
+}
+
+/// More samples a pixel than one batch of camera rays holds (`CHUNK_SAMPLES`, 4096): the
+/// render cuts inside a pixel, and the pieces must add up to exactly the pixel's samples,
+/// none twice, none left out. Two sample batches cut elsewhere merge into its values.
+#[test]
+fn a_pixel_cut_into_batches_of_camera_rays_keeps_every_sample_once() {
+    let dir = common::temp_dir("farm-chunks");
+    let spp = trilux::render::CHUNK_SAMPLES + 904;
+    let base = words(&format!(
+        "-input {} --engine path -size 2 2 -num_antialias_samples {spp} --seed 3 --quiet",
+        scene("cornell_box_diffuse_sphere.obj")
+    ));
+    let with = |extra: &str| -> Vec<String> { base.iter().cloned().chain(words(extra)).collect() };
+    ok(&dir, &with("-o single.exr"));
+    ok(&dir, &with("--pixel-samples 0 1000 -o a.exr"));
+    ok(&dir, &with(&format!("--pixel-samples 1000 {spp} -o b.exr")));
+    ok(&dir, &words("merge a.exr b.exr -o merged.exr"));
+    let worst = worst_relative(
+        &read_exr(&dir.join("single.exr")),
+        &read_exr(&dir.join("merged.exr")),
+    );
+    assert!(
+        worst <= 1e-6,
+        "merged batches {worst:e} from the single render"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The merge refuses parts of another seed or scene, a set with a tile missing (naming the

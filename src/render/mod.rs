@@ -206,7 +206,8 @@ impl CameraSampler {
     }
 }
 
-/// Camera samples traced as one batch (a row is cut into chunks of about this many).
+/// Camera samples traced as one batch (a row's samples are cut into chunks of at most this
+/// many).
 pub const CHUNK_SAMPLES: usize = 4096;
 
 /// A pixel's samples summed (in f64) and counted.
@@ -388,29 +389,35 @@ fn take_samples(
         .map(|(row, out)| {
             let j = h - 1 - row as u32;
             let mut counts = Counts::default();
-            let mut row_sums = Vec::with_capacity(if keep { window.width() as usize } else { 0 });
-            // A row in chunks of about CHUNK_SAMPLES camera samples: one batch of camera rays
-            // each, memory bounded whatever the samples per pixel, and Ctrl-C heard between
-            // chunks (the pixels not yet rendered stay black, with no samples).
-            let chunk = (CHUNK_SAMPLES / spp.max(1)).max(1);
             let out = &mut out[window.x0 as usize..window.x1 as usize];
-            for (c, pixels) in out.chunks_mut(chunk).enumerate() {
+            // The row's camera samples, pixel by pixel and within a pixel sample by sample,
+            // in chunks of at most CHUNK_SAMPLES: one batch of camera rays each, memory
+            // bounded and Ctrl-C heard between chunks whatever the samples per pixel (a
+            // reference of ten million a pixel is cut inside a pixel). A pixel Ctrl-C cut
+            // short keeps the mean of the samples it took; those not reached stay black,
+            // with no samples.
+            let mut sums: Vec<PixelSum> = vec![([0.0; 3], 0); out.len()];
+            let total = out.len() * spp;
+            let mut done = 0;
+            while done < total {
                 if crate::interrupt::superseded()
                     || (!interrupted_before && crate::interrupt::requested())
                 {
                     break;
                 }
-                let first = window.x0 + (c * chunk) as u32;
-                let mut rngs = Vec::with_capacity(pixels.len() * spp);
-                let mut rays = Vec::with_capacity(pixels.len() * spp);
-                let mut ids = Vec::with_capacity(pixels.len() * spp);
-                for i in first..first + pixels.len() as u32 {
-                    for k in samples.clone() {
-                        let (ray, rng) = camera.sample((i, j), k);
-                        rays.push(ray);
-                        rngs.push(rng);
-                        ids.push(camera.sample_id((i, j), k));
-                    }
+                let chunk = done..(done + CHUNK_SAMPLES).min(total);
+                let pixel_sample = |n: usize| {
+                    let i = window.x0 + (n / spp) as u32;
+                    (i, samples.start + (n % spp) as u32)
+                };
+                let mut rngs = Vec::with_capacity(chunk.len());
+                let mut rays = Vec::with_capacity(chunk.len());
+                let mut ids = Vec::with_capacity(chunk.len());
+                for (i, k) in chunk.clone().map(pixel_sample) {
+                    let (ray, rng) = camera.sample((i, j), k);
+                    rays.push(ray);
+                    rngs.push(rng);
+                    ids.push(camera.sample_id((i, j), k));
                 }
                 let mut prim_hits = vec![None; rays.len()];
                 accel.intersect_batch(&rays, &mut prim_hits);
@@ -428,32 +435,36 @@ fn take_samples(
                     ids: &ids,
                 };
                 radiance(batch, &mut counts, &mut radiances);
-                for (i, pixel) in pixels.iter_mut().enumerate() {
-                    // Summed in f64: finite samples near f32's largest value must not add up
-                    // to infinity; their mean is again a finite f32.
-                    let mut sum = [0.0f64; 3];
-                    let mut good = 0u32;
-                    for &l in &radiances[i * spp..(i + 1) * spp] {
-                        if l.is_finite() {
-                            for (s, c) in sum.iter_mut().zip(l.to_array()) {
-                                *s += c as f64;
-                            }
-                            good += 1;
-                        } else {
-                            counts.non_finite += 1;
+                // Summed in f64: finite samples near f32's largest value must not add up to
+                // infinity; their mean is again a finite f32.
+                for (n, l) in chunk.clone().zip(&radiances) {
+                    let (sum, good) = &mut sums[n / spp];
+                    if l.is_finite() {
+                        for (s, c) in sum.iter_mut().zip(l.to_array()) {
+                            *s += c as f64;
                         }
-                    }
-                    let n = good.max(1) as f64;
-                    *pixel = crate::geometry::vec3(
-                        (sum[0] / n) as f32,
-                        (sum[1] / n) as f32,
-                        (sum[2] / n) as f32,
-                    );
-                    if keep {
-                        row_sums.push((sum, good));
+                        *good += 1;
+                    } else {
+                        counts.non_finite += 1;
                     }
                 }
+                done = chunk.end;
             }
+            let reached = done.div_ceil(spp.max(1));
+            for (pixel, (sum, good)) in out.iter_mut().zip(&sums).take(reached) {
+                let n = (*good).max(1) as f64;
+                *pixel = crate::geometry::vec3(
+                    (sum[0] / n) as f32,
+                    (sum[1] / n) as f32,
+                    (sum[2] / n) as f32,
+                );
+            }
+            let row_sums = if keep {
+                sums.truncate(reached);
+                sums
+            } else {
+                Vec::new()
+            };
             stats.camera_rays.fetch_add(counts.camera, Relaxed);
             stats.shadow_rays.fetch_add(counts.shadow, Relaxed);
             stats.secondary_rays.fetch_add(counts.secondary, Relaxed);
