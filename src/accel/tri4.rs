@@ -391,7 +391,6 @@ mod tests {
         );
     }
 
-    /// `triangles()` gives back what was packed, without the padding.
     /// Four rays against one triangle (`Rays4`, the batched occlusion's quad test): every
     /// lane not handed back as on an edge decides as `intersect_triangle_sheared` does, and
     /// `faces` as `faces_ray`. The rays start near one point and aim at the triangle's
@@ -455,6 +454,7 @@ mod tests {
         assert!(apart < 2000, "{apart} cases of rays with different axes");
     }
 
+    /// `triangles()` gives back what was packed, without the padding.
     #[test]
     fn a_pack_gives_back_its_triangles() {
         let tris: Vec<([Vec3; 3], PackedPrim)> = (0..3)
