@@ -5,10 +5,10 @@
 use crate::geometry::Vec3;
 
 mod sobol;
-pub use sobol::{PathSampler, PathSamples, SampleId};
+pub use sobol::{PathSampler, PathSamples, SampleId, SobolLanes, SOBOL_LANES};
 
 /// SplitMix64's finaliser: a strong 64-bit mix.
-#[inline]
+#[inline(always)]
 pub fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);

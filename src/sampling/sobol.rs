@@ -176,6 +176,78 @@ impl PathSamples {
     }
 }
 
+/// Paths `SobolLanes` prepares at once.
+pub const SOBOL_LANES: usize = 16;
+
+/// `PathSamples::prepare` for up to `SOBOL_LANES` paths at once: each path's state taken into
+/// a lane (`load`), the points of all of them made together in SIMD lanes (`make`, compiled
+/// for the processor's widest instructions by `pulp`'s run-time dispatch), and handed back
+/// (`store`). Each path gets the points `prepare` would make it, bit for bit. The path
+/// tracer's wavefront prepares its paths so.
+#[derive(Default)]
+pub struct SobolLanes {
+    pixel: [u64; SOBOL_LANES],
+    dimension: [u64; SOBOL_LANES],
+    reversed_index: [u32; SOBOL_LANES],
+    keep: [u32; SOBOL_LANES],
+    /// Points each lane's path still needs (0: none, or not a Sobol path).
+    need: [usize; SOBOL_LANES],
+    x: [[f32; SOBOL_LANES]; AHEAD],
+    y: [[f32; SOBOL_LANES]; AHEAD],
+}
+
+impl SobolLanes {
+    /// Takes the state of `samples` into lane `k`.
+    pub fn load(&mut self, k: usize, samples: &PathSamples) {
+        self.need[k] = 0;
+        if let Source::Sobol(p) = &samples.source {
+            self.pixel[k] = p.pixel;
+            self.dimension[k] = p.dimension;
+            self.reversed_index[k] = p.reversed_index;
+            self.keep[k] = p.keep;
+            self.need[k] = AHEAD - p.ahead.len;
+        }
+    }
+
+    /// Makes the points every lane needs.
+    pub fn make(&mut self, arch: pulp::Arch) {
+        arch.dispatch(MakePoints(self))
+    }
+
+    /// Hands lane `k`'s points to `samples` (the path loaded into it).
+    pub fn store(&self, k: usize, samples: &mut PathSamples) {
+        if let Source::Sobol(p) = &mut samples.source {
+            for d in 0..self.need[k] {
+                let slot = (p.ahead.first + p.ahead.len) % AHEAD;
+                p.ahead.points[slot] = (self.x[d][k], self.y[d][k]);
+                p.ahead.len += 1;
+                p.dimension += 1;
+            }
+        }
+    }
+}
+
+/// `SobolLanes::make` for `pulp::Arch::dispatch`. The loop over the lanes is the inner one:
+/// so LLVM vectorises it (with the dimensions inside, session 37 found it did not).
+struct MakePoints<'a>(&'a mut SobolLanes);
+
+impl pulp::WithSimd for MakePoints<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let l = self.0;
+        let depth = l.need.iter().copied().max().unwrap_or(0);
+        for d in 0..depth {
+            for k in 0..SOBOL_LANES {
+                let dimension = l.dimension[k] + 1 + d as u64;
+                let (x, y) = sobol_point(l.pixel[k], dimension, l.reversed_index[k], l.keep[k]);
+                l.x[d][k] = x;
+                l.y[d][k] = y;
+            }
+        }
+    }
+}
+
 /// Point `reversed_index` (bits reversed) of dimension `dimension` of the pixel hashed to
 /// `pixel`, its shuffled index kept to `keep` (a mask of the top bits, the index reversed).
 #[inline(always)]
@@ -202,51 +274,25 @@ fn to_unit(x: u32) -> f32 {
     (x >> 8) as f32 * UNIT_24
 }
 
-/// The Sobol sequence's second dimension by bytes of the bit-reversed index: `SECOND_BY_BYTE
-/// [i][b]` is the coordinate of the index whose byte `i` (from the low end) is `b` reversed and
-/// which is zero elsewhere. The sequence is linear over bits (XOR), so a point is the XOR of
-/// its four bytes' entries: four loads where a loop over the index's bits took a dozen steps.
-/// The direction numbers (primitive polynomial x + 1) are v₀ = 2³¹, vⱼ = vⱼ₋₁ ⊕ (vⱼ₋₁ >> 1);
-/// the first dimension's are the powers of two, which make it the bit-reversed index.
-static SECOND_BY_BYTE: [[u32; 256]; 4] = {
-    let mut v = [0u32; 32];
-    v[0] = 1 << 31;
-    let mut j = 1;
-    while j < 32 {
-        v[j] = v[j - 1] ^ (v[j - 1] >> 1);
-        j += 1;
-    }
-    let mut table = [[0u32; 256]; 4];
-    let mut byte = 0;
-    while byte < 4 {
-        let mut b = 0;
-        while b < 256 {
-            // Bit k of the reversed byte b is bit 7 − k of b: index bit 8·byte + 7 − k.
-            let mut x = 0;
-            let mut k = 0;
-            while k < 8 {
-                if b >> k & 1 != 0 {
-                    x ^= v[8 * byte + 7 - k];
-                }
-                k += 1;
-            }
-            table[byte][b] = x;
-            b += 1;
-        }
-        byte += 1;
-    }
-    table
-};
-
 /// The second coordinate, as a 32-bit fraction, of the Sobol point whose index reversed is
-/// `reversed` (byte 0 of the index is the top byte of `reversed`).
+/// `reversed`, by shifts and masks alone (no table, so that it runs in SIMD lanes too).
+///
+/// The second dimension's direction numbers (primitive polynomial x + 1) are v₀ = 2³¹,
+/// vⱼ = vⱼ₋₁ ⊕ (vⱼ₋₁ >> 1): bit 31 − k of vⱼ is C(j, k) mod 2, which by Lucas' theorem is 1
+/// exactly when k's bits are a subset of j's. Bit 31 − j of `reversed` is bit j of the index,
+/// and complementing 5-bit positions (p = 31 − k) turns "k ⊆ j" into "31 − j ⊆ 31 − k": bit p
+/// of the coordinate is the XOR of the bits of `reversed` at the positions that are subsets of
+/// p. That sum over subsets takes five steps, one per bit of the position, each adding the
+/// position's neighbour with that bit cleared to the positions that have it set.
 #[inline(always)]
 fn sobol_second_of_reversed(reversed: u32) -> u32 {
-    let byte = |i: u32| (reversed >> (24 - 8 * i) & 0xff) as usize;
-    SECOND_BY_BYTE[0][byte(0)]
-        ^ SECOND_BY_BYTE[1][byte(1)]
-        ^ SECOND_BY_BYTE[2][byte(2)]
-        ^ SECOND_BY_BYTE[3][byte(3)]
+    let mut w = reversed;
+    w ^= (w << 1) & 0xaaaa_aaaa;
+    w ^= (w << 2) & 0xcccc_cccc;
+    w ^= (w << 4) & 0xf0f0_f0f0;
+    w ^= (w << 8) & 0xff00_ff00;
+    w ^= (w << 16) & 0xffff_0000;
+    w
 }
 
 /// A hash in which each bit is flipped by a function of the bits below it only: on a
@@ -280,6 +326,54 @@ mod tests {
             }
         }
         per_draw
+    }
+
+    /// `SobolLanes` gives each path the points `prepare` gives it: paths of different pixels,
+    /// indices and counts, some with points already made ahead and some with draws taken,
+    /// and an independent path (which it leaves alone), in a block not full.
+    #[test]
+    fn lanes_prepare_the_points_prepare_makes() {
+        let make = |k: u32| {
+            let id = SampleId {
+                seed: 5,
+                pixel: 1000 + k as u64 / 3,
+                index: k * 7,
+                count: [Some(64), None, Some(1)][k as usize % 3],
+            };
+            let mut s = match k {
+                11 => PathSamples::independent(Rng::new(1, 2, 3)),
+                _ => PathSamples::sobol(id),
+            };
+            for _ in 0..k % 4 {
+                s.next_2d();
+            }
+            if k.is_multiple_of(5) {
+                s.prepare();
+                s.next_1d();
+            }
+            s
+        };
+        let lanes_used = SOBOL_LANES as u32 - 3;
+        let mut alone: Vec<PathSamples> = (0..lanes_used).map(make).collect();
+        let mut together: Vec<PathSamples> = (0..lanes_used).map(make).collect();
+        let mut lanes = SobolLanes::default();
+        for (k, s) in together.iter().enumerate() {
+            lanes.load(k, s);
+        }
+        lanes.make(pulp::Arch::new());
+        for (k, s) in together.iter_mut().enumerate() {
+            lanes.store(k, s);
+        }
+        for s in &mut alone {
+            s.prepare();
+        }
+        for (k, (a, b)) in alone.iter_mut().zip(&mut together).enumerate() {
+            for draw in 0..5 {
+                let (p, q) = (a.next_2d(), b.next_2d());
+                let bits = |(x, y): (f32, f32)| (x.to_bits(), y.to_bits());
+                assert_eq!(bits(p), bits(q), "path {k}, draw {draw}");
+            }
+        }
     }
 
     /// Every 2-D draw of a pixel's 2^m samples is a (0, m, 2)-net: for every split of m bits
@@ -403,8 +497,8 @@ mod tests {
     }
 
     /// The second coordinate is the Sobol sequence's, from its direction numbers bit by
-    /// bit: the first eight points are 0, 1/2, 3/4, 1/4, 5/8, 1/8, 3/8, 7/8, and the byte
-    /// tables agree with the bit loop on indices of every size.
+    /// bit: the first eight points are 0, 1/2, 3/4, 1/4, 5/8, 1/8, 3/8, 7/8, and the shifts
+    /// and masks agree with the bit loop on indices of every size and on each single bit.
     #[test]
     fn second_dimension_is_sobols() {
         let bit_by_bit = |index: u32| {
@@ -424,8 +518,8 @@ mod tests {
             assert_eq!(x as f64 / 2f64.powi(32), *w, "point {i}");
         }
         let mut rng = Rng::new(1, 2, 3);
-        for _ in 0..10_000 {
-            let index = (rng.next_u64() >> (rng.next_u64() % 33)) as u32;
+        let random = (0..10_000).map(|_| (rng.next_u64() >> (rng.next_u64() % 33)) as u32);
+        for index in random.chain((0..32).map(|j| 1 << j)) {
             assert_eq!(
                 sobol_second_of_reversed(index.reverse_bits()),
                 bit_by_bit(index),

@@ -22,7 +22,7 @@ use super::{roulette, PathTracer, Previous, MAX_VERTICES};
 use crate::engines::scattering::{diffuse_sample, power_heuristic};
 use crate::geometry::{offset_ray_origin, shadow_ray, spawn_ray, vec3, Ray, Vec3};
 use crate::render::Counts;
-use crate::sampling::PathSamples;
+use crate::sampling::{PathSamples, SobolLanes, SOBOL_LANES};
 use crate::scene::{Color, SurfaceHit};
 
 /// One path of the batch between two vertices.
@@ -219,6 +219,14 @@ impl PathTracer<'_> {
     fn finish_block(&self, block: &VertexIn, lanes: &[u32], paths: &mut [Path], taken: &mut Taken) {
         let mut out = VertexOut::default();
         vertex_kernel(self.arch, block, &mut out);
+        // The numbers of the next vertex of the paths that go on, made ahead in lanes.
+        let mut sobol = SobolLanes::default();
+        for (l, &i) in lanes.iter().enumerate() {
+            if out.alive[l] > 0.0 {
+                sobol.load(l, &paths[i as usize].samples);
+            }
+        }
+        sobol.make(self.arch);
         for (l, &i) in lanes.iter().enumerate() {
             let path = &mut paths[i as usize];
             if out.lit[l] > 0.0 {
@@ -239,7 +247,7 @@ impl PathTracer<'_> {
             if out.alive[l] > 0.0 {
                 path.throughput = get(&out.throughput, l);
                 path.ray = Ray::new(get(&out.spawn_origin, l), get(&out.direction, l));
-                path.samples.prepare();
+                sobol.store(l, &mut path.samples);
                 taken.next.push(i);
             }
         }
@@ -256,8 +264,9 @@ struct Taken {
     next: Vec<u32>,
 }
 
-/// Paths a vertex kernel takes at once.
+/// Paths a vertex kernel takes at once (their numbers are made ahead together too).
 const LANES: usize = 16;
+const _: () = assert!(LANES <= SOBOL_LANES);
 
 type Lanes = [f32; LANES];
 
