@@ -161,10 +161,14 @@ impl PathTracer<'_> {
         if vertex >= self.max_depth {
             return false;
         }
-        let Some((_, weight)) = self.choose_lobe(s, &mut path.samples) else {
+        // Every material here reflects diffusely only (`wavefront_applies`): `choose_lobe`
+        // takes the diffuse lobe without a draw, and its weight, the albedo times total / d
+        // with total = d, is the albedo itself.
+        let albedo = self.scene.albedo(s);
+        if albedo.max_element() <= 0.0 {
             return false;
-        };
-        path.throughput *= weight;
+        }
+        path.throughput *= albedo;
         if path.throughput.max_element() == 0.0 {
             return false;
         }
