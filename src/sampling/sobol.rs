@@ -77,6 +77,15 @@ struct Ahead {
     len: usize,
 }
 
+impl Ahead {
+    /// Puts `point` after the points held (of which there are fewer than `AHEAD`).
+    #[inline(always)]
+    fn push(&mut self, point: (f32, f32)) {
+        self.points[(self.first + self.len) % AHEAD] = point;
+        self.len += 1;
+    }
+}
+
 impl SobolPoints {
     /// The point of the dimension after the last one made.
     #[inline(always)]
@@ -89,9 +98,8 @@ impl SobolPoints {
     #[inline]
     fn prepare(&mut self) {
         while self.ahead.len < AHEAD {
-            let slot = (self.ahead.first + self.ahead.len) % AHEAD;
-            self.ahead.points[slot] = self.make();
-            self.ahead.len += 1;
+            let point = self.make();
+            self.ahead.push(point);
         }
     }
 
@@ -218,9 +226,7 @@ impl SobolLanes {
     pub fn store(&self, k: usize, samples: &mut PathSamples) {
         if let Source::Sobol(p) = &mut samples.source {
             for d in 0..self.need[k] {
-                let slot = (p.ahead.first + p.ahead.len) % AHEAD;
-                p.ahead.points[slot] = (self.x[d][k], self.y[d][k]);
-                p.ahead.len += 1;
+                p.ahead.push((self.x[d][k], self.y[d][k]));
                 p.dimension += 1;
             }
         }
