@@ -198,6 +198,12 @@ impl CameraSampler {
             self.pixel_strata.sample(k, &mut rng)
         };
         let screen = Camera::screen_point(i, j, dx, dy, w, h);
+        // The lens point's two numbers are drawn whatever the aperture, so that the rest of
+        // the path draws the same numbers; a pinhole only steps past them.
+        if self.aperture <= 0.0 {
+            rng.skip(2);
+            return (self.view.ray(screen.0, screen.1), rng);
+        }
         let lens = (rng.next_f32(), rng.next_f32());
         let ray = self
             .view

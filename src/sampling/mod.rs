@@ -31,6 +31,9 @@ pub struct Rng {
     state: u64,
 }
 
+/// What each draw adds to an `Rng`'s state (the golden ratio's 64-bit fraction, SplitMix64's).
+const RNG_STEP: u64 = 0x9e37_79b9_7f4a_7c15;
+
 impl Rng {
     pub fn new(seed: u64, a: u64, b: u64) -> Rng {
         Rng {
@@ -40,8 +43,14 @@ impl Rng {
 
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        self.state = self.state.wrapping_add(RNG_STEP);
         mix64(self.state)
+    }
+
+    /// Steps past `n` numbers without making them: the state `n` draws leave.
+    #[inline]
+    pub fn skip(&mut self, n: u64) {
+        self.state = self.state.wrapping_add(n.wrapping_mul(RNG_STEP));
     }
 
     /// Uniform in [0, 1).
@@ -322,6 +331,19 @@ pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Skipping n numbers leaves the generator where drawing them does.
+    #[test]
+    fn skipping_numbers_is_drawing_them() {
+        for n in [0u64, 1, 2, 7] {
+            let (mut drawn, mut skipped) = (Rng::new(3, 4, 5), Rng::new(3, 4, 5));
+            for _ in 0..n {
+                drawn.next_u64();
+            }
+            skipped.skip(n);
+            assert_eq!(drawn.next_u64(), skipped.next_u64(), "{n} skipped");
+        }
+    }
 
     #[test]
     fn quarter_sines_and_cosines_are_within_two_ulps() {
