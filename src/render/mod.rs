@@ -349,6 +349,24 @@ pub fn render_pixel_batches(
     (film, stats)
 }
 
+/// The (pixel, sample) pairs, both counted from 0, of the samples `run` of a row taken in
+/// order, `spp` a pixel: sample n is sample n mod spp of pixel n / spp, divided once per run
+/// and not once per sample.
+fn pixels_and_samples(
+    run: std::ops::Range<usize>,
+    spp: usize,
+) -> impl Iterator<Item = (usize, usize)> {
+    let pixels = if run.is_empty() {
+        0..0
+    } else {
+        run.start / spp..(run.end - 1) / spp + 1
+    };
+    pixels.flat_map(move |p| {
+        let first = p * spp;
+        (run.start.max(first) - first..run.end.min(first + spp) - first).map(move |k| (p, k))
+    })
+}
+
 /// The sums of a window's pixels, row by row (a row Ctrl-C cut short took no samples in its
 /// remaining pixels).
 fn sample_sums(window: Window, rows: Vec<Vec<PixelSum>>) -> SampleSums {
@@ -412,14 +430,11 @@ fn take_samples(
                     break;
                 }
                 let chunk = done..(done + CHUNK_SAMPLES).min(total);
-                let pixel_sample = |n: usize| {
-                    let i = window.x0 + (n / spp) as u32;
-                    (i, samples.start + (n % spp) as u32)
-                };
                 let mut rngs = Vec::with_capacity(chunk.len());
                 let mut rays = Vec::with_capacity(chunk.len());
                 let mut ids = Vec::with_capacity(chunk.len());
-                for (i, k) in chunk.clone().map(pixel_sample) {
+                for (p, k) in pixels_and_samples(chunk.clone(), spp) {
+                    let (i, k) = (window.x0 + p as u32, samples.start + k as u32);
                     let (ray, rng) = camera.sample((i, j), k);
                     rays.push(ray);
                     rngs.push(rng);
@@ -443,8 +458,8 @@ fn take_samples(
                 radiance(batch, &mut counts, &mut radiances);
                 // Summed in f64: finite samples near f32's largest value must not add up to
                 // infinity; their mean is again a finite f32.
-                for (n, l) in chunk.clone().zip(&radiances) {
-                    let (sum, good) = &mut sums[n / spp];
+                for ((p, _), l) in pixels_and_samples(chunk.clone(), spp).zip(&radiances) {
+                    let (sum, good) = &mut sums[p];
                     if l.is_finite() {
                         for (s, c) in sum.iter_mut().zip(l.to_array()) {
                             *s += c as f64;
