@@ -309,6 +309,8 @@ pub struct Bvh {
     prim_count: usize,
     shapes: Vec<AnalyticShape>,
     one_sided_quads: bool,
+    /// The processor's instructions, for the batched queries' dispatch.
+    arch: pulp::Arch,
 }
 
 /// A primitive during the build: 28 bytes, its centroid computed where it is needed (the
@@ -427,6 +429,7 @@ impl Bvh {
             prim_count: build.len(),
             shapes: scene.shapes.iter().map(|s| s.shape).collect(),
             one_sided_quads: !scene.two_sided_quads,
+            arch: pulp::Arch::new(),
         })
     }
 
@@ -557,7 +560,7 @@ impl Bvh {
         ray: &Ray,
         start: Entry,
         t_max: &mut f32,
-        mut visit: impl FnMut(&Entry, &mut f32) -> bool,
+        visit: &mut impl LeafVisit,
     ) {
         if self.items.is_empty() {
             return;
@@ -573,7 +576,7 @@ impl Bvh {
         let mut current = start;
         loop {
             if current.count > 0 {
-                if visit(&current, t_max) {
+                if visit.visit(self, &current, t_max) {
                     return;
                 }
             } else {
@@ -698,20 +701,17 @@ impl Accel for Bvh {
     }
 
     fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
-        let shear = RayShear::new(ray);
-        let pack_ray = Tri4Ray::new(ray, &shear);
-        let mut t_max = ray.t_max;
-        let mut best = None;
-        self.traverse::<true>(ray, ROOT, &mut t_max, |node, t_max| {
-            self.leaf_closest(node, (ray, &shear, &pack_ray), t_max, &mut best);
-            false
-        });
-        best.map(|(prim, u, v)| PrimHit {
-            t: t_max,
-            prim: prim.unpack(),
-            u,
-            v,
-            exact: true,
+        self.closest(ray)
+    }
+
+    /// The rays one by one, as `intersect`, in a loop compiled for the processor's widest
+    /// instructions (`pulp`'s run-time dispatch): the walk and the tests inlined into it take
+    /// the VEX encodings and wider registers.
+    fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<PrimHit>]) {
+        self.arch.dispatch(ClosestBatch {
+            bvh: self,
+            rays,
+            hits,
         })
     }
 
@@ -723,30 +723,45 @@ impl Accel for Bvh {
     /// Packets of `PACKET` rays walk the tree together: a box is tested against all the
     /// packet's rays still to be decided that entered its parent, in one pass over the box, and
     /// a leaf's primitives against each of them. The answers are `occluded`'s, ray by ray:
-    /// each ray is taken into exactly the boxes it would enter alone.
+    /// each ray is taken into exactly the boxes it would enter alone. Compiled, as
+    /// `intersect_batch`, for the processor's widest instructions.
     fn occluded_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
-        let mut stack = Vec::with_capacity(4 * WIDTH);
-        let mut packet = Packet::default();
-        for (rays, occluded) in rays.chunks(PACKET).zip(occluded.chunks_mut(PACKET)) {
-            packet.load(rays);
-            self.occluded_packet(rays, &packet, occluded, &mut stack);
-        }
+        self.arch.dispatch(OccludedBatch {
+            bvh: self,
+            rays,
+            occluded,
+        })
     }
 }
 
 impl Bvh {
+    /// `intersect`, inlined wherever it is called.
+    #[inline(always)]
+    fn closest(&self, ray: &Ray) -> Option<PrimHit> {
+        let shear = RayShear::new(ray);
+        let pack_ray = Tri4Ray::new(ray, &shear);
+        let mut t_max = ray.t_max;
+        let mut closest = ClosestHit {
+            ray: (ray, &shear, &pack_ray),
+            best: None,
+        };
+        self.traverse::<true>(ray, ROOT, &mut t_max, &mut closest);
+        closest.best.map(|(prim, u, v)| PrimHit {
+            t: t_max,
+            prim: prim.unpack(),
+            u,
+            v,
+            exact: true,
+        })
+    }
+
     /// Whether a primitive below `start` blocks the ray (with its shear and pack form).
+    #[inline(always)]
     fn occluded_below(&self, start: Entry, ray: OneRay) -> bool {
         let mut t_max = ray.0.t_max;
-        let mut hit = false;
-        self.traverse::<false>(ray.0, start, &mut t_max, |leaf, _| {
-            hit = self
-                .leaf(leaf)
-                .iter()
-                .any(|item| self.item_blocks(item, ray));
-            hit
-        });
-        hit
+        let mut any = AnyHit { ray, hit: false };
+        self.traverse::<false>(ray.0, start, &mut t_max, &mut any);
+        any.hit
     }
 
     /// Whether `item` blocks the ray (with its shear and pack form).
@@ -760,6 +775,7 @@ impl Bvh {
 
     /// `occluded` for up to `PACKET` rays at once (see `occluded_batch`); `stack` is working
     /// space (entries still to visit with the rays that entered them, bit `i` ray `i`).
+    #[inline(always)]
     fn occluded_packet(
         &self,
         rays: &[Ray],
@@ -812,6 +828,7 @@ impl Bvh {
     /// blocks. A quad is tested against four rays at once where they share their axes (the
     /// packet's rays run alike: camera rays, shadow rays to a small light, rays between two
     /// patches), every other primitive ray by ray.
+    #[inline(always)]
     fn leaf_blocks(&self, leaf: &Entry, entered: u32, (packet, rays): (&Packet, &[Ray])) -> u32 {
         let one = |i: usize| packet.one(rays, i);
         let mut blocked = 0;
@@ -872,6 +889,86 @@ impl Bvh {
     }
 }
 
+/// What a walk of the tree (`Bvh::traverse`) does at each leaf it enters. A trait and not a
+/// closure so that the test is inlined into the walk wherever the walk is.
+trait LeafVisit {
+    /// Tests the items of `leaf` (shrinking `t_max` to a hit found); true stops the walk.
+    fn visit(&mut self, bvh: &Bvh, leaf: &Entry, t_max: &mut f32) -> bool;
+}
+
+/// The closest hit: primitive, u, v (its t is the walk's `t_max`).
+struct ClosestHit<'a> {
+    ray: OneRay<'a>,
+    best: Option<(PackedPrim, f32, f32)>,
+}
+
+impl LeafVisit for ClosestHit<'_> {
+    #[inline(always)]
+    fn visit(&mut self, bvh: &Bvh, leaf: &Entry, t_max: &mut f32) -> bool {
+        bvh.leaf_closest(leaf, self.ray, t_max, &mut self.best);
+        false
+    }
+}
+
+/// Whether anything blocks the ray: the first hit stops the walk.
+struct AnyHit<'a> {
+    ray: OneRay<'a>,
+    hit: bool,
+}
+
+impl LeafVisit for AnyHit<'_> {
+    #[inline(always)]
+    fn visit(&mut self, bvh: &Bvh, leaf: &Entry, _: &mut f32) -> bool {
+        self.hit = bvh
+            .leaf(leaf)
+            .iter()
+            .any(|item| bvh.item_blocks(item, self.ray));
+        self.hit
+    }
+}
+
+/// `Bvh::intersect_batch`'s loop, for `pulp::Arch::dispatch`.
+struct ClosestBatch<'a> {
+    bvh: &'a Bvh,
+    rays: &'a [Ray],
+    hits: &'a mut [Option<PrimHit>],
+}
+
+impl pulp::WithSimd for ClosestBatch<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        for (ray, hit) in self.rays.iter().zip(self.hits.iter_mut()) {
+            *hit = self.bvh.closest(ray);
+        }
+    }
+}
+
+/// `Bvh::occluded_batch`'s loop, for `pulp::Arch::dispatch`.
+struct OccludedBatch<'a> {
+    bvh: &'a Bvh,
+    rays: &'a [Ray],
+    occluded: &'a mut [bool],
+}
+
+impl pulp::WithSimd for OccludedBatch<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let mut stack = Vec::with_capacity(4 * WIDTH);
+        let mut packet = Packet::default();
+        let chunks = self
+            .rays
+            .chunks(PACKET)
+            .zip(self.occluded.chunks_mut(PACKET));
+        for (rays, occluded) in chunks {
+            packet.load(rays);
+            self.bvh
+                .occluded_packet(rays, &packet, occluded, &mut stack);
+        }
+    }
+}
+
 /// A ray with its shear and its form for the pack test, as a leaf's primitives take it.
 type OneRay<'a> = (&'a Ray, &'a RayShear, &'a Tri4Ray);
 
@@ -888,6 +985,7 @@ struct Packet {
 }
 
 impl Packet {
+    #[inline(always)]
     fn load(&mut self, rays: &[Ray]) {
         let ray = |i: usize| &rays[i.min(rays.len() - 1)];
         for i in 0..PACKET {
@@ -899,6 +997,7 @@ impl Packet {
     }
 
     /// Group `g` of `rays` (the rays loaded) set up for quads, if its rays share their axes.
+    #[inline(always)]
     fn rays4(&self, rays: &[Ray], g: usize) -> Option<&Rays4> {
         self.groups[g]
             .get_or_init(|| {
@@ -912,6 +1011,7 @@ impl Packet {
     }
 
     /// Ray `i` of `rays` (the rays loaded) with its shear and pack form.
+    #[inline(always)]
     fn one<'a>(&'a self, rays: &'a [Ray], i: usize) -> OneRay<'a> {
         (&rays[i], &self.shears[i], &self.pack_rays[i])
     }
