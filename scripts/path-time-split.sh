@@ -13,10 +13,10 @@
 # whose samples are CPU time at 999 a second on each thread. Ray casting is, in Mitsuba, Embree
 # (libembree3) and the sphere's intersection callbacks Embree calls (Mitsuba's `ray_intersect`
 # and `ray_test` and its packet wrappers); in ours, the BVH's traversal and tests (symbols of
-# `accel::bvh`, or Embree's, our shim's (sys/shim.c) and the exact tests it calls back with
-# `--accel embree`). Prints, per renderer, the medians of ray casting, the rest, and their sum
+# `accel::bvh`, and the functions `pulp`'s dispatch compiled for its batched queries; or
+# Embree's, our shim's (sys/shim.c) and the exact tests it calls back with `--accel embree`). Prints, per renderer, the medians of ray casting, the rest, and their sum
 # in CPU seconds a render, and ours over Mitsuba's.
-# Needs linux-perf (Debian), `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH
+# Needs linux-perf and binutils (Debian), `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH
 # (set by scripts/mitsuba-common.sh from ldconfig when unset).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -29,29 +29,69 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 scene=$(scene_for_mitsuba cornell_box_diffuse_sphere.obj "$work")
 
-# cpu_split NAME RENDERS PERF_DATA: a CSV row of CPU seconds (casting, rest) a render.
+# dispatched_casting RENDER: the addresses (hex, one a line) of the functions that `pulp`'s
+# run-time dispatch compiled for the BVH's batched queries. They are all named
+# `pulp::…::vectorize::imp_fastcall`, like the path tracer's own kernels, so they are told
+# apart by who calls them: the BVH's functions (`objdump`).
+dispatched_casting() {
+  objdump -d -C --no-show-raw-insn "$1" | awk '
+    /^[0-9a-f]+ <.*>:$/ { caller = $0 }
+    /(call|jmp).*vectorize::imp/ && caller ~ /accel::bvh/ { print $(NF - 1) }' | sort -u
+}
+
+# cpu_split NAME RENDERS PERF_DATA [BINARY]: a CSV row of CPU seconds (casting, rest) a
+# render. With BINARY (ours), its dispatched functions count as casting where the BVH calls
+# them; a sample's function is found from its address less its offset in the function,
+# against `nm`'s addresses (the program is loaded at an offset, found from a function whose
+# name is its own).
 cpu_split() {
-  perf report -i "$3" --no-children --sort dso,sym --stdio -n -g none --percent-limit 0 \
-    2>/dev/null | python3 -c '
-import re, sys
-name, renders = sys.argv[1], int(sys.argv[2])
+  local dispatched="" symbols=""
+  if [ -n "${4:-}" ]; then
+    dispatched=$(dispatched_casting "$4" | tr '\n' ' ')
+    symbols=$work/symbols.txt
+    nm -C --defined-only "$4" >"$symbols"
+  fi
+  perf script -i "$3" -F ip,sym,symoff,dso 2>/dev/null | python3 -c '
+import collections, os, re, sys
+name, renders, dispatched, symbols = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
+binary = sys.argv[5] and os.path.realpath(sys.argv[5])
 casting = re.compile(
     r"libembree|embree_(intersect|occluded)|::ray_(intersect|test)|accel::bvh|accel::embree"
     # our C shim (sys/shim.c) around Embree: its calls and the callbacks Embree makes
     r"|^(tx_\w+|\w+_filter|user_(intersect|occluded)|exact_occludes|offer|best_of|load_ray|init_ray(hit)?)$"
 )
-cast = rest = 0
+dispatched = {int(a, 16) for a in dispatched.split()}
+# Functions of the binary by name, for those with one address: the load offset.
+addresses = collections.defaultdict(set)
+if symbols:
+    for line in open(symbols):
+        parts = line.rstrip("\n").split(" ", 2)
+        if len(parts) == 3 and parts[1] in "tTwW":
+            addresses[parts[2]].add(int(parts[0], 16))
+samples = []
 for line in sys.stdin:
-    m = re.match(r"\s*[\d.]+%\s+(\d+)\s+(.+?)\s+\[[.k]\]\s+(.*)", line)
-    if not m:
-        continue
-    n, dso, sym = int(m.group(1)), m.group(2), m.group(3).strip()
+    m = re.match(r"\s*([0-9a-f]+) (.+)\+0x([0-9a-f]+) \((.*)\)$", line)
+    if m:
+        ip, sym, off, dso = int(m.group(1), 16), m.group(2), int(m.group(3), 16), m.group(4)
+        ours = bool(binary) and os.path.realpath(dso) == binary
+        samples.append((ip - off, sym, dso, ours))
+    elif line.strip():
+        samples.append((None, "", "", False))
+base = next(
+    (start - min(addresses[sym]) for start, sym, _, ours in samples
+     if ours and len(addresses.get(sym, ())) == 1),
+    None,
+)
+cast = rest = 0
+for start, sym, dso, ours in samples:
     if casting.search(dso) or casting.search(sym):
-        cast += n
+        cast += 1
+    elif ours and base is not None and start - base in dispatched:
+        cast += 1
     else:
-        rest += n
+        rest += 1
 print(f"{name},{cast / 999 / renders:.4f},{rest / 999 / renders:.4f}")
-' "$1" "$2"
+' "$1" "$2" "$dispatched" "$symbols" "${4:-}"
 }
 
 csv=$work/split.csv
@@ -63,7 +103,7 @@ for r in $(seq "$repeats"); do
     "$render" -input "$scene" --engine path -num_antialias_samples "$spp" \
     --light-sampling random --accel "$accel" --seed "$r" --quiet -o "$work/ours.exr" \
     >/dev/null 2>&1
-  cpu_split "trilux ($accel)" 1 "$work/ours.data" >>"$csv"
+  cpu_split "trilux ($accel)" 1 "$work/ours.data" "$render" >>"$csv"
 done
 
 python3 - "$csv" "$spp" <<'PY'
