@@ -14,10 +14,11 @@
 # (libembree3) and the sphere's intersection callbacks Embree calls (Mitsuba's `ray_intersect`
 # and `ray_test` and its packet wrappers); in ours, the BVH's traversal and tests (symbols of
 # `accel::bvh`, and the functions `pulp`'s dispatch compiled for its batched queries; or
-# Embree's, our shim's (sys/shim.c) and the exact tests it calls back with `--accel embree`). Prints, per renderer, the medians of ray casting, the rest, and their sum
-# in CPU seconds a render, and ours over Mitsuba's.
-# Needs linux-perf and binutils (Debian), `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH
-# (set by scripts/mitsuba-common.sh from ldconfig when unset).
+# Embree's, our shim's (sys/shim.c) and the exact tests it calls back with `--accel embree`).
+# Prints, per renderer, the medians of ray casting, the rest, and their sum in CPU seconds a
+# render, and ours over Mitsuba's.
+# Needs linux-perf and binutils (Debian), `pip install mitsuba`, Debian's libllvm19 and
+# DRJIT_LIBLLVM_PATH (set by scripts/mitsuba-common.sh from ldconfig when unset).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 repeats=$1 spp=$2 who=$3
@@ -78,7 +79,7 @@ for line in sys.stdin:
     elif line.strip():
         samples.append((None, "", "", False))
 base = next(
-    (start - min(addresses[sym]) for start, sym, _, ours in samples
+    (start - next(iter(addresses[sym])) for start, sym, _, ours in samples
      if ours and len(addresses.get(sym, ())) == 1),
     None,
 )
