@@ -96,6 +96,7 @@ pub struct SurfaceHit {
 impl Scene {
     /// Whether a ray travelling along `dir` sees the emission of the surface it hit: quads
     /// emit from their front side only (unless `--two-sided`), closed surfaces from all sides.
+    #[inline]
     pub fn sees_emission(&self, s: &SurfaceHit, dir: Vec3) -> bool {
         let closed = s.prim.kind == PrimKind::Shape;
         self.materials[s.material as usize].is_emissive()

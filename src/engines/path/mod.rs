@@ -343,10 +343,20 @@ impl PathTracer<'_> {
     /// The emitted radiance a path of `throughput` arriving at `s` along `dir` from `previous`
     /// takes in: what the surface emits towards it, weighed against next-event estimation
     /// (which could have found the point from `previous`) by the power heuristic.
+    ///
+    /// The test is inlined and the weighing is not: most vertices meet a surface that emits
+    /// nothing, and as one call the weighing's large frame was set up for every vertex.
+    #[inline(always)]
     fn emission(&self, s: &SurfaceHit, dir: Vec3, previous: &Previous, throughput: Color) -> Color {
         if !self.scene.sees_emission(s, dir) {
             return Vec3::ZERO;
         }
+        self.weighed_emission(s, previous, throughput)
+    }
+
+    /// `emission` at a surface that emits towards the path.
+    #[inline(never)]
+    fn weighed_emission(&self, s: &SurfaceHit, previous: &Previous, throughput: Color) -> Color {
         let weight = match (previous.bsdf_pdf, Light::index_of(&self.lights, s.prim)) {
             (Some(bsdf_pdf), Some(k)) => {
                 let light_pdf = self.light_pdf(k, previous, s);
