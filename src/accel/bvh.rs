@@ -525,7 +525,7 @@ impl Bvh {
                     }
                 }
                 ItemView::Single(p) => {
-                    if let Some((t, u, v)) = self.hit_single(&p, ray, shear, limit) {
+                    if let Some((t, u, v)) = self.hit_single(&p, ray, || shear, limit) {
                         keep_closest(best, t_max, (p.prim, t, u, v));
                     }
                 }
@@ -533,12 +533,14 @@ impl Bvh {
         }
     }
 
+    /// `shear` gives the ray's shear, made when first asked for where the caller makes it
+    /// lazily (`RayForms`): a quad facing away, or a shape, does not ask.
     #[inline(always)]
-    fn hit_single(
+    fn hit_single<'s>(
         &self,
         p: &LeafPrim,
         ray: &Ray,
-        shear: &RayShear,
+        shear: impl FnOnce() -> &'s RayShear,
         t_max: f32,
     ) -> Option<(f32, f32, f32)> {
         match p.prim.kind() {
@@ -547,7 +549,7 @@ impl Bvh {
                 if self.one_sided_quads && !faces_ray(p.normal, ray.direction) {
                     return None;
                 }
-                intersect_quad_sheared(ray, shear, t_max, &p.v)
+                intersect_quad_sheared(ray, shear(), t_max, &p.v)
             }
             PrimKind::Shape => self.shapes[p.prim.index() as usize]
                 .intersect(ray, t_max)
@@ -720,8 +722,7 @@ impl Accel for Bvh {
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
-        let shear = RayShear::new(ray);
-        self.occluded_below(ROOT, (ray, &shear, &Tri4Ray::new(ray, &shear)))
+        self.occluded_below(ROOT, (ray, &OnceCell::new()))
     }
 
     /// Packets of `PACKET` rays walk the tree together: a box is tested against all the
@@ -768,12 +769,21 @@ impl Bvh {
         any.hit
     }
 
-    /// Whether `item` blocks the ray (with its shear and pack form).
+    /// Whether `item` blocks the ray (with its forms, made here if it needs them).
     #[inline(always)]
-    fn item_blocks(&self, item: &LeafItem, (ray, shear, pack_ray): OneRay) -> bool {
+    fn item_blocks(&self, item: &LeafItem, (ray, forms): OneRay) -> bool {
+        let forms = || forms.get_or_init(|| RayForms::new(ray));
         match item.view() {
-            ItemView::Triangles(pack) => pack.intersect(pack_ray, ray, shear, ray.t_max).mask != 0,
-            ItemView::Single(p) => self.hit_single(&p, ray, shear, ray.t_max).is_some(),
+            ItemView::Triangles(pack) => {
+                let RayForms {
+                    shear,
+                    pack: pack_ray,
+                } = forms();
+                pack.intersect(pack_ray, ray, shear, ray.t_max).mask != 0
+            }
+            ItemView::Single(p) => self
+                .hit_single(&p, ray, || &forms().shear, ray.t_max)
+                .is_some(),
         }
     }
 
@@ -884,7 +894,8 @@ impl Bvh {
         let hit = (first | second) & facing & lanes;
         let unsure = (first_edge | second_edge) & facing & lanes & !hit;
         bits(unsure).fold(hit, |hit, i| {
-            let (ray, shear, _) = one(i);
+            let (ray, forms) = one(i);
+            let shear = || &forms.get_or_init(|| RayForms::new(ray)).shear;
             match self.hit_single(p, ray, shear, ray.t_max) {
                 Some(_) => hit | 1 << i,
                 None => hit,
@@ -904,7 +915,8 @@ trait LeafVisit {
 
 /// The closest hit: primitive, u, v (its t is the walk's `t_max`).
 struct ClosestHit<'a> {
-    ray: OneRay<'a>,
+    /// The ray with its shear and pack form (a closest hit tests a primitive at once).
+    ray: (&'a Ray, &'a RayShear, &'a Tri4Ray),
     best: Option<(PackedPrim, f32, f32)>,
 }
 
@@ -975,15 +987,34 @@ impl pulp::WithSimd for OccludedBatch<'_> {
     }
 }
 
-/// A ray with its shear and its form for the pack test, as a leaf's primitives take it.
-type OneRay<'a> = (&'a Ray, &'a RayShear, &'a Tri4Ray);
+/// A ray's shear and its form for the pack test, as a leaf's primitives take it.
+#[derive(Default)]
+struct RayForms {
+    shear: RayShear,
+    pack: Tri4Ray,
+}
+
+impl RayForms {
+    #[inline(always)]
+    fn new(ray: &Ray) -> RayForms {
+        let shear = RayShear::new(ray);
+        let pack = Tri4Ray::new(ray, &shear);
+        RayForms { shear, pack }
+    }
+}
+
+/// A ray of an occlusion query with its forms, made when a primitive test first needs them.
+/// Most of a shadow ray's walk meets boxes it misses, quads facing away and shapes, which
+/// need no shear: made at once, the three divisions were a quarter of the batched occlusion
+/// query's time on the Cornell box.
+type OneRay<'a> = (&'a Ray, &'a OnceCell<RayForms>);
 
 /// A packet's rays in every form its tests take, filled afresh for each packet (lanes beyond
-/// its rays repeat its last one; no query asks for them).
+/// its rays repeat its last one; no query asks for them); the forms for the primitives' tests
+/// when first needed.
 #[derive(Default)]
 struct Packet {
-    shears: [RayShear; PACKET],
-    pack_rays: [Tri4Ray; PACKET],
+    forms: [OnceCell<RayForms>; PACKET],
     boxes: PacketBoxes,
     /// Each group of four rays set up for quads (if they share their axes), made when a
     /// quad first needs it: scenes of triangles never do.
@@ -995,10 +1026,9 @@ impl Packet {
     fn load(&mut self, rays: &[Ray]) {
         let ray = |i: usize| &rays[i.min(rays.len() - 1)];
         for i in 0..PACKET {
-            self.shears[i] = RayShear::new(ray(i));
-            self.pack_rays[i] = Tri4Ray::new(ray(i), &self.shears[i]);
             self.boxes.set(i, ray(i));
         }
+        self.forms = Default::default();
         self.groups = Default::default();
     }
 
@@ -1009,17 +1039,18 @@ impl Packet {
             .get_or_init(|| {
                 let lane = |i: usize| {
                     let i = (4 * g + i).min(rays.len() - 1);
-                    (&rays[i], &self.shears[i])
+                    let forms = self.forms[i].get_or_init(|| RayForms::new(&rays[i]));
+                    (&rays[i], &forms.shear)
                 };
                 Rays4::new([lane(0), lane(1), lane(2), lane(3)])
             })
             .as_ref()
     }
 
-    /// Ray `i` of `rays` (the rays loaded) with its shear and pack form.
+    /// Ray `i` of `rays` (the rays loaded) with its forms.
     #[inline(always)]
     fn one<'a>(&'a self, rays: &'a [Ray], i: usize) -> OneRay<'a> {
-        (&rays[i], &self.shears[i], &self.pack_rays[i])
+        (&rays[i], &self.forms[i])
     }
 }
 
