@@ -150,7 +150,12 @@ struct RayBoxes {
 impl RayBoxes {
     #[inline(always)]
     fn new(ray: &Ray) -> RayBoxes {
-        let inv = inverse_direction(ray);
+        RayBoxes::with_inverse(ray, inverse_direction(ray))
+    }
+
+    /// The ray set up with `inv`, its `inverse_direction` made before.
+    #[inline(always)]
+    fn with_inverse(ray: &Ray, inv: [f32; 3]) -> RayBoxes {
         RayBoxes {
             org: [0, 1, 2].map(|a| Vec4::splat(ray.origin[a])),
             inv: inv.map(Vec4::splat),
@@ -203,6 +208,13 @@ impl PacketBoxes {
         }
         self.t_min[g][lane] = ray.t_min;
         self.t_max[g][lane] = ray.t_max * BOX_REACH;
+    }
+
+    /// The inverse direction of the ray in lane `i` (`inverse_direction`'s).
+    #[inline(always)]
+    fn inverse(&self, i: usize) -> [f32; 3] {
+        let (g, lane) = (i / 4, i % 4);
+        [0, 1, 2].map(|a| self.inv[a][g][lane])
     }
 
     /// The rays (bit `i`: ray `i`) that enter the box of child `slot` of `n`: for each ray
@@ -558,12 +570,12 @@ impl Bvh {
     }
 
     /// Walks the tree below `start` (`ROOT`, or a child the ray was found to enter), the
-    /// children a ray enters nearest first when `ORDERED`, else in slot order. `visit` tests a
-    /// leaf and returns true to stop.
+    /// children a ray enters nearest first when `ORDERED`, else in slot order; `boxes` is
+    /// `ray` set up for the slab test. `visit` tests a leaf and returns true to stop.
     #[inline(always)]
     fn traverse<const ORDERED: bool>(
         &self,
-        ray: &Ray,
+        (ray, boxes): (&Ray, &RayBoxes),
         start: Entry,
         t_max: &mut f32,
         visit: &mut impl LeafVisit,
@@ -571,7 +583,6 @@ impl Bvh {
         if self.items.is_empty() {
             return;
         }
-        let boxes = RayBoxes::new(ray);
         // Boxes are kept up to `BOX_REACH` beyond the current hit: see there.
         let reach = |t: f32| t * BOX_REACH;
         // Children not taken at once wait with their entry distance: a closer hit found
@@ -587,7 +598,7 @@ impl Bvh {
                 }
             } else {
                 let node = &self.nodes[current.first as usize];
-                let (mut mask, near) = slab(node, &boxes, ray.t_min, reach(*t_max));
+                let (mut mask, near) = slab(node, boxes, ray.t_min, reach(*t_max));
                 if mask != 0 {
                     let entry = |slot: usize| Entry {
                         first: node.first[slot],
@@ -722,7 +733,7 @@ impl Accel for Bvh {
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
-        self.occluded_below(ROOT, (ray, &OnceCell::new()))
+        self.occluded_below(ROOT, (ray, &OnceCell::new()), inverse_direction(ray))
     }
 
     /// Packets of `PACKET` rays walk the tree together: a box is tested against all the
@@ -750,7 +761,7 @@ impl Bvh {
             ray: (ray, &shear, &pack_ray),
             best: None,
         };
-        self.traverse::<true>(ray, ROOT, &mut t_max, &mut closest);
+        self.traverse::<true>((ray, &RayBoxes::new(ray)), ROOT, &mut t_max, &mut closest);
         closest.best.map(|(prim, u, v)| PrimHit {
             t: t_max,
             prim: prim.unpack(),
@@ -760,12 +771,14 @@ impl Bvh {
         })
     }
 
-    /// Whether a primitive below `start` blocks the ray (with its shear and pack form).
+    /// Whether a primitive below `start` blocks the ray (with its forms, and the inverse of
+    /// its direction made before).
     #[inline(always)]
-    fn occluded_below(&self, start: Entry, ray: OneRay) -> bool {
+    fn occluded_below(&self, start: Entry, ray: OneRay, inv: [f32; 3]) -> bool {
         let mut t_max = ray.0.t_max;
         let mut any = AnyHit { ray, hit: false };
-        self.traverse::<false>(ray.0, start, &mut t_max, &mut any);
+        let boxes = RayBoxes::with_inverse(ray.0, inv);
+        self.traverse::<false>((ray.0, &boxes), start, &mut t_max, &mut any);
         any.hit
     }
 
@@ -809,7 +822,7 @@ impl Bvh {
                     open &= !self.leaf_blocks(&entry, entered, (packet, rays));
                 } else if entered.count_ones() <= PACKET_SWITCH {
                     for i in bits(entered) {
-                        if self.occluded_below(entry, one(i)) {
+                        if self.occluded_below(entry, one(i), packet.boxes.inverse(i)) {
                             open &= !(1 << i);
                         }
                     }
