@@ -1001,7 +1001,6 @@ impl pulp::WithSimd for OccludedBatch<'_> {
 }
 
 /// A ray's shear and its form for the pack test, as a leaf's primitives take it.
-#[derive(Default)]
 struct RayForms {
     shear: RayShear,
     pack: Tri4Ray,

@@ -22,7 +22,6 @@ pub(super) struct Tri4 {
 
 /// The ray in the form the pack test wants, made once per ray: its origin and shear in every
 /// lane, axes already permuted so that z is the direction's dominant axis.
-#[derive(Default)]
 pub(super) struct Tri4Ray {
     org: [Vec4; 3],
     sx: Vec4,
