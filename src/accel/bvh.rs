@@ -197,24 +197,29 @@ struct PacketBoxes {
 }
 
 impl PacketBoxes {
-    /// Sets lane `i` to `ray`.
+    /// Sets lane `i` to `ray(i)`, every lane. A group's lanes are gathered into arrays and
+    /// loaded whole: a `Vec4`'s lane indexed by a number known only at run time is a `match`,
+    /// a branch the processor mispredicts.
     #[inline(always)]
-    fn set(&mut self, i: usize, ray: &Ray) {
-        let inv = inverse_direction(ray);
-        let (g, lane) = (i / 4, i % 4);
-        for (a, inv) in inv.into_iter().enumerate() {
-            self.org[a][g][lane] = ray.origin[a];
-            self.inv[a][g][lane] = inv;
+    fn load<'r>(&mut self, ray: impl Fn(usize) -> &'r Ray) {
+        for g in 0..PACKET / 4 {
+            let rays: [&Ray; 4] = std::array::from_fn(|lane| ray(4 * g + lane));
+            let inv = rays.map(inverse_direction);
+            for a in 0..3 {
+                self.org[a][g] = Vec4::from_array(rays.map(|r| r.origin[a]));
+                self.inv[a][g] = Vec4::from_array(inv.map(|v| v[a]));
+            }
+            self.t_min[g] = Vec4::from_array(rays.map(|r| r.t_min));
+            self.t_max[g] = Vec4::from_array(rays.map(|r| r.t_max * BOX_REACH));
         }
-        self.t_min[g][lane] = ray.t_min;
-        self.t_max[g][lane] = ray.t_max * BOX_REACH;
     }
 
-    /// The inverse direction of the ray in lane `i` (`inverse_direction`'s).
+    /// The inverse direction of the ray in lane `i` (`inverse_direction`'s), read through an
+    /// array (see `load`).
     #[inline(always)]
     fn inverse(&self, i: usize) -> [f32; 3] {
         let (g, lane) = (i / 4, i % 4);
-        [0, 1, 2].map(|a| self.inv[a][g][lane])
+        [0, 1, 2].map(|a| self.inv[a][g].to_array()[lane])
     }
 
     /// The rays (bit `i`: ray `i`) that enter the box of child `slot` of `n`: for each ray
@@ -1036,10 +1041,7 @@ struct Packet {
 impl Packet {
     #[inline(always)]
     fn load(&mut self, rays: &[Ray]) {
-        let ray = |i: usize| &rays[i.min(rays.len() - 1)];
-        for i in 0..PACKET {
-            self.boxes.set(i, ray(i));
-        }
+        self.boxes.load(|i| &rays[i.min(rays.len() - 1)]);
         self.forms = Default::default();
         self.groups = Default::default();
     }
