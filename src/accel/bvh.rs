@@ -790,7 +790,7 @@ impl Bvh {
     /// Whether `item` blocks the ray (with its forms, made here if it needs them).
     #[inline(always)]
     fn item_blocks(&self, item: &LeafItem, (ray, forms): OneRay) -> bool {
-        let forms = || forms.get_or_init(|| RayForms::new(ray));
+        let forms = || RayForms::of(forms, ray);
         match item.view() {
             ItemView::Triangles(pack) => {
                 let RayForms {
@@ -913,7 +913,7 @@ impl Bvh {
         let unsure = (first_edge | second_edge) & facing & lanes & !hit;
         bits(unsure).fold(hit, |hit, i| {
             let (ray, forms) = one(i);
-            let shear = || &forms.get_or_init(|| RayForms::new(ray)).shear;
+            let shear = || &RayForms::of(forms, ray).shear;
             match self.hit_single(p, ray, shear, ray.t_max) {
                 Some(_) => hit | 1 << i,
                 None => hit,
@@ -1018,6 +1018,12 @@ impl RayForms {
         let pack = Tri4Ray::new(ray, &shear);
         RayForms { shear, pack }
     }
+
+    /// The forms of `ray` kept in `cell`, made there on first use.
+    #[inline(always)]
+    fn of<'a>(cell: &'a OnceCell<RayForms>, ray: &Ray) -> &'a RayForms {
+        cell.get_or_init(|| RayForms::new(ray))
+    }
 }
 
 /// A ray of an occlusion query with its forms, made when a primitive test first needs them.
@@ -1053,8 +1059,7 @@ impl Packet {
             .get_or_init(|| {
                 let lane = |i: usize| {
                     let i = (4 * g + i).min(rays.len() - 1);
-                    let forms = self.forms[i].get_or_init(|| RayForms::new(&rays[i]));
-                    (&rays[i], &forms.shear)
+                    (&rays[i], &RayForms::of(&self.forms[i], &rays[i]).shear)
                 };
                 Rays4::new([lane(0), lane(1), lane(2), lane(3)])
             })
