@@ -60,7 +60,8 @@ pub struct RenderArgs {
 #[derive(Args, Debug)]
 #[command(next_help_heading = "Scene, output and run")]
 pub struct CommonArgs {
-    /// The scene file (course dialect or standard OBJ).
+    /// The scene file: course dialect or standard OBJ (`.obj`), MGF (`.mgf`), Mitsuba 3
+    /// (`.xml`).
     #[arg(long, required = true)]
     pub input: Option<PathBuf>,
     /// Output image: .png or .jpg (sRGB 8-bit), .exr or .pfm (linear float). Default:
@@ -112,6 +113,10 @@ pub struct CommonArgs {
     /// Make quads opaque from both sides.
     #[arg(long)]
     pub two_sided: bool,
+    /// A parameter of a Mitsuba scene: what `$NAME` stands for, over the scene's own
+    /// `<default>` (Mitsuba's -D); may be given more than once.
+    #[arg(long, value_name = "NAME=VALUE", value_parser = parse_define)]
+    pub define: Vec<(String, String)>,
     /// Embree's build quality.
     #[arg(long, value_enum, default_value_t = AccelOptions::default().embree_quality)]
     pub embree_quality: EmbreeQuality,
@@ -779,9 +784,21 @@ const TIME_LIMITED_SOLVE_SHARE_UNDER_RAYS: f64 = 0.5;
 /// The most worker threads `--threads` accepts: far above any machine's cores, far below
 /// what would exhaust the process's threads.
 pub const MAX_THREADS: usize = 1024;
-/// The largest image side `-size` accepts (the EXR and PNG encoders' own limits are higher;
-/// `--max-memory` bounds the area).
-pub const MAX_IMAGE_SIDE: u32 = 1 << 16;
+pub use crate::scene::MAX_IMAGE_SIDE;
+
+/// `--define NAME=VALUE`.
+fn parse_define(text: &str) -> Result<(String, String), String> {
+    match text.split_once('=') {
+        Some((name, value))
+            if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') =>
+        {
+            Ok((name.to_string(), value.to_string()))
+        }
+        _ => Err(format!(
+            "\"{text}\": expected NAME=VALUE, NAME of letters, digits and _"
+        )),
+    }
+}
 
 /// `value` must be finite and at least `min` (`open`: greater than `min`).
 fn check_number(id: &str, value: f32, min: f32, open: bool) -> Result<(), String> {

@@ -25,7 +25,8 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         .time_limit
         .map(|t| load_start + std::time::Duration::from_secs_f64(t));
     let engine = args.engine();
-    let scene = load_scene(args, input, engine)?;
+    let mut scene = load_scene(args, input, engine)?;
+    apply_scene_hints(args, &mut scene, &mut settings);
     let load_s = load_start.elapsed().as_secs_f64();
     let kind = args.accel_kind();
     let plan = Plan::new(&scene, engine, kind, &settings);
@@ -174,11 +175,38 @@ pub fn checked_settings(args: &RenderArgs) -> Result<RenderSettings, String> {
     Ok(settings)
 }
 
+/// What the scene file asks of the render (a Mitsuba scene's film size, samples per pixel,
+/// path depth and lens), where the command line did not give its own: the flags win.
+pub fn apply_scene_hints(args: &RenderArgs, scene: &mut Scene, settings: &mut RenderSettings) {
+    let given = |id: &str| args.given.iter().any(|(_, g)| g == id);
+    let hints = scene.render_hints.clone();
+    if let (Some((w, h)), false) = (hints.size, given("size")) {
+        settings.width = w;
+        settings.height = h;
+        settings.window = args.part.window(w, h);
+        scene.filter_textures_for(w, h);
+    }
+    if let (Some(n), false) = (hints.samples, given("num_antialias_samples")) {
+        settings.num_antialias_samples = n;
+    }
+    if !given("max_depth") && hints.max_depth.is_some() {
+        settings.max_depth = hints.max_depth;
+    }
+    if let Some((radius, focus)) = hints.lens {
+        if !given("aperture") {
+            settings.aperture = radius;
+        }
+        if !given("focus_distance") && focus > 0.0 {
+            settings.focus_distance = Some(focus);
+        }
+    }
+}
+
 /// The scene as `render` reads it: loaded (its warnings printed), `--two-sided` and the
 /// camera flags applied; refused if it has nothing to render or holds what `engine` would
 /// leave out. The viewer loads its scene here too.
 pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result<Scene, String> {
-    let mut scene = Scene::load(input).map_err(|e| e.to_string())?;
+    let mut scene = Scene::load_with(input, &args.common.define).map_err(|e| e.to_string())?;
     scene.two_sided_quads = args.common.two_sided;
     for w in &scene.warnings {
         eprintln!("warning: {w}");

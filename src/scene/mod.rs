@@ -6,6 +6,7 @@ mod dialect;
 mod error;
 pub mod medium;
 mod mgf;
+mod mitsuba;
 mod obj;
 pub mod procedural;
 pub mod sky;
@@ -194,18 +195,50 @@ pub struct Scene {
     /// For each quad, the quads that share a vertex position with it (built on first use; it
     /// settles hits on shared edges the same way whichever backend reported them).
     pub quad_neighbours: QuadNeighbours,
+    /// Triangles are shaded with their vertex normals interpolated (Mitsuba scenes); the
+    /// course's formats shade them flat, as the course program does.
+    pub smooth_normals: bool,
+    /// What the scene file asks of the render (a Mitsuba scene's film, sampler and
+    /// integrator), which the command line's own flags override.
+    pub render_hints: RenderHints,
     /// Problems that did not stop loading (e.g. a material that does not conserve energy).
     pub warnings: Vec<String>,
 }
 
+/// The largest image side a render takes (`-size`, a scene's film): the EXR and PNG
+/// encoders' own limits are higher; `--max-memory` bounds the area.
+pub const MAX_IMAGE_SIDE: u32 = 1 << 16;
+
+/// Render settings a scene file gives (Mitsuba's film, sampler and integrator), used where
+/// the command line gives none.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderHints {
+    /// The image's width and height (`-size`).
+    pub size: Option<(u32, u32)>,
+    /// Samples per pixel (`-num_antialias_samples`).
+    pub samples: Option<u32>,
+    /// Scatterings a path may take (`--max-depth`); None: no limit.
+    pub max_depth: Option<u32>,
+    /// A thin lens: its radius and focus distance (`--aperture`, `--focus-distance`).
+    pub lens: Option<(f32, f32)>,
+}
+
 impl Scene {
-    /// Loads a scene file: MGF by its `.mgf` extension, else the course dialect or standard
-    /// OBJ/MTL, decided by content.
+    /// Loads a scene file: MGF by its `.mgf` extension, Mitsuba 3 by `.xml`, else the course
+    /// dialect or standard OBJ/MTL, decided by content.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let mgf = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("mgf"));
-        let text = if mgf {
+        Scene::load_with(path, &[])
+    }
+
+    /// `load`, with the values of a Mitsuba scene's `$name` parameters (`--define`), which
+    /// win over its `<default>`s; other formats have no parameters.
+    pub fn load_with(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
+        let is = |ext: &str| {
+            path.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case(ext))
+        };
+        let mgf = is("mgf");
+        let text = if mgf || is("xml") {
             String::new()
         } else {
             let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
@@ -216,6 +249,8 @@ impl Scene {
         };
         let mut scene = if mgf {
             mgf::load(path)?
+        } else if is("xml") {
+            mitsuba::load(path, defines)?
         } else if dialect::is_dialect(&text) {
             dialect::parse(path, &text)?
         } else {

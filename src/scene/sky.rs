@@ -111,6 +111,10 @@ pub struct SkyMap {
     rows: Vec<f32>,
     /// For each row, the cumulative share of each of its texels (width + 1 entries a row).
     columns: Vec<f32>,
+    /// None: the layout above. Some(rotation from the scene's frame to the map's): Mitsuba's
+    /// `envmap` layout, the mirror image of ours: column 0 looks along −z and the columns
+    /// turn towards +x (u = atan2(x, −z) / 2π), row 0 is +y.
+    pub mitsuba_frame: Option<glam::Mat3>,
 }
 
 impl SkyMap {
@@ -125,6 +129,7 @@ impl SkyMap {
             texels: Vec::new(),
             rows: Vec::new(),
             columns: Vec::new(),
+            mitsuba_frame: None,
         }
     }
 
@@ -170,7 +175,12 @@ impl SkyMap {
                 path.display()
             ));
         }
-        *self = SkyMap::from_texels(width, height, texels);
+        *self = SkyMap {
+            scale: self.scale,
+            line: self.line,
+            mitsuba_frame: self.mitsuba_frame,
+            ..SkyMap::from_texels(width, height, texels)
+        };
         self.file = path
             .strip_prefix(dir)
             .map_or(path.clone(), Path::to_path_buf);
@@ -211,13 +221,21 @@ impl SkyMap {
             texels,
             rows,
             columns,
+            mitsuba_frame: None,
         }
     }
 
     /// The texel a unit direction falls in: (column, row).
     fn texel_of(&self, d: Vec3) -> (usize, usize) {
+        let (d, phi) = match self.mitsuba_frame {
+            None => (d, (-d.z).atan2(d.x)),
+            Some(r) => {
+                let d = r * d;
+                (d, d.x.atan2(-d.z))
+            }
+        };
         let theta = d.y.clamp(-1.0, 1.0).acos();
-        let phi = (-d.z).atan2(d.x).rem_euclid(std::f32::consts::TAU);
+        let phi = phi.rem_euclid(std::f32::consts::TAU);
         let column = (phi / std::f32::consts::TAU * self.width as f32) as usize;
         let row = (theta / std::f32::consts::PI * self.height as f32) as usize;
         (
@@ -261,7 +279,10 @@ impl SkyMap {
         let theta = (row as f32 + fv) / h as f32 * std::f32::consts::PI;
         let phi = (column as f32 + fu) / w as f32 * std::f32::consts::TAU;
         let sin = theta.sin();
-        let d = vec3(sin * phi.cos(), theta.cos(), -sin * phi.sin());
+        let d = match self.mitsuba_frame {
+            None => vec3(sin * phi.cos(), theta.cos(), -sin * phi.sin()),
+            Some(r) => r.transpose() * vec3(sin * phi.sin(), theta.cos(), -sin * phi.cos()),
+        };
         let pdf = self.pdf(d);
         (pdf > 0.0).then_some((d, pdf))
     }
@@ -312,7 +333,11 @@ impl std::fmt::Debug for SkyMap {
             self.width,
             self.height,
             self.scale
-        )
+        )?;
+        match self.mitsuba_frame {
+            Some(r) => write!(f, ", Mitsuba's layout, rotated {r:?}"),
+            None => Ok(()),
+        }
     }
 }
 

@@ -47,6 +47,20 @@ impl SurfaceHit {
     }
 }
 
+/// The vertex normals of triangle `i` interpolated at barycentric (b1, b2), on the side of
+/// the geometric normal `ng` (a mesh whose normals disagree with its winding is shaded from
+/// the side it is hit on); `ng` where they cancel.
+#[inline]
+fn smooth_normal(mesh: &super::TriangleMesh, i: usize, b1: f32, b2: f32, ng: Vec3) -> Vec3 {
+    let [a, b, c] = mesh.indices[i].map(|k| mesh.normals[k as usize]);
+    let n = (a * (1.0 - b1 - b2) + b * b1 + c * b2).normalize_or_zero();
+    match n.dot(ng) {
+        d if d > 0.0 => n,
+        d if d < 0.0 => -n,
+        _ => ng,
+    }
+}
+
 fn max_abs(points: &[Vec3]) -> f32 {
     points
         .iter()
@@ -77,8 +91,9 @@ pub struct SurfaceHit {
     /// Unit geometric normal: the front normal of quads and triangles, outward on closed
     /// surfaces. It does not depend on the side the ray came from.
     pub geometric_normal: Vec3,
-    /// Unit shading normal: the geometric normal tilted by the material's bump map, if any
-    /// (on the same side of the surface). A mesh's vertex normals are not interpolated.
+    /// Unit shading normal: the geometric normal tilted by the material's bump map, if any,
+    /// or a mesh's vertex normals interpolated where the scene asks for it
+    /// (`Scene::smooth_normals`), on the same side of the surface.
     pub shading_normal: Vec3,
     /// Bound on the absolute error of `point` in each coordinate (see `offset_ray_origin`).
     pub error: f32,
@@ -259,12 +274,17 @@ impl Scene {
                 };
                 let point = p0 + (p1 - p0) * b1 + (p2 - p0) * b2;
                 let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+                let shading_normal = if self.smooth_normals && !mesh.normals.is_empty() {
+                    smooth_normal(mesh, i, b1, b2, ng)
+                } else {
+                    ng
+                };
                 SurfaceHit {
                     t,
                     point,
                     error: point_error(max_abs(&[p0, p1, p2])),
                     geometric_normal: ng,
-                    shading_normal: ng,
+                    shading_normal,
                     uv: (b1, b2),
                     prim: hit.prim,
                     part: 0,

@@ -1,0 +1,861 @@
+//! Mitsuba 3 scenes (`.xml`): the plugins trilux knows made into a `Scene`, each one that it
+//! does not render exactly named in a warning, and every plugin or parameter it does not read
+//! named too (file:line:column). docs/scene-format.md lists what is read and how.
+//!
+//! Mitsuba's conventions, and what they become here:
+//! * a sensor's `to_world` (usually a `lookat`) gives the camera: its origin, +z the view
+//!   direction, +y up; `fov` along `fov_axis` becomes the course camera's angle across the
+//!   larger image side;
+//! * the film's size, the sampler's `sample_count` and the integrator's `max_depth` (which
+//!   counts the camera's segment: 2 is direct light) are the scene's `RenderHints`, which the
+//!   command line's `-size`, `-num_antialias_samples` and `--max-depth` override;
+//! * every shape becomes triangles with per-vertex shading normals (a mesh's own, or its
+//!   faces' for `face_normals` and meshes without them), except `sphere`, the analytic
+//!   sphere; texture coordinates follow trilux's convention (t = 0 at the image's bottom);
+//! * colours are linear sRGB; spectra are integrated as Mitsuba's RGB variants integrate them
+//!   (`spectrum.rs`).
+
+mod cie;
+mod meshes;
+mod spectrum;
+mod xml;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+use glam::{DMat4, DVec3, Mat3};
+
+use self::meshes::Mesh;
+use self::spectrum::{spectrum_to_rgb, SpectrumUse};
+use self::xml::{Plugin, Value};
+use super::camera::{Camera, Projection};
+use super::medium::Medium;
+use super::sky::{Sky, SkyMap};
+use super::{Material, Scene, SceneError, ShapePrim};
+use crate::color::Color;
+use crate::geometry::{SphereShape, Vec2, Vec3};
+
+/// Segments around a `disk` or a `cylinder` (their triangles' shading normals are smooth).
+const ROUND_SEGMENTS: u32 = 128;
+
+/// Reads a Mitsuba 3 scene; `defines` are the command line's `--define name=value`s.
+pub fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
+    let root = xml::read(path, defines)?;
+    let mut builder = Builder {
+        scene: Scene {
+            path: path.to_path_buf(),
+            smooth_normals: true,
+            ..Scene::default()
+        },
+        materials: HashMap::new(),
+        media: HashMap::new(),
+    };
+    for child in &root.children {
+        let plugin = &child.plugin;
+        match plugin.tag.as_str() {
+            "integrator" => builder.integrator(plugin)?,
+            "sensor" => builder.sensor(plugin)?,
+            "shape" => builder.shape(plugin)?,
+            "emitter" => builder.emitter(plugin)?,
+            // Made where a shape refers to them; reported below if none does.
+            "bsdf" | "texture" | "medium" | "spectrum" => {}
+            other => {
+                return Err(plugin.at.error(format!(
+                    "<{other}> cannot stand in <scene>: expected integrator, sensor, shape, emitter, bsdf, texture or medium"
+                )))
+            }
+        }
+    }
+    let mut unused = Vec::new();
+    root.unused(&mut unused);
+    let mut seen = std::collections::HashSet::new();
+    unused.retain(|w| seen.insert(w.clone()));
+    builder.scene.warnings.extend(unused);
+    Ok(builder.scene)
+}
+
+struct Builder {
+    scene: Scene,
+    /// The material made of each BSDF plugin (by its address: a plugin referenced by several
+    /// shapes is one material).
+    materials: HashMap<*const Plugin, u32>,
+    /// The medium made of each medium plugin.
+    media: HashMap<*const Plugin, usize>,
+}
+
+impl Builder {
+    fn warn(&mut self, at: &xml::Location, message: impl std::fmt::Display) {
+        self.scene.warnings.push(format!("{at}: {message}"));
+    }
+
+    fn integrator(&mut self, p: &Plugin) -> Result<(), SceneError> {
+        p.mark_used();
+        match p.kind.as_str() {
+            // Mitsuba's `moment` integrator renders what it wraps (and its second moment).
+            "moment" => {
+                for child in p.children_tagged("integrator") {
+                    self.integrator(&child.plugin)?;
+                }
+            }
+            "path" | "volpath" | "volpathmis" | "direct" => {
+                let depth = if p.kind == "direct" {
+                    2
+                } else {
+                    p.integer("max_depth", -1)?
+                };
+                // Mitsuba counts the camera's segment: max_depth 1 shows emitters only, 2
+                // direct light; −1 is no limit.
+                self.scene.render_hints.max_depth = match depth {
+                    -1 => None,
+                    d if d >= 1 => Some((d - 1) as u32),
+                    d => {
+                        return Err(p.at.error(format!(
+                            "max_depth {d}: expected -1 (no limit) or at least 1"
+                        )))
+                    }
+                };
+                let _ = p.integer("rr_depth", 5)?;
+                if p.kind == "direct" {
+                    for name in ["emitter_samples", "bsdf_samples", "shading_samples"] {
+                        let _ = p.integer(name, 1)?;
+                    }
+                }
+                if p.boolean("hide_emitters", false)? {
+                    self.warn(&p.at, "hide_emitters is not supported: emitters are seen");
+                }
+            }
+            other => {
+                return Err(p.at.error(format!(
+                    "integrator \"{other}\" is not supported: expected path, volpath, volpathmis, direct or moment"
+                )))
+            }
+        }
+        Ok(())
+    }
+
+    fn sensor(&mut self, p: &Plugin) -> Result<(), SceneError> {
+        p.mark_used();
+        let to_world = p.transform("to_world")?;
+        let _ = p.float("near_clip", 1e-2)?;
+        let _ = p.float("far_clip", 1e4)?;
+        let mut width = 768u32;
+        let mut height = 576u32;
+        for film in p.children_tagged("film") {
+            let film = &film.plugin;
+            film.mark_used();
+            width = positive(film, "width", 768)?;
+            height = positive(film, "height", 576)?;
+            for name in ["pixel_format", "component_format", "file_format"] {
+                let _ = film.string(name)?;
+            }
+            let _ = film.boolean("banner", false)?;
+            for filter in film.children_tagged("rfilter") {
+                filter.plugin.mark_used();
+                if filter.plugin.kind != "box" {
+                    self.warn(
+                        &filter.plugin.at,
+                        format!(
+                            "rfilter \"{}\": trilux averages a pixel's samples with equal weights (box)",
+                            filter.plugin.kind
+                        ),
+                    );
+                }
+            }
+        }
+        if width.max(height) > super::MAX_IMAGE_SIDE {
+            return Err(p.at.error(format!(
+                "film {width} × {height}: a side may be at most {}",
+                super::MAX_IMAGE_SIDE
+            )));
+        }
+        self.scene.render_hints.size = Some((width, height));
+        for sampler in p.children_tagged("sampler") {
+            let sampler = &sampler.plugin;
+            sampler.mark_used();
+            self.scene.render_hints.samples = Some(positive(sampler, "sample_count", 4)?);
+            let _ = sampler.integer("seed", 0)?;
+        }
+        let origin = to_world.transform_point3(DVec3::ZERO);
+        let forward = to_world.transform_vector3(DVec3::Z);
+        let up = to_world.transform_vector3(DVec3::Y);
+        let left = to_world.transform_vector3(DVec3::X);
+        if forward.length_squared() == 0.0 || up.length_squared() == 0.0 {
+            return Err(p.at.error("the sensor's to_world is degenerate"));
+        }
+        if forward.cross(up).dot(left) > 0.0 {
+            self.warn(
+                &p.at,
+                "the sensor's to_world mirrors the image (trilux renders it unmirrored)",
+            );
+        }
+        let aspect = width as f64 / height as f64;
+        let projection = match p.kind.as_str() {
+            "perspective" | "thinlens" => {
+                let fov = match p.property("fov") {
+                    Some(_) => p.float("fov", 0.0)?,
+                    None => {
+                        // Mitsuba's default: a 50 mm lens on 36 mm film, across x.
+                        let focal = match p.string("focal_length")? {
+                            Some((f, at)) => f.trim_end_matches("mm").parse::<f64>().map_err(|_| {
+                                at.error(format!("focal_length \"{f}\": expected e.g. 50mm"))
+                            })?,
+                            None => 50.0,
+                        };
+                        2.0 * (18.0 / focal).atan().to_degrees()
+                    }
+                };
+                if !(fov > 0.0 && fov < 180.0) {
+                    return Err(p.at.error(format!("fov {fov}: expected (0, 180) degrees")));
+                }
+                let axis = p.string("fov_axis")?.map_or("x", |(a, _)| a).to_string();
+                let t = (fov.to_radians() / 2.0).tan();
+                let diagonal = (aspect * aspect + 1.0).sqrt();
+                // The half-width's tangent along x.
+                let tx = match axis.as_str() {
+                    "x" => t,
+                    "y" => t * aspect,
+                    "diagonal" => t * aspect / diagonal,
+                    "smaller" if aspect < 1.0 => t,
+                    "smaller" => t * aspect,
+                    "larger" if aspect >= 1.0 => t,
+                    "larger" => t * aspect,
+                    other => {
+                        return Err(p.at.error(format!(
+                            "fov_axis \"{other}\": expected x, y, diagonal, smaller or larger"
+                        )))
+                    }
+                };
+                // The course camera's angle spans the larger side.
+                let larger = if aspect >= 1.0 { tx } else { tx / aspect };
+                if p.kind == "thinlens" {
+                    let radius = p.float("aperture_radius", 0.0)?;
+                    let focus = p.float("focus_distance", 0.0)?;
+                    self.scene.render_hints.lens = Some((radius as f32, focus as f32));
+                }
+                Projection::Perspective {
+                    angle: (2.0 * larger.atan()) as f32,
+                }
+            }
+            "orthographic" => {
+                // Mitsuba's orthographic camera sees [-1, 1]² of its own space, scaled by
+                // to_world: the screen's side along x is twice the x axis's length.
+                let side_x = 2.0 * left.length();
+                let side = if aspect >= 1.0 {
+                    side_x
+                } else {
+                    side_x / aspect
+                };
+                Projection::Orthographic { size: side as f32 }
+            }
+            other => {
+                return Err(p.at.error(format!(
+                    "sensor \"{other}\" is not supported: expected perspective, thinlens or orthographic"
+                )))
+            }
+        };
+        let position = origin.as_vec3();
+        self.scene.camera = Some(Camera {
+            position,
+            point_of_interest: position + forward.normalize().as_vec3(),
+            up: up.normalize().as_vec3(),
+            projection,
+        });
+        Ok(())
+    }
+
+    fn shape(&mut self, p: &Plugin) -> Result<(), SceneError> {
+        p.mark_used();
+        let to_world = p.transform("to_world")?;
+        let flip = p.boolean("flip_normals", false)?;
+        let material = self.shape_material(p)?;
+        if p.kind == "sphere" {
+            let centre = to_world.transform_point3(p.point("center", DVec3::ZERO)?);
+            let radius = p.float("radius", 1.0)?;
+            let axes =
+                [DVec3::X, DVec3::Y, DVec3::Z].map(|a| to_world.transform_vector3(a).length());
+            if (axes[0] - axes[1]).abs() > 1e-6 * axes[0]
+                || (axes[0] - axes[2]).abs() > 1e-6 * axes[0]
+            {
+                return Err(p.at.error(
+                    "a sphere's to_world must scale all axes alike (trilux's sphere is round)",
+                ));
+            }
+            if flip {
+                self.warn(
+                    &p.at,
+                    "flip_normals on a sphere: trilux's sphere faces outward",
+                );
+            }
+            self.scene.shapes.push(ShapePrim {
+                shape: SphereShape {
+                    centre: centre.as_vec3(),
+                    radius: (radius * axes[0]) as f32,
+                }
+                .into(),
+                material,
+            });
+            return Ok(());
+        }
+        let file = |name: &str| -> Result<(PathBuf, &xml::Location), SceneError> {
+            p.file(name)?
+                .ok_or_else(|| p.at.error(format!("shape \"{}\" needs a filename", p.kind)))
+        };
+        let read = |result: Result<Mesh, String>, path: &Path, at: &xml::Location| {
+            result.map_err(|why| at.error(format!("cannot read {}: {why}", path.display())))
+        };
+        let mut mesh = match p.kind.as_str() {
+            "obj" => {
+                let (path, at) = file("filename")?;
+                read(meshes::read_obj(&path), &path, at)?
+            }
+            "ply" => {
+                let (path, at) = file("filename")?;
+                read(meshes::read_ply(&path), &path, at)?
+            }
+            "serialized" => {
+                let (path, at) = file("filename")?;
+                let index = p.integer("shape_index", 0)?;
+                let index = u32::try_from(index)
+                    .map_err(|_| at.error(format!("shape_index {index}: expected ≥ 0")))?;
+                read(meshes::read_serialized(&path, index), &path, at)?
+            }
+            "rectangle" => meshes::rectangle(),
+            "cube" => meshes::cube(),
+            "disk" => meshes::disk(ROUND_SEGMENTS),
+            "cylinder" => {
+                let p0 = p.point("p0", DVec3::ZERO)?;
+                let p1 = p.point("p1", DVec3::Z)?;
+                let radius = p.float("radius", 1.0)?;
+                cylinder(p0, p1, radius, ROUND_SEGMENTS)
+                    .ok_or_else(|| p.at.error("a cylinder needs p0 ≠ p1 and a radius > 0"))?
+            }
+            other => {
+                return Err(p.at.error(format!(
+                    "shape \"{other}\" is not supported: expected obj, ply, serialized, rectangle, cube, disk, sphere or cylinder"
+                )))
+            }
+        };
+        if p.boolean("face_normals", false)? {
+            mesh.normals.clear();
+        }
+        self.add_mesh(mesh, to_world, flip, material);
+        Ok(())
+    }
+
+    /// Appends a mesh, moved by `to_world`, to the scene's triangles: every triangle gets
+    /// shading normals at its vertices (its own face's where the mesh has none).
+    fn add_mesh(&mut self, mesh: Mesh, to_world: DMat4, flip: bool, material: u32) {
+        let normal_matrix = to_world.inverse().transpose();
+        let tri = &mut self.scene.triangles;
+        let place = |p: Vec3| to_world.transform_point3(p.as_dvec3()).as_vec3();
+        let turn = |n: Vec3| {
+            let n = normal_matrix
+                .transform_vector3(n.as_dvec3())
+                .normalize_or_zero()
+                .as_vec3();
+            if flip {
+                -n
+            } else {
+                n
+            }
+        };
+        // Texture coordinates are one per position or none: meshes without them get (0, 0).
+        let before = tri.positions.len();
+        if !mesh.tex_coords.is_empty() {
+            tri.tex_coords.resize(before, Vec2::ZERO);
+        }
+        let flat = mesh.normals.is_empty();
+        let order = |t: [u32; 3]| if flip { [t[0], t[2], t[1]] } else { t };
+        if flat {
+            // Each triangle its own vertices, with its face's normal.
+            for t in &mesh.indices {
+                let t = order(*t);
+                let [a, b, c] = t.map(|k| place(mesh.positions[k as usize]));
+                let n = (b - a).cross(c - a).normalize_or_zero();
+                let base = tri.positions.len() as u32;
+                tri.positions.extend([a, b, c]);
+                tri.normals.extend([n; 3]);
+                if !mesh.tex_coords.is_empty() {
+                    tri.tex_coords
+                        .extend(t.map(|k| mesh.tex_coords[k as usize]));
+                }
+                tri.indices.push([base, base + 1, base + 2]);
+                tri.materials.push(material);
+            }
+        } else {
+            let base = tri.positions.len() as u32;
+            tri.positions
+                .extend(mesh.positions.iter().map(|&p| place(p)));
+            tri.normals.extend(mesh.normals.iter().map(|&n| turn(n)));
+            tri.tex_coords.extend(mesh.tex_coords.iter().copied());
+            for t in &mesh.indices {
+                tri.indices.push(order(*t).map(|k| base + k));
+                tri.materials.push(material);
+            }
+        }
+        if !tri.tex_coords.is_empty() {
+            tri.tex_coords.resize(tri.positions.len(), Vec2::ZERO);
+        }
+    }
+
+    /// The material of a shape: its BSDF (Mitsuba's default, diffuse 0.5, without one), with
+    /// its area emitter's radiance, and the medium inside it.
+    fn shape_material(&mut self, p: &Plugin) -> Result<u32, SceneError> {
+        let bsdf = p.children_tagged("bsdf").next().map(|c| c.plugin.clone());
+        let emitter = p
+            .children_tagged("emitter")
+            .next()
+            .map(|c| c.plugin.clone());
+        let interior = p.child_named("interior").cloned();
+        if let Some(exterior) = p.child_named("exterior") {
+            exterior.mark_used();
+            self.warn(
+                &exterior.at,
+                "exterior media are not supported: the space outside shapes is empty",
+            );
+        }
+        let plain = emitter.is_none() && interior.is_none();
+        if let (true, Some(b)) = (plain, &bsdf) {
+            if let Some(&k) = self.materials.get(&Rc::as_ptr(b)) {
+                return Ok(k);
+            }
+        }
+        let mut material = match &bsdf {
+            Some(b) => self.bsdf(b)?,
+            None => Material {
+                diffuse: Color::splat(0.5),
+                ..Material::default()
+            },
+        };
+        if let Some(e) = &emitter {
+            e.mark_used();
+            if e.kind != "area" {
+                return Err(e.at.error(format!(
+                    "emitter \"{}\" inside a shape: only \"area\" emitters belong to shapes",
+                    e.kind
+                )));
+            }
+            material.emitted = self.colour(e, "radiance", 1.0, SpectrumUse::Emission)?;
+        }
+        if let Some(m) = &interior {
+            material.interior_medium = Some(self.medium(m)?);
+            if material.transmitted == Vec3::ZERO {
+                self.warn(
+                    &m.at,
+                    "a medium inside an opaque shape: light never reaches it",
+                );
+            }
+        }
+        let k = self.scene.materials.len() as u32;
+        self.scene.materials.push(material);
+        if let (true, Some(b)) = (plain, &bsdf) {
+            self.materials.insert(Rc::as_ptr(b), k);
+        }
+        Ok(k)
+    }
+
+    /// A BSDF as a material. Lambertian reflection, smooth dielectrics and `null` are exact;
+    /// the others are approximated by the course's lobes, with a warning that says how.
+    fn bsdf(&mut self, p: &Plugin) -> Result<Material, SceneError> {
+        p.mark_used();
+        let inner = |p: &Plugin| p.children_tagged("bsdf").next().map(|c| c.plugin.clone());
+        let line = p.at.line;
+        let material = match p.kind.as_str() {
+            "diffuse" => {
+                let mut m = Material {
+                    line,
+                    ..Material::default()
+                };
+                self.reflectance(p, "reflectance", 0.5, &mut m)?;
+                m
+            }
+            "twosided" => match inner(p) {
+                // trilux's triangles and spheres already reflect on both sides.
+                Some(b) => self.bsdf(&b)?,
+                None => return Err(p.at.error("twosided needs a nested bsdf")),
+            },
+            "mask" | "bumpmap" | "normalmap" => {
+                for t in p.children_tagged("texture") {
+                    mark_all_used(&t.plugin);
+                }
+                let _ = p.float("opacity", 1.0);
+                let _ = p.float("scale", 1.0);
+                self.warn(
+                    &p.at,
+                    format!("bsdf \"{}\" is not supported: its nested bsdf is rendered without it", p.kind),
+                );
+                match inner(p) {
+                    Some(b) => self.bsdf(&b)?,
+                    None => return Err(p.at.error(format!("{} needs a nested bsdf", p.kind))),
+                }
+            }
+            "null" => Material {
+                // A boundary that changes nothing: glass of index 1 reflects nothing.
+                transmitted: Color::ONE,
+                ior: 1.0,
+                line,
+                ..Material::default()
+            },
+            "dielectric" | "roughdielectric" | "thindielectric" => {
+                let eta = self.ior(p, "int_ior", "bk7")? / self.ior(p, "ext_ior", "air")?;
+                let transmitted = self.colour(p, "specular_transmittance", 1.0, SpectrumUse::Bounded)?;
+                let _ = self.colour(p, "specular_reflectance", 1.0, SpectrumUse::Bounded)?;
+                if p.kind == "roughdielectric" {
+                    let _ = p.string("distribution")?;
+                    let _ = p.float("alpha", 0.1)?;
+                    self.warn(&p.at, "roughdielectric is rendered as a smooth dielectric");
+                }
+                let ior = if p.kind == "thindielectric" {
+                    self.warn(
+                        &p.at,
+                        "thindielectric is rendered as a boundary light passes straight through (its reflection is left out)",
+                    );
+                    1.0
+                } else {
+                    eta as f32
+                };
+                Material {
+                    transmitted,
+                    ior,
+                    line,
+                    ..Material::default()
+                }
+            }
+            "conductor" | "roughconductor" => {
+                let reflectance = self.colour(p, "specular_reflectance", 1.0, SpectrumUse::Bounded)?;
+                let name = p.string("material")?.map(|(m, at)| (m.to_string(), at.clone()));
+                let given = p.property("eta").is_some() || p.property("k").is_some();
+                let fresnel = if given {
+                    let eta = self.colour(p, "eta", 0.0, SpectrumUse::Unbounded)?;
+                    let k = self.colour(p, "k", 1.0, SpectrumUse::Unbounded)?;
+                    conductor_reflectance(eta, k)
+                } else {
+                    match name {
+                        None => Color::ONE,
+                        Some((m, _)) if m == "none" => Color::ONE,
+                        Some((m, at)) => {
+                            let (eta, k) = spectrum::named_conductor(&m).ok_or_else(|| {
+                                at.error(format!(
+                                    "conductor material \"{m}\" is unknown: expected none or one of {}",
+                                    spectrum::conductor_names()
+                                ))
+                            })?;
+                            conductor_reflectance(eta, k)
+                        }
+                    }
+                };
+                let roughness = self.roughness(p)?;
+                self.warn(
+                    &p.at,
+                    format!("{} is approximated: Fresnel reflectance at normal incidence{}", p.kind,
+                        if roughness > 0.0 { ", a Phong lobe of the same width" } else { "" }),
+                );
+                Material {
+                    reflective: reflectance * fresnel,
+                    roughness,
+                    line,
+                    ..Material::default()
+                }
+            }
+            "plastic" | "roughplastic" => {
+                let eta = self.ior(p, "int_ior", "polypropylene")? / self.ior(p, "ext_ior", "air")?;
+                let f0 = (((eta - 1.0) / (eta + 1.0)).powi(2)) as f32;
+                let specular = self.colour(p, "specular_reflectance", 1.0, SpectrumUse::Bounded)?;
+                let _ = p.boolean("nonlinear", false)?;
+                let mut m = Material {
+                    reflective: specular * f0,
+                    roughness: self.roughness(p)?,
+                    line,
+                    ..Material::default()
+                };
+                self.reflectance(p, "diffuse_reflectance", 0.5, &mut m)?;
+                m.diffuse *= 1.0 - f0;
+                self.warn(
+                    &p.at,
+                    format!("{} is approximated: a Lambertian base under a constant specular layer", p.kind),
+                );
+                m
+            }
+            "principled" | "principledthin" => {
+                let mut m = Material {
+                    line,
+                    ..Material::default()
+                };
+                self.reflectance(p, "base_color", 0.5, &mut m)?;
+                let metallic = p.float("metallic", 0.0).unwrap_or(0.0) as f32;
+                let roughness = p.float("roughness", 0.5).unwrap_or(0.5) as f32;
+                for t in p.children_tagged("texture") {
+                    mark_all_used(&t.plugin);
+                }
+                m.reflective = m.diffuse * metallic + Color::splat(0.04 * (1.0 - metallic));
+                m.diffuse *= 1.0 - metallic;
+                m.roughness = roughness * roughness;
+                self.warn(
+                    &p.at,
+                    format!("{} is approximated: a Lambertian base and a Phong lobe", p.kind),
+                );
+                m
+            }
+            other => {
+                return Err(p.at.error(format!(
+                    "bsdf \"{other}\" is not supported: expected diffuse, dielectric, roughdielectric, thindielectric, conductor, roughconductor, plastic, roughplastic, principled, principledthin, twosided, mask, bumpmap, normalmap or null"
+                )))
+            }
+        };
+        Ok(material)
+    }
+
+    /// A microfacet BSDF's roughness (`alpha`, or the mean of `alpha_u` and `alpha_v`); 0
+    /// for the smooth kinds.
+    fn roughness(&mut self, p: &Plugin) -> Result<f32, SceneError> {
+        if !p.kind.starts_with("rough") {
+            return Ok(0.0);
+        }
+        let _ = p.string("distribution")?;
+        let _ = p.boolean("sample_visible", true)?;
+        let alpha = if p.property("alpha_u").is_some() {
+            0.5 * (p.float("alpha_u", 0.1)? + p.float("alpha_v", 0.1)?)
+        } else {
+            p.float("alpha", 0.1)?
+        };
+        Ok(alpha.max(0.0) as f32)
+    }
+
+    /// A reflectance given as a colour, or as a `bitmap` texture (read through the scene's
+    /// textures), or a `checkerboard` (its mean, with a warning).
+    fn reflectance(
+        &mut self,
+        p: &Plugin,
+        name: &str,
+        default: f64,
+        m: &mut Material,
+    ) -> Result<(), SceneError> {
+        if let Some(t) = p.child_named(name).cloned() {
+            t.mark_used();
+            match t.kind.as_str() {
+                "bitmap" => {
+                    let (file, _) = t
+                        .file("filename")?
+                        .ok_or_else(|| t.at.error("bitmap needs a filename"))?;
+                    m.texture_file = Some(file);
+                    for name in ["filter_type", "wrap_mode", "format"] {
+                        let _ = t.string(name)?;
+                    }
+                    let _ = t.boolean("raw", false)?;
+                    let _ = t.transform("to_uv")?;
+                }
+                "checkerboard" => {
+                    let a = self.colour(&t, "color0", 0.4, SpectrumUse::Bounded)?;
+                    let b = self.colour(&t, "color1", 0.2, SpectrumUse::Bounded)?;
+                    let _ = t.transform("to_uv")?;
+                    m.diffuse = (a + b) * 0.5;
+                    self.warn(&t.at, "checkerboard is rendered as its mean colour");
+                }
+                other => {
+                    return Err(t.at.error(format!(
+                        "texture \"{other}\" is not supported: expected bitmap or checkerboard"
+                    )))
+                }
+            }
+            return Ok(());
+        }
+        m.diffuse = self.colour(p, name, default, SpectrumUse::Bounded)?;
+        Ok(())
+    }
+
+    /// A colour property (`rgb`, `spectrum`, `float`), or `default` grey.
+    fn colour(
+        &mut self,
+        p: &Plugin,
+        name: &str,
+        default: f64,
+        usage: SpectrumUse,
+    ) -> Result<Color, SceneError> {
+        if let Some(t) = p.child_named(name).cloned() {
+            t.mark_used();
+            return Err(t.at.error(format!(
+                "a {} texture for \"{name}\" is not supported here: give a colour",
+                t.kind
+            )));
+        }
+        // A default or a `float` is grey, even for an emitter; a uniform `spectrum` emitter
+        // is not (see `spectrum_to_rgb`).
+        let Some(prop) = p.property(name) else {
+            return Ok(Color::splat(default as f32));
+        };
+        let c = match &prop.value {
+            Value::Rgb(c) => c.as_vec3(),
+            Value::Float(v) => Color::splat(*v as f32),
+            Value::Spectrum(s) => spectrum_to_rgb(s, usage),
+            other => {
+                return Err(prop.at.error(format!(
+                    "\"{name}\" is a {other:?}: expected rgb, spectrum or float"
+                )))
+            }
+        };
+        if !c.is_finite() || c.min_element() < 0.0 {
+            return Err(prop
+                .at
+                .error(format!("\"{name}\" must be finite and ≥ 0, found {c}")));
+        }
+        Ok(c)
+    }
+
+    /// An index of refraction given as a number or a name.
+    fn ior(&mut self, p: &Plugin, name: &str, default: &str) -> Result<f64, SceneError> {
+        let Some(prop) = p.property(name) else {
+            return Ok(spectrum::named_ior(default).unwrap_or(1.0) as f64);
+        };
+        let ior = match &prop.value {
+            Value::Float(v) => *v,
+            Value::String(s) => spectrum::named_ior(s).ok_or_else(|| {
+                prop.at.error(format!(
+                    "\"{s}\" is not a known index of refraction: expected a number or one of {}",
+                    spectrum::ior_names()
+                ))
+            })? as f64,
+            other => {
+                return Err(prop.at.error(format!(
+                    "\"{name}\" is a {other:?}: expected a number or a name"
+                )))
+            }
+        };
+        if ior.is_nan() || ior <= 0.0 {
+            return Err(prop.at.error(format!("\"{name}\" {ior}: expected > 0")));
+        }
+        Ok(ior)
+    }
+
+    /// A medium plugin as a medium of the scene.
+    fn medium(&mut self, p: &Rc<Plugin>) -> Result<usize, SceneError> {
+        if let Some(&k) = self.media.get(&Rc::as_ptr(p)) {
+            return Ok(k);
+        }
+        p.mark_used();
+        if p.kind != "homogeneous" {
+            return Err(p.at.error(format!(
+                "medium \"{}\" is not supported: expected homogeneous",
+                p.kind
+            )));
+        }
+        let scale = p.float("scale", 1.0)? as f32;
+        let sigma_t = self.colour(p, "sigma_t", 1.0, SpectrumUse::Unbounded)? * scale;
+        let albedo = self.colour(p, "albedo", 0.75, SpectrumUse::Bounded)?;
+        let _ = p.boolean("sample_emitters", true)?;
+        let mut g = 0.0;
+        for phase in p.children_tagged("phase") {
+            let phase = &phase.plugin;
+            phase.mark_used();
+            match phase.kind.as_str() {
+                "isotropic" => {}
+                "hg" => g = phase.float("g", 0.8)? as f32,
+                other => {
+                    return Err(phase.at.error(format!(
+                        "phase \"{other}\" is not supported: expected isotropic or hg"
+                    )))
+                }
+            }
+        }
+        let k = self.scene.media.len();
+        self.scene.media.push(Medium {
+            sigma_a: sigma_t * (Color::ONE - albedo),
+            sigma_s: sigma_t * albedo,
+            g,
+            line: p.at.line,
+        });
+        self.media.insert(Rc::as_ptr(p), k);
+        Ok(k)
+    }
+
+    fn emitter(&mut self, p: &Plugin) -> Result<(), SceneError> {
+        p.mark_used();
+        let sky = match p.kind.as_str() {
+            "constant" => Sky::Uniform(self.colour(p, "radiance", 1.0, SpectrumUse::Emission)?),
+            "envmap" => {
+                let (file, _) = p
+                    .file("filename")?
+                    .ok_or_else(|| p.at.error("envmap needs a filename"))?;
+                let mut map = SkyMap::named(file, p.at.line);
+                map.scale = p.float("scale", 1.0)? as f32;
+                let to_world = p.transform("to_world")?;
+                let rotation = Mat3::from_mat4(to_world.as_mat4());
+                map.mitsuba_frame = Some(rotation.transpose());
+                Sky::Map(std::sync::Arc::new(map))
+            }
+            "point" | "spot" | "directional" | "area" => {
+                self.warn(
+                    &p.at,
+                    format!("emitter \"{}\" is not supported yet: left out", p.kind),
+                );
+                mark_all_used(p);
+                return Ok(());
+            }
+            other => {
+                return Err(p.at.error(format!(
+                    "emitter \"{other}\" is not supported: expected constant, envmap (and, inside shapes, area)"
+                )))
+            }
+        };
+        if self.scene.sky.is_some() {
+            self.warn(
+                &p.at,
+                "a second environment emitter: only the first lights the scene",
+            );
+            return Ok(());
+        }
+        self.scene.sky = Some(sky);
+        Ok(())
+    }
+}
+
+/// Marks a plugin and everything in it as read: for what a warning has already named as
+/// left out, so that its parameters are not named again one by one.
+fn mark_all_used(p: &Plugin) {
+    p.mark_used();
+    for prop in &p.properties {
+        p.property(&prop.name);
+    }
+    for c in &p.children {
+        mark_all_used(&c.plugin);
+    }
+}
+
+/// A positive integer property (a film's size, a sample count).
+fn positive(p: &Plugin, name: &str, default: i64) -> Result<u32, SceneError> {
+    let v = p.integer(name, default)?;
+    u32::try_from(v).ok().filter(|&v| v > 0).ok_or_else(|| {
+        p.at.error(format!("\"{name}\" {v}: expected a positive integer"))
+    })
+}
+
+/// The reflectance of a conductor of complex index η + ik at normal incidence:
+/// ((η − 1)² + k²) / ((η + 1)² + k²).
+fn conductor_reflectance(eta: Color, k: Color) -> Color {
+    let k2 = k * k;
+    ((eta - Color::ONE) * (eta - Color::ONE) + k2) / ((eta + Color::ONE) * (eta + Color::ONE) + k2)
+}
+
+/// Mitsuba's `cylinder`: the open tube of `radius` from `p0` to `p1`, `segments` around.
+fn cylinder(p0: DVec3, p1: DVec3, radius: f64, segments: u32) -> Option<Mesh> {
+    let axis = p1 - p0;
+    if axis.length_squared() == 0.0 || radius.is_nan() || radius <= 0.0 {
+        return None;
+    }
+    let (u, v) = axis.normalize().any_orthonormal_pair();
+    let mut mesh = Mesh::default();
+    for k in 0..segments {
+        let phi = std::f64::consts::TAU * k as f64 / segments as f64;
+        let n = u * phi.cos() + v * phi.sin();
+        for (end, t) in [(p0, 0.0f32), (p1, 1.0)] {
+            mesh.positions.push((end + n * radius).as_vec3());
+            mesh.normals.push(n.as_vec3());
+            mesh.tex_coords
+                .push(crate::geometry::vec2(k as f32 / segments as f32, 1.0 - t));
+        }
+        let (a, b) = (2 * k, 2 * ((k + 1) % segments));
+        mesh.indices.push([a, b, b + 1]);
+        mesh.indices.push([a, b + 1, a + 1]);
+    }
+    Some(mesh)
+}
