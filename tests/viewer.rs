@@ -199,7 +199,7 @@ impl Viewer {
     /// window took to open. A viewer that ends before its window appears is started again, up
     /// to three times: on this 2-core machine, with four displays at once, a viewer could now
     /// and then not connect to its Xvfb ("Failed to open connection to X server", in 2 of 7
-    /// runs in session 30; a client connected a moment before did not help), which is no
+    /// runs; a client connected a moment before did not help), which is no
     /// fault of the viewer's.
     fn open_window(
         display: &Display,

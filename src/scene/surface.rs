@@ -108,7 +108,7 @@ impl Scene {
     /// Inlined, with `flat_surface`, so that the hit is built where the caller keeps it: as
     /// calls, the path tracer's wavefront copied each hit twice through the stack, and read
     /// the copies back wider than they were written, a store-forwarding stall (0.98× the
-    /// time inlined, 0.985× more without the bump map's copy; session 37).
+    /// time inlined, 0.985× more without the bump map's copy).
     #[inline(always)]
     pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> SurfaceHit {
         let s = self.flat_surface(ray, hit);
@@ -325,7 +325,7 @@ impl Scene {
     ///
     /// An exact hit (the BVH's, Embree's with `--embree-exact`) is its own answer, inline: as
     /// a call, the answer came back through memory and was read wider than it was written, a
-    /// store-forwarding stall (session 37).
+    /// store-forwarding stall.
     #[inline(always)]
     fn settle_quad_hit(&self, ray: &Ray, i: usize, hit: &PrimHit) -> (usize, (f32, f32, f32)) {
         if hit.exact {
