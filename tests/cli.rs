@@ -1327,3 +1327,28 @@ fn time_limit_renders_until_the_time_is_spent() {
         assert!(stderr.contains(expected), "{extra:?}: {stderr}");
     }
 }
+
+/// `render man` writes the manual page generated from the flag definitions: roff with a title,
+/// the render command's flags with their defaults, and a page for each subcommand; `-o`
+/// writes the same page to a file.
+#[test]
+fn man_writes_the_manual_page_from_the_flag_definitions() {
+    let dir = common::temp_dir("man");
+    let page = ok(&render(&dir, &["man"]));
+    for text in [
+        ".TH render 1",
+        ".SH OPTIONS",
+        // A flag of the render command with its default, in roff's escapes.
+        "\\fB\\-\\-embree\\-exact\\fR [\\fI<EMBREE_EXACT>\\fR] [default: true]",
+        "\\fB\\-\\-time\\-limit\\fR",
+        // A page per subcommand.
+        ".TH render-farm 1",
+        ".TH render-bench-accel 1",
+        ".TH render-man 1",
+    ] {
+        assert!(page.contains(text), "the manual page lacks {text:?}");
+    }
+    ok(&render(&dir, &["man", "-o", "render.1"]));
+    let written = std::fs::read_to_string(dir.join("render.1")).expect("render.1 written");
+    assert_eq!(written, page, "-o writes what standard output shows");
+}
