@@ -64,7 +64,7 @@ pub struct CommonArgs {
     #[arg(long, required = true)]
     pub input: Option<PathBuf>,
     /// Output image: .png or .jpg (sRGB 8-bit), .exr or .pfm (linear float). Default:
-    /// <scene stem>.png.
+    /// the scene's name with .png (cornell_box.obj: cornell_box.png).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Image size in pixels.

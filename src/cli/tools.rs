@@ -69,7 +69,7 @@ pub struct ReportArgs {
     /// Samples per pixel of the path-traced reference.
     #[arg(long, default_value_t = 4096)]
     pub reference_samples: u32,
-    /// Output directory (default: report-<scene name>).
+    /// Output directory (default: `report-` and the scene's name, e.g. report-cornell_box).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Worker threads (0: one per core).

@@ -82,7 +82,7 @@ pub struct SurfaceHit {
     pub shading_normal: Vec3,
     /// Bound on the absolute error of `point` in each coordinate (see `offset_ray_origin`).
     pub error: f32,
-    /// A polygon's own parameters in [0,1]² (a quad's (u, v), a triangle's barycentric
+    /// A polygon's own parameters in \[0,1\]² (a quad's (u, v), a triangle's barycentric
     /// (b1, b2)); (0, 0) on an analytic shape, whose parameters take inverse trigonometric
     /// functions that most hits never need. Read them with `Scene::parameters`, texture
     /// coordinates with `Scene::tex_coords`.
@@ -173,7 +173,7 @@ impl Scene {
         bumped_normal(n, tangents, dh, bump.amplitude, 2.0 * step)
     }
 
-    /// The primitive's own parameters at a hit, in [0,1]²: a quad's (u, v), a triangle's
+    /// The primitive's own parameters at a hit, in \[0,1\]²: a quad's (u, v), a triangle's
     /// barycentric (b1, b2), an analytic shape's (`Shape::uv_at`) on the hit's part.
     pub fn parameters(&self, hit: &SurfaceHit) -> (f32, f32) {
         match hit.prim.kind {
