@@ -2,7 +2,7 @@
 //! and drags sent with xdotool, the window photographed with ImageMagick's `import`. What it
 //! shows is checked against what the offline command it prints renders, pixel for pixel.
 //!
-//! `TRILUX_VIEWER_SCREENSHOT=FILE` keeps the screenshot of the finished trace (the README's).
+//! `TRILUX_VIEWER_SCREENSHOT=FILE` keeps the screenshot of the finished trace (docs/viewer.md's).
 //!
 //! Needs `Xvfb`, `xdotool` and `import` (Debian: xvfb, xdotool, imagemagick). Where one is
 //! missing the trials are reported as ignored, saying which; CI installs them and sets
@@ -358,7 +358,7 @@ fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
     eprintln!("viewer: the trace took {trace_time:?}");
     let (traced_line, traced) = screen_is_offline_render(&display, &viewer, &id, &dir, "traced")?;
     assert!(traced_line.contains("--engine raytrace"), "{traced_line}");
-    // The README's screenshot is this one (TRILUX_VIEWER_SCREENSHOT=docs/viewer.png).
+    // docs/viewer.md's screenshot is this one (TRILUX_VIEWER_SCREENSHOT=docs/viewer.png).
     if let Some(keep) = std::env::var_os("TRILUX_VIEWER_SCREENSHOT") {
         std::fs::copy(dir.join("traced.png"), keep)?;
     }
