@@ -70,11 +70,11 @@ fn lookups(c: &mut Criterion) {
     group.finish();
 }
 
-/// Issue #16's k-nearest figure: k = 50 queries on the global map of 2M photons shot into the
+/// The k-nearest figure of BENCHMARKS.md: k = 50 queries on the global map of 2M photons shot into the
 /// Cornell box with the diffuse sphere, one thread, at the `lookups` points: our kd-tree
 /// (`kdtree::KdTree`) against kiddo's `ImmutableKdTree` (what the maps used before), sorted
 /// as the estimates need and unsorted. Ours twice: renumbered in leaf order as `PhotonMap`
-/// keeps it ("ours", the issue's figure), and answering indices into the points it was
+/// keeps it ("ours", BENCHMARKS.md's figure), and answering indices into the points it was
 /// built from as kiddo does ("ours_indexed": one more array read per point offered).
 fn nearest_50_of_2m(c: &mut Criterion) {
     use kiddo::immutable::float::kdtree::ImmutableKdTree;

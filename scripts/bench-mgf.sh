@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Radiosity on RenderPark's MGF scenes (issue #15): each scene with both Accels and both
+# Radiosity on RenderPark's MGF scenes: each scene with both Accels and both
 # solvers (the progressive one only where it can finish in reasonable time), visibility on,
 # tolerance 1e-3. Prints one table row per run: input patches, elements, links, rays,
 # wall time, peak memory (from /usr/bin/time), residual.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Renders the README gallery's and the course's command lines with two `render` binaries and
+# Renders the docs gallery's (docs/gallery/) and the course's command lines with two `render` binaries and
 # compares the outputs byte for byte: the check that a refactoring changed no image.
 #
 #   scripts/compare-binaries.sh OLD_RENDER NEW_RENDER [SCENE_DIR]

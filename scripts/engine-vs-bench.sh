@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The ray tracer's ray rate against `render bench-accel` for the same kinds of rays (issue #3).
+# The ray tracer's ray rate against `render bench-accel` for the same kinds of rays.
 #
 # Each round renders the scene with the ray tracer and runs `render bench-accel` right after,
 # for each backend, so that the machine's speed (noisy here: it changes by half within minutes)
@@ -13,7 +13,7 @@
 #
 # usage: scripts/engine-vs-bench.sh [ROUNDS=5] [SCENE=scenes/cornell_box_diffuse_sphere.obj]
 # environment: RENDER (default target/release/render), ACCELS (default "embree bvh"),
-#              RENDER_ARGS (default: the issue's 512×512, 16 AA × 16 shadow samples)
+#              RENDER_ARGS (default: BENCHMARKS.md's 512×512, 16 AA × 16 shadow samples)
 set -euo pipefail
 
 rounds=${1:-5}

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Soft shadows by light sampling (issue #18, BENCHMARKS.md session 16): on a course scene,
+# Soft shadows by light sampling (BENCHMARKS.md, "Light sampling"): on a course scene,
 # shadow rays per pixel and RMSE against a converged render (4,096 shadow rays by solid angle,
 # the same camera samples) for jittered and solid-angle sampling at N = 4, 16, 64 shadow rays
 # and for adaptive sampling at depths 1–4:

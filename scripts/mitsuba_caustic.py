@@ -20,7 +20,7 @@ the 32k-spp references of BENCHMARKS.md). Our conventions, as
   * a black background: render ours with `background_color 0 0 0` appended (our default, white,
     is seen by camera rays and through glass but lights nothing, which Mitsuba has no emitter
     for).
-Checked (session 15): 128×128, Mitsuba 256 spp against our path tracer 256 spp, image means
+Checked: 128×128, Mitsuba 256 spp against our path tracer 256 spp, image means
 0.1006/0.0893/0.0857 against 0.1005/0.0892/0.0856, and within 1% in each band of rows.
 Needs `pip install mitsuba`; the default variant llvm_ad_rgb needs Debian's libllvm19 and
 DRJIT_LIBLLVM_PATH (MITSUBA_VARIANT=scalar_rgb runs without them, slowly).

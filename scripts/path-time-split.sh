@@ -2,8 +2,7 @@
 # Where the path tracers' time goes, ours against Mitsuba 3's, on the course's Cornell box with
 # the diffuse sphere (256×256, both threads, light sampling by area as Mitsuba's): CPU time
 # (both threads summed) split into ray casting and the rest (sampling, shading, the path
-# loop), from `perf` samples — issue #16's question of which half of the work a faster path
-# tracer has to win:
+# loop), from `perf` samples: which half of the work a faster path tracer has to win:
 #
 #   scripts/path-time-split.sh REPEATS SPP RENDER[:ACCEL]
 #

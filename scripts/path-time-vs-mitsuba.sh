@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Times our path tracer against Mitsuba 3's on the course's Cornell box with the diffuse sphere
-# (256×256, both threads), times only, in one run — issue #16's first acceptance item:
+# (256×256, both threads), times only, in one run (BENCHMARKS.md, "The path tracer against Mitsuba 3"):
 #
 #   scripts/path-time-vs-mitsuba.sh REPEATS RENDER:ACCEL [RENDER:ACCEL ...]
 #

@@ -3,7 +3,7 @@
 //! the shim's plain C loops over Embree as the baseline. The backends' repetitions of a cell
 //! (and of the build) alternate, so that a slow spell of the machine falls on both: measured
 //! one backend after the other, the same binary's BVH/Embree ratio on the terrain moved
-//! between 0.48 and 0.73 from run to run (session 29).
+//! between 0.48 and 0.73 from run to run.
 
 use std::time::Instant;
 
@@ -259,8 +259,8 @@ pub struct Report {
 
 impl Report {
     /// Our BVH's rows, each with its throughput over Embree's in the same cell (through the
-    /// same `Accel` calls), for every cell both were measured in: the lines issue #16's
-    /// targets are stated in.
+    /// same `Accel` calls), for every cell both were measured in: the lines BENCHMARKS.md's
+    /// comparisons of the two backends are stated in.
     pub fn ratios(&self) -> Vec<(&Row, f64)> {
         let (bvh, embree) = (AccelKind::Bvh.to_string(), AccelKind::Embree.to_string());
         let cell = |r: &Row| (r.rays, r.query, r.mode, r.threads);

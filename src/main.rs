@@ -20,6 +20,7 @@ fn main() -> ExitCode {
         Some(Command::Farm(args)) => cli::farm::run(args),
         Some(Command::View { words }) => trilux::viewer::run(words),
         Some(Command::Merge { parts, output }) => cli::tools::merge(parts, output),
+        Some(Command::Man { output }) => cli::tools::man(output.as_deref()),
         Some(Command::GenTerrain { triangles, output }) => {
             generate::write_obj(&generate::terrain(*triangles), output).map_err(|e| e.to_string())
         }

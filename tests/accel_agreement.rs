@@ -113,7 +113,7 @@ fn backends_agree_on_a_million_rays_per_scene() {
         // engines see (settled by the shared exact routine) must be the same.
         let camera = camera_rays(&scene, 512);
         // The raw hits too (primitive and t): the surface re-settled a backend's hit among a
-        // quad's neighbours until session 22, which hid the BVH culling, by its box's rounded
+        // quad's neighbours, which hid the BVH culling, by its box's rounded
         // entry distance, a quad met at its edge a few ulps before the hit found first.
         let hits: Vec<Vec<_>> = built
             .iter()

@@ -619,7 +619,7 @@ fn compare_reports_the_errors_of_an_image_against_a_reference() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// The radiosity issue's course command lines, verbatim: each writes `<stem>.png`, and those
+/// The course's radiosity command lines, verbatim: each writes `<stem>.png`, and those
 /// with a radiosity-only flag run the radiosity engine.
 #[test]
 fn course_radiosity_command_lines_run_verbatim() {
@@ -757,7 +757,7 @@ fn radiosity_modes_write_their_outputs_identically_with_both_backends() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// The photon issue's course command lines, verbatim but for a smaller image: each writes
+/// The course's photon command lines, verbatim but for a smaller image: each writes
 /// `<stem>.png` with the photon engine.
 #[test]
 fn course_photon_command_lines_run_verbatim() {
@@ -996,9 +996,9 @@ fn report_writes_csv_plot_and_summary_with_the_path_tracers_slope() {
             .and_then(|s| s.trim().parse().ok())
             .expect("a fitted slope");
         // An unbiased estimator of independent samples has its relMSE fall as 1/time
-        // (−0.98 to −1.03 over eight runs, σ 0.017, until session 32). The path tracer's
+        // (−0.98 to −1.03 over eight runs, σ 0.017, with `--sampler independent`). The path tracer's
         // paths are stratified across the pixel (Sobol points, `sampling::sobol`), and fall
-        // faster: −1.09 to −1.11 over six fits of three quiet runs in session 33, −1.21 with
+        // faster: −1.09 to −1.11 over six fits of three quiet runs, −1.21 with
         // the other tests running beside it. The slope is fitted against wall time, which
         // those tests disturb, so the bound allows ±0.2 about −1.1.
         assert!((slope + 1.1).abs() < 0.2, "slope {slope}: {line}");
@@ -1251,8 +1251,8 @@ fn time_limit_renders_until_the_time_is_spent() {
                 &trilux::film::read_pfm(&dir.join("ref.pfm")).expect("reference"),
             )
             .expect("same size");
-            // The path tracer's relMSE at N paths a pixel is about 0.5/N on this scene (issue
-            // #16: 7.8e-3 at 64), the 1,024-path reference adding its own 5e-4: the bound is
+            // The path tracer's relMSE at N paths a pixel is about 0.5/N on this scene
+            // (7.8e-3 at 64), the 1,024-path reference adding its own 5e-4: the bound is
             // about four times that at what was reached.
             assert!(
                 m.relmse < 2.4 / reached as f64 + 2e-3,
@@ -1326,4 +1326,29 @@ fn time_limit_renders_until_the_time_is_spent() {
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.contains(expected), "{extra:?}: {stderr}");
     }
+}
+
+/// `render man` writes the manual page generated from the flag definitions: roff with a title,
+/// the render command's flags with their defaults, and a page for each subcommand; `-o`
+/// writes the same page to a file.
+#[test]
+fn man_writes_the_manual_page_from_the_flag_definitions() {
+    let dir = common::temp_dir("man");
+    let page = ok(&render(&dir, &["man"]));
+    for text in [
+        ".TH render 1",
+        ".SH OPTIONS",
+        // A flag of the render command with its default, in roff's escapes.
+        "\\fB\\-\\-embree\\-exact\\fR [\\fI<EMBREE_EXACT>\\fR] [default: true]",
+        "\\fB\\-\\-time\\-limit\\fR",
+        // A page per subcommand.
+        ".TH render-farm 1",
+        ".TH render-bench-accel 1",
+        ".TH render-man 1",
+    ] {
+        assert!(page.contains(text), "the manual page lacks {text:?}");
+    }
+    ok(&render(&dir, &["man", "-o", "render.1"]));
+    let written = std::fs::read_to_string(dir.join("render.1")).expect("render.1 written");
+    assert_eq!(written, page, "-o writes what standard output shows");
 }

@@ -74,7 +74,7 @@ const BATCHES: [&str; 4] = ["0 1", "1 3", "3 6", "6 8"];
 
 /// For the ray tracer, the path tracer and the photon engine on two course scenes: four tiles
 /// merged give the single render's bytes (PFM), four sample batches its values to 1e-6
-/// relative in every pixel (EXR, as the issue asks; measured: identical).
+/// relative in every pixel (EXR; measured: identical).
 #[test]
 fn tiles_and_sample_batches_merge_into_the_single_render() {
     let dir = common::temp_dir("farm-merge");

@@ -149,7 +149,7 @@ fn cornell_box_agrees_with_the_progressive_solver() {
     let reference = solve(&scene, &progressive);
     let solution = solve(&scene, &hier);
     let (l1, power_error) = printed_difference(&reference, &solution);
-    // Issue #15's aims, 2% and 1%; measured 1.72% and +0.54% (the reference takes one point
+    // Bounds 2% and 1%; measured 1.72% and +0.54% (the reference takes one point
     // per form factor, so part of the difference is its own).
     assert!(l1 < 0.02, "relative L1 {l1}");
     assert!(power_error.abs() < 0.01, "reflected power {power_error}");
@@ -203,11 +203,10 @@ fn cornell_box_mgf_agrees_with_path_traced_and_fine_progressive_references() {
             // 0.92% / +0.13%, against the fine progressive 1.02% / +0.09% and 1.04% / +0.08%
             // (0.90%, 0.92%, 1.01%, 1.03% while each link's visibility multiplied its mean
             // form factor and every leaf was taken at its centre). The L1 bound is the worst of those and two fifths (the references are 0.30%
-            // apart), the power bound issue #15's. History: 1.79% / -1.23% until session 9,
-            // then -2.0% once elements sent light from their front only, because a link none
-            // of whose four point pairs saw its source was dropped instead of refined; then
-            // 1.54% / +0.18% until the form factor's clip kept every crossing and the leaf
-            // scales were weighted by the light each link carries.
+            // apart), the power bound 1%. Two faults these bounds catch: a link none of whose
+            // four point pairs saw its source dropped instead of refined (-2.0% power), and a
+            // form factor's clip losing crossings or leaf scales not weighted by the light each
+            // link carries (1.54% L1).
             assert!(l1 < 0.015, "{name}: relative L1 {l1}");
             assert!(
                 power_error.abs() < 0.01,
@@ -238,7 +237,7 @@ fn direct_light_through_the_clusters_matches_the_rays() {
     // Measured 2.71% / -1.99% (3.00% / -2.34% while a cluster's points were drawn among all
     // its patches until one faced the other end); 11.0% / -10.9% while a cluster holding
     // the lamp sent its light as one and clusters sent their patches' mean whichever way
-    // they faced. The bounds are session 24's figures and a half.
+    // they faced. The bounds are the measured figures and a half.
     assert!(l1 < 0.045, "relative L1 {l1}");
     assert!(power_error.abs() < 0.035, "reflected power {power_error}");
 }
@@ -436,7 +435,7 @@ fn two_sided_walls_have_a_patch_on_each_side() {
     }
 }
 
-/// Issue #4's analytic form factors between unit squares, through the hierarchy: a square
+/// The analytic form factors between unit squares, through the hierarchy: a square
 /// emitting radiance 1 (albedo 0) and a receiving square of albedo ρ = 0.5, nothing else, so
 /// the receiver's radiance is exactly ρ·F. Linked as one pair of patches and refined by the
 /// oracle, the receiver's area mean over its leaves gives F within 1%.
@@ -468,7 +467,7 @@ fn one_refined_link_reproduces_analytic_form_factors() {
             "{name}: {}: F = {f:.6} (exact {truth})",
             solution.solver_report
         );
-        // Issue #4's 1% (the link error refines until the oracle's estimate is within it);
+        // 1% (the link error refines until the oracle's estimate is within it);
         // measured +0.24%, +0.42%, +0.40% and −0.05% in the order above.
         assert!((f / truth - 1.0).abs() < 0.01, "{name}: {f} vs {truth}");
     }

@@ -129,7 +129,7 @@ fn square_light_matches_the_closed_form() {
 /// 64 paths a pixel their pixels' squared error against a 16,384-path reference is well
 /// below independent paths' — the light points and bounce directions of a pixel's paths cover
 /// the square evenly, and this light, seen unoccluded, is a smooth integrand. Measured 0.015×
-/// over seeds 1–4 (session 33); were the draws' dimensions misaligned between a pixel's
+/// over seeds 1–4; were the draws' dimensions misaligned between a pixel's
 /// paths, it would be 1×. (Unbiased all the same: the ρ = 0.9 furnace over seeds 0–9 came out
 /// at +0.028% ± 0.050% with Sobol paths, +0.035% ± 0.045% with independent ones.)
 #[test]

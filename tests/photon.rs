@@ -364,10 +364,10 @@ fn stored_power_is_emitted_power_over_one_minus_rho() {
 
 /// No stored photon is black. On the course's Cornell box a photon the red wall (1, 0, 0) left
 /// red carries nothing after the blue wall (0, 0, 1), yet roulette at a pure-coloured wall
-/// keeps it with probability 1: before session 32 it went on and was stored at every bounce
+/// keeps it with probability 1: were it to go on, it would be stored at every bounce
 /// as zeros that took places among each lookup's k nearest (a third of the photon rays at
-/// 200,000 photons; the photon image's relMSE against a converged reference was 6.5e-3, and
-/// 4.7e-3 without them).
+/// 200,000 photons; the photon image's relMSE against a converged reference is 6.5e-3 with
+/// them, and 4.7e-3 without).
 #[test]
 fn no_stored_photon_is_black() {
     let dir = common::own_scene_dir();
@@ -464,9 +464,9 @@ fn both_accels_give_identical_photon_maps() {
 /// surroundings): the brightest small region inside the ring stands out from the floor around
 /// it with photons, as much as in the unbiased path tracer's image, and not with photons off.
 ///
-/// The issue asked for 3×; the path tracer, which agrees with the photon image within 2% over
+/// Not 3×, as one might expect: the path tracer, which agrees with the photon image within 2% over
 /// the whole view, puts this scene's caustic at about 2× its surroundings: the 2×2 light
-/// blurs the cusp over about a unit of floor (see the note on issue #5).
+/// blurs the cusp over about a unit of floor.
 ///
 /// Bounds from seeds 0–9 (photons and path tracer alike): the photons' contrast over the path
 /// tracer's is −2.6% ± 4.3% (the brightest-region search picks up each image's noise: 1.93

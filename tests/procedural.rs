@@ -1,4 +1,4 @@
-//! Procedural textures and bump maps (issue #18): what a pixel shows at one sample against the
+//! Procedural textures and bump maps: what a pixel shows at one sample against the
 //! true average of the pattern over the pixel, and a bump's shading normal against the slope
 //! of the height image it was given.
 

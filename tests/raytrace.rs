@@ -810,7 +810,7 @@ fn solid_angle_sampling_matches_lamberts_formula() {
         println!("{samples} samples: worst {off:.2e} (h {h}, at ({px}, {py}))");
     }
     println!("densities integrate to 1 within {worst_density:.2e}");
-    // Issue #21 asks 0.5% at 64 samples from 1e-3 to 1e3. (Uniform in solid angle with 8 × 8
+    // The bound: 0.5% at 64 samples from 1e-3 to 1e3. (Uniform in solid angle with 8 × 8
     // jittered points was 1.4% off at h = 1e-3 above the centre.)
     assert!(worst[0].0 < 5e-3, "{:?}", worst[0]);
     assert!(worst[1].0 < 1e-3, "{:?}", worst[1]);
@@ -886,7 +886,7 @@ fn direct_light_by_solid_angle_has_no_fireflies() {
             brightest(&film)
         );
         if n == 16 {
-            // Measured 1.74× (by area 14.6×): the issue asks for less than 3×.
+            // Measured 1.74× (by area 14.6×): the bound is 3×.
             assert!(
                 brightest(&film) < 3.0,
                 "a pixel {}× too bright",

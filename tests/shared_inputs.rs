@@ -268,8 +268,7 @@ fn office3_against_path_traced_references(path: &Path) {
     // sources and clusters sent the light of the patches facing the receiver
     // (`holds_emitter`, `sent`): 8.95% / +3.7%. Of what is left, 0.44 points are the lamp's
     // shade (0.29 its tube), 0.38 the walls, 0.19 the ceiling (BENCHMARKS.md). The L1
-    // bounds are issue #15's aim of 2% (the measured figures and about a tenth), the power
-    // bound its 1%.
+    // bounds are the measured figures and about a tenth, within 2%; the power bound is 1%.
     assert!(noise < 0.012, "the references disagree: L1 {noise}");
     assert!(power_error.abs() < 0.01, "reflected power {power_error}");
     assert!(l1 < 0.02, "relative L1 {l1}");

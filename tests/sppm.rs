@@ -1,4 +1,4 @@
-//! Stochastic progressive photon mapping (`--engine sppm`, issue #21): the furnace (a closed
+//! Stochastic progressive photon mapping (`--engine sppm`): the furnace (a closed
 //! box of albedo ρ emitting 1 has radiance 1/(1−ρ) everywhere), convergence to the path
 //! tracer's image as passes grow, and a tile equal to the same pixels of the whole image.
 
@@ -32,7 +32,7 @@ fn sppm(width: u32, passes: u32, photons: u64) -> RenderSettings {
 }
 
 /// The furnace at ρ = 0.5 and 0.9 (16×16 pixels, 32 passes of 100,000 photons): the image's
-/// mean within 1% of 1/(1−ρ) (issue #21's figure; measured within 0.34% over seeds 0–3), and
+/// mean within 1% of 1/(1−ρ) (measured within 0.34% over seeds 0–3), and
 /// no pixel 12% off (measured at most 8.1%: the noise of 32 passes, where a photon lost or
 /// doubled at the walls' edges would show as a band).
 #[test]
@@ -57,7 +57,7 @@ fn sppm_furnace_has_radiance_le_over_one_minus_rho() {
 
 /// On the Cornell box with the diffuse sphere (24×24), against the path tracer at 16,384
 /// paths a pixel: SPPM's relMSE falls as passes double from 8 to 256, with a fitted slope
-/// steeper than −0.5 (issue #21), where a photon map of fixed radius levels off at its bias.
+/// steeper than −0.5, where a photon map of fixed radius levels off at its bias.
 #[test]
 fn sppm_converges_to_the_path_tracer() {
     let scene = common::own_scene("cornell_box_diffuse_sphere.obj");

@@ -1,7 +1,7 @@
-//! Numerical stability on stiff and extreme cases (issue #7), at sizes fast enough for CI.
+//! Numerical stability on stiff and extreme cases, at sizes fast enough for CI.
 //! Each case has an oracle the code under test does not produce: the furnace's Le/(1−ρ), the
 //! untransformed render of the same scene, linearity in the emitted radiance, closed forms.
-//! STABILITY.md holds the figures for both Accels and the commands behind them.
+//! docs/stability.md holds the figures for both Accels and the commands behind them.
 
 mod common;
 

@@ -2,7 +2,7 @@
 //! and drags sent with xdotool, the window photographed with ImageMagick's `import`. What it
 //! shows is checked against what the offline command it prints renders, pixel for pixel.
 //!
-//! `TRILUX_VIEWER_SCREENSHOT=FILE` keeps the screenshot of the finished trace (the README's).
+//! `TRILUX_VIEWER_SCREENSHOT=FILE` keeps the screenshot of the finished trace (docs/viewer.md's).
 //!
 //! Needs `Xvfb`, `xdotool` and `import` (Debian: xvfb, xdotool, imagemagick). Where one is
 //! missing the trials are reported as ignored, saying which; CI installs them and sets
@@ -199,7 +199,7 @@ impl Viewer {
     /// window took to open. A viewer that ends before its window appears is started again, up
     /// to three times: on this 2-core machine, with four displays at once, a viewer could now
     /// and then not connect to its Xvfb ("Failed to open connection to X server", in 2 of 7
-    /// runs in session 30; a client connected a moment before did not help), which is no
+    /// runs; a client connected a moment before did not help), which is no
     /// fault of the viewer's.
     fn open_window(
         display: &Display,
@@ -358,7 +358,7 @@ fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
     eprintln!("viewer: the trace took {trace_time:?}");
     let (traced_line, traced) = screen_is_offline_render(&display, &viewer, &id, &dir, "traced")?;
     assert!(traced_line.contains("--engine raytrace"), "{traced_line}");
-    // The README's screenshot is this one (TRILUX_VIEWER_SCREENSHOT=docs/viewer.png).
+    // docs/viewer.md's screenshot is this one (TRILUX_VIEWER_SCREENSHOT=docs/viewer.png).
     if let Some(keep) = std::env::var_os("TRILUX_VIEWER_SCREENSHOT") {
         std::fs::copy(dir.join("traced.png"), keep)?;
     }

@@ -3,7 +3,7 @@
 //! one ray is tested against four at a time (glam's `Vec4`). Traversal is iterative and
 //! ordered: the children a ray enters are taken nearest first. On the 1M-triangle terrain a
 //! ray's time goes mostly to waiting for nodes and leaves from memory; each halving of the
-//! depth paid (BENCHMARKS.md, session 29: 4-wide nodes about +15% over the binary tree, 8-wide
+//! depth paid (the terrain with `bench-accel`: 4-wide nodes about +15% over the binary tree, 8-wide
 //! about +25% over 4-wide; no `std::arch` beyond SSE, which would need `unsafe`). Leaves hold
 //! copies of their primitives in leaf order, so a leaf's primitives are read from consecutive
 //! memory: triangles in packs of four tested at once (`tri4`), quads and analytic shapes one
@@ -11,11 +11,11 @@
 //! of them at once, a quad against four of them where they share their axes), down to where
 //! two or fewer of a packet's rays still go on, which then go on alone: on the course's
 //! Cornell box (seven primitives under one node, where a ray's own work is all) that took
-//! camera occlusion from 0.8 to 1.3 times Embree's packets (BENCHMARKS.md, session 30). The
+//! camera occlusion from 0.8 to 1.3 times Embree's packets (`bench-accel`). The
 //! batched queries run through `pulp`'s run-time dispatch, so that the walk inlined into them
 //! is compiled for the processor's widest instructions; with the leaf tests inlined too
 //! (`LeafVisit`), the Cornell box's batched closest hits gained 16–21% on camera and shadow
-//! rays and its path tracer took 0.96× the time (session 39).
+//! rays and its path tracer took 0.96× the time.
 
 use std::cell::OnceCell;
 
@@ -47,7 +47,7 @@ const TRAVERSAL_COST: f32 = 1.0;
 /// kind as one left the Cornell box's seven primitives in one leaf (no split of its walls,
 /// whose boxes are as large as the room, looked cheaper); counted so, each wall gets a leaf of
 /// its own, and one thread's incoherent closest hits there went from about 5.5 to 8 Mrays/s
-/// and its shadow rays from about 6 to 10–13 (session 23, interleaved rounds).
+/// and its shadow rays from about 6 to 10–13 (`bench-accel`, interleaved rounds).
 const SINGLE_PRIM_COST: f32 = 2.0;
 /// Relative cost of testing a pack of up to four triangles at once (`tri4`): a leaf's
 /// triangles cost by the pack, so the SAH makes leaves of about four.
@@ -925,7 +925,7 @@ impl Bvh {
 /// What a walk of the tree (`Bvh::traverse`) does at each leaf it enters. A trait and not a
 /// closure so that the test is inlined into the walk wherever the walk is: a closure was
 /// compiled apart, in the baseline instructions, even under the batched queries' dispatch
-/// (session 38, BENCHMARKS.md).
+/// (the path tracer's time, measured with `perf`).
 trait LeafVisit {
     /// Tests the items of `leaf` (shrinking `t_max` to a hit found); true stops the walk.
     fn visit(&mut self, bvh: &Bvh, leaf: &Entry, t_max: &mut f32) -> bool;

@@ -94,7 +94,7 @@ pub struct AccelOptions {
     /// both backends then answer the same primitive at the same t for every ray, and render
     /// the same images. Off, Embree's own test decides, and a ray through an edge two
     /// primitives share may land on the other one (one pixel in 65,536 of the course's
-    /// Cornell box, path traced); Embree is then faster (BENCHMARKS.md, session 21).
+    /// Cornell box, path traced); Embree is then faster (BENCHMARKS.md, "`--embree-exact`").
     pub embree_exact: bool,
 }
 

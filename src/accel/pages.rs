@@ -2,7 +2,7 @@
 //! leaves. A ray through the 1M-triangle terrain reads a few nodes and leaves scattered over
 //! some 53 MB; in 4 KiB pages most of those reads also miss the TLB. Embree asks for huge
 //! pages for its own BVH (its terrain held 58 MB of them), so the comparison is made on equal
-//! terms (BENCHMARKS.md, session 29: BVH/Embree 0.58–0.65 → 0.69–0.72). The memory is an
+//! terms (on the terrain with `bench-accel`, BVH/Embree went from 0.58–0.65 to 0.69–0.72). The memory is an
 //! anonymous mapping (memmap2) advised with `MADV_HUGEPAGE`, which counts whether the system's
 //! setting is `always` or `madvise`; it is read and written as a typed slice over the
 //! mapping's bytes (bytemuck), so no `unsafe` is needed here.

@@ -65,7 +65,7 @@ pub struct CommonArgs {
     #[arg(long, required = true)]
     pub input: Option<PathBuf>,
     /// Output image: .png or .jpg (sRGB 8-bit), .exr or .pfm (linear float). Default:
-    /// <scene stem>.png.
+    /// the scene's name with .png (cornell_box.obj: cornell_box.png).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Image size in pixels.
@@ -640,7 +640,7 @@ impl RenderArgs {
     /// the course's defaults (one shadow ray to the light's centre, one camera sample, no
     /// final gathering) suit its command lines, not "the best image in T seconds". Measured
     /// on the Cornell box with the diffuse sphere against Mitsuba 3's reference (BENCHMARKS.md,
-    /// sessions 14–15):
+    /// "Error against time, against Mitsuba 3"):
     /// - the ray tracer and the engines built on it (photon, ray tracer + radiosity): 16
     ///   shadow rays a light (soft shadows by solid angle; relMSE of direct light 1.2e-4 at
     ///   256×256 in 0.4 s) and passes of 4 camera samples;
@@ -776,8 +776,8 @@ const TIME_LIMITED_PHOTONS: (f64, f64) = (20_000.0, 2_000_000.0);
 /// The share of the time left that the radiosity mesh's solve may take (`subdivide_to_fit`):
 /// most of it for the radiosity engine, whose pixels only look the solution up; half with
 /// `--indirect radiosity`, whose ray-traced direct light needs the rest. Measured on the
-/// Cornell box (BENCHMARKS.md, session 16): these choose the level of lower error at 1 s and
-/// at 2 s for both.
+/// Cornell box (BENCHMARKS.md, "The radiosity mesh under `--time-limit`"): these choose the
+/// level of lower error at 1 s and at 2 s for both.
 const TIME_LIMITED_SOLVE_SHARE: f64 = 0.8;
 const TIME_LIMITED_SOLVE_SHARE_UNDER_RAYS: f64 = 0.5;
 

@@ -31,7 +31,7 @@ pub struct FarmArgs {
     /// CPUs per job (each job renders with as many threads).
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub cpus_per_task: u32,
-    /// The farm's folder (scripts, parts, logs) [default: <scene stem>.farm].
+    /// The farm's folder (scripts, parts, logs) [default: the scene's name with .farm, e.g. cornell_box.farm].
     #[arg(long, value_name = "DIR")]
     pub dir: Option<PathBuf>,
     /// Submit the jobs with sbatch and print their ids.

@@ -122,6 +122,13 @@ pub enum Command {
     /// Each engine's error against run time on a scene, and Embree against the BVH: a CSV, a
     /// log-log plot (PNG) and a markdown summary.
     Report(tools::ReportArgs),
+    /// Writes the manual page of `render` (roff, for `man -l`), generated from the same
+    /// definitions as `render --help`, with a section per subcommand.
+    Man {
+        /// Where to write it (default: standard output).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
     /// Writes a height-field terrain of at least N triangles as standard OBJ.
     GenTerrain {
         /// Number of triangles (at least).

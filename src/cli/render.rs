@@ -225,7 +225,7 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
     Ok(scene)
 }
 
-/// What an engine does not render yet is refused, not left out (issue #18): media (fog, a
+/// What an engine does not render yet is refused, not left out: media (fog, a
 /// material's `interior_medium`) and skies are the path tracer's, the ray tracer's (not with
 /// radiosity as its indirect light, whose solution leaves them out) and the photon engine's
 /// (final gathering included: its gather rays cross the media); radiosity takes a sky and a

@@ -55,7 +55,7 @@ impl Parallelogram {
         }
     }
 
-    /// The points `sample` gives for (u[i], v[i]), lane by lane (the same arithmetic, so
+    /// The points `sample` gives for (`u[i]`, `v[i]`), lane by lane (the same arithmetic, so
     /// the same bits).
     #[inline(always)]
     pub fn sample_block(&self, u: &[f32; LANES], v: &[f32; LANES]) -> PointBlock {

@@ -179,7 +179,7 @@ impl CameraSampler {
     /// its path draws from: both depend only on (seed, pixel, sample).
     ///
     /// Always inlined: as a call, its ray came back through memory and was read wider than
-    /// it was written, a store-forwarding stall (1% of the path tracer's time, session 40).
+    /// it was written, a store-forwarding stall (1% of the path tracer's time).
     #[inline(always)]
     pub fn sample(&self, (i, j): (u32, u32), k: u32) -> (Ray, Rng) {
         let (w, h) = (self.width, self.height);

@@ -6,7 +6,7 @@
 //! of the 2^m elementary intervals of every shape, where independent numbers leave clumps and
 //! holes. Every point is still uniform in the square, so the estimate stays unbiased. On the
 //! Cornell box at 64 samples a pixel the relMSE falls to 0.64× at 1.04–1.06× the time
-//! (BENCHMARKS.md, session 33).
+//! (`scripts/path-time-vs-mitsuba.sh`).
 //!
 //! Everything is a hash of (seed, pixel, dimension) and the sample's index, as `Rng` is: an
 //! image does not depend on threads or on how a render is split into parts.
@@ -20,8 +20,8 @@ pub enum PathSampler {
     /// pixel's scrambled Sobol points (pbrt-v4's default sampler is of this kind).
     #[default]
     Sobol,
-    /// Independent uniform numbers for every path (Mitsuba 3's `independent` sampler, and
-    /// this renderer's until session 33).
+    /// Independent uniform numbers for every path (Mitsuba 3's `independent` sampler:
+    /// the one to compare with it).
     Independent,
 }
 
@@ -234,7 +234,7 @@ impl SobolLanes {
 }
 
 /// `SobolLanes::make` for `pulp::Arch::dispatch`. The loop over the lanes is the inner one:
-/// so LLVM vectorises it (with the dimensions inside, session 37 found it did not).
+/// so LLVM vectorises it (with the dimensions inside, it did not).
 struct MakePoints<'a>(&'a mut SobolLanes);
 
 impl pulp::WithSimd for MakePoints<'_> {

@@ -58,7 +58,7 @@ impl Camera {
         }
     }
 
-    /// The ray through screen point (x, y) in [0,1]², (0,0) bottom left. For many rays,
+    /// The ray through screen point (x, y) in \[0,1\]², (0,0) bottom left. For many rays,
     /// `view()` once and `View::ray`.
     pub fn generate_ray(&self, x: f32, y: f32) -> Ray {
         self.view().ray(x, y)
@@ -78,7 +78,7 @@ impl Camera {
         (x, y)
     }
 
-    /// Projects a world point to screen coordinates in [0,1]² (None when behind the camera).
+    /// Projects a world point to screen coordinates in \[0,1\]² (None when behind the camera).
     pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
         self.view().project(p)
     }
@@ -98,7 +98,7 @@ pub struct View {
 }
 
 impl View {
-    /// The ray through screen point (x, y) in [0,1]², (0,0) bottom left.
+    /// The ray through screen point (x, y) in \[0,1\]², (0,0) bottom left.
     #[inline]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let (h, v) = ((x - 0.5) * self.side, (y - 0.5) * self.side);
@@ -138,7 +138,7 @@ impl View {
         Ray::new(origin, (focus - origin).normalize_or_zero())
     }
 
-    /// Projects a world point to screen coordinates in [0,1]² (None when behind the camera).
+    /// Projects a world point to screen coordinates in \[0,1\]² (None when behind the camera).
     pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
         let d = p - self.position;
         if !self.perspective {

@@ -97,7 +97,7 @@ pub struct SurfaceHit {
     pub shading_normal: Vec3,
     /// Bound on the absolute error of `point` in each coordinate (see `offset_ray_origin`).
     pub error: f32,
-    /// A polygon's own parameters in [0,1]² (a quad's (u, v), a triangle's barycentric
+    /// A polygon's own parameters in \[0,1\]² (a quad's (u, v), a triangle's barycentric
     /// (b1, b2)); (0, 0) on an analytic shape, whose parameters take inverse trigonometric
     /// functions that most hits never need. Read them with `Scene::parameters`, texture
     /// coordinates with `Scene::tex_coords`.
@@ -123,7 +123,7 @@ impl Scene {
     /// Inlined, with `flat_surface`, so that the hit is built where the caller keeps it: as
     /// calls, the path tracer's wavefront copied each hit twice through the stack, and read
     /// the copies back wider than they were written, a store-forwarding stall (0.98× the
-    /// time inlined, 0.985× more without the bump map's copy; session 37).
+    /// time inlined, 0.985× more without the bump map's copy).
     #[inline(always)]
     pub fn surface(&self, ray: &Ray, hit: &PrimHit) -> SurfaceHit {
         let s = self.flat_surface(ray, hit);
@@ -188,7 +188,7 @@ impl Scene {
         bumped_normal(n, tangents, dh, bump.amplitude, 2.0 * step)
     }
 
-    /// The primitive's own parameters at a hit, in [0,1]²: a quad's (u, v), a triangle's
+    /// The primitive's own parameters at a hit, in \[0,1\]²: a quad's (u, v), a triangle's
     /// barycentric (b1, b2), an analytic shape's (`Shape::uv_at`) on the hit's part.
     pub fn parameters(&self, hit: &SurfaceHit) -> (f32, f32) {
         match hit.prim.kind {
@@ -345,7 +345,7 @@ impl Scene {
     ///
     /// An exact hit (the BVH's, Embree's with `--embree-exact`) is its own answer, inline: as
     /// a call, the answer came back through memory and was read wider than it was written, a
-    /// store-forwarding stall (session 37).
+    /// store-forwarding stall.
     #[inline(always)]
     fn settle_quad_hit(&self, ray: &Ray, i: usize, hit: &PrimHit) -> (usize, (f32, f32, f32)) {
         if hit.exact {

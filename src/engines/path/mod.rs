@@ -30,11 +30,11 @@ use crate::scene::sky::Sky;
 use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
 
 /// Vertices after which Russian roulette may end a path (0-based: the sixth vertex is the
-/// first it may end at). From the third (as until session 22) the Cornell box's relMSE at 64
+/// first it may end at). From the third, the Cornell box's relMSE at 64
 /// paths a pixel was 22–24% higher (by solid angle 5.37e-3 against 4.33e-3, by area 7.83e-3
 /// against 6.39e-3) for somewhat less time a path. Mitsuba 3's `rr_depth = 5` is one vertex
-/// earlier (its depth is counted after the bounce, `depth >= rr_depth`): 4 here. Measured in
-/// session 32, by area at 64 paths a pixel against a 16k-path Mitsuba reference, 4 gave
+/// earlier (its depth is counted after the bounce, `depth >= rr_depth`): 4 here. Measured
+/// by area at 64 paths a pixel against a 16k-path Mitsuba reference, 4 gave
 /// Mitsuba's relMSE (0.99× its 7.10e-3, against 0.90×) in 0.94× the time: time × error no
 /// better (0.59 of Mitsuba's efficiency against 0.61), so 5 stays.
 const ROULETTE_FROM: u32 = 5;
@@ -43,7 +43,7 @@ const ROULETTE_FROM: u32 = 5;
 /// only keeps a perfectly white closed room finite. (A cap of 0.95 let throughput grow as
 /// (ρ/0.95)^k: the ρ = 0.99 furnace came out at 90.4 instead of 100 with 4096 paths a pixel.)
 const MAX_SURVIVAL: f32 = 0.999;
-/// Paths the wavefront follows together (`wavefront.rs`). On the Cornell box (session 37)
+/// Paths the wavefront follows together (`wavefront.rs`). On the Cornell box
 /// without the vertex kernel, 256 took 0.88× the time of 4096 (the whole chunk of camera
 /// samples of `render_pixels`, whose state no longer fits the caches) and 16 took 1.18×;
 /// with it, 128, 512 and 1024 were within 3% of 256.
@@ -714,7 +714,7 @@ mod tests {
     /// the ceiling looking straight down: every path meets the floor, samples the light once,
     /// and its bounce meets a green face, where red times green leaves it nothing to carry.
     /// So it ends there, having spent one shadow ray and one bounce ray and no more (the
-    /// tracer before session 32 went on to the sixth vertex and its roulette).
+    /// path does not go on to the sixth vertex and its roulette).
     const RED_FLOOR_GREEN_WALLS: &str = "
 material
 diffuse 1 0 0

@@ -8,7 +8,7 @@
 //! Why: one path at a time, each vertex's arithmetic is a long chain of dependent divisions
 //! and square roots between two ray queries, and the processor waits on each in turn; 16
 //! lanes run 16 vertices' chains at once. On the Cornell box at 64 paths a pixel the path
-//! tracer took 0.88× the time (session 37, BENCHMARKS.md). Without the kernel (the same
+//! tracer took 0.88× the time (`scripts/path-time-vs-mitsuba.sh`). Without the kernel (the same
 //! stages, scalar) it took 1.05×: the gain is the lanes, not the reordering.
 //!
 //! It follows exactly the paths `PathTracer::radiance` follows, drawing the same numbers in
@@ -341,7 +341,7 @@ fn put(a: &mut [Lanes; 3], k: usize, v: Vec3) {
 /// tracer's own functions, inlined and branch-free. The by-area sample and its weighing are
 /// written out here: they mirror `Light::sample_by_area_towards` (with `point_towards`) and
 /// `PathTracer::light_sample`, whose chains of `Option`s kept LLVM from vectorising the lanes
-/// (session 37: 1.18× the time instead of 0.88×).
+/// (1.18× the time instead of 0.88×).
 #[inline(always)]
 fn vertex_lane(i: &VertexIn, o: &mut VertexOut, k: usize) {
     let (x, n, ng, error) = (get(&i.x, k), get(&i.n, k), get(&i.ng, k), i.error[k]);

@@ -1,4 +1,4 @@
-//! A kd-tree for the photon maps' and the irradiance cache's k-nearest queries (issue #16).
+//! A kd-tree for the photon maps' and the irradiance cache's k-nearest queries.
 //!
 //! kiddo's `ImmutableKdTree`, which they used before, splits the axes in turn; photons lie on
 //! surfaces, and on an axis-aligned wall every photon shares one coordinate, so a third of its
@@ -7,7 +7,7 @@
 //! threads, and searches best-first (the nearest unopened cell next). A query is bound by
 //! memory: on the 2M-photon Cornell box map it opens about 9 leaves and reads some 180 points
 //! for k = 50 (photons lie on surfaces, where a ball meets about 3×3 cells). What made it
-//! fast, one change at a time (one thread, k = 50; BENCHMARKS.md, sessions 20 and 22):
+//! fast, one change at a time (one thread, k = 50; `cargo bench --bench photon`):
 //! - a leaf's points stored together (one array per axis and one of indices were four
 //!   places apart: 8.2 → 5.2 µs on the 10M-photon map);
 //! - the candidates ordered by one u64 (squared distance's bits, then index) instead of a
@@ -15,7 +15,7 @@
 //! - best-first rather than depth-first search (8.8 → 8.2 µs);
 //! - leaves of 32 points rather than 16 (4.5–7.4 → 4.4–5.6 µs, noisy; 8 was slower);
 //! - the points moved, not indices, while building (7.5 s → 0.95 s with the two threads);
-//! - session 22, together 0.78× the time of the above in interleaved rounds: nodes of 8
+//! - together 0.78× the time of the above in interleaved rounds: nodes of 8
 //!   bytes with no leaves stored (ranges follow from the median split); a leaf's coordinates
 //!   as runs of x, y and z, 12 bytes a point, the indices apart (the photon maps renumber
 //!   their photons in leaf order and need none); the k best kept sorted, a nearer one

@@ -326,7 +326,7 @@ impl QuadMesh {
     }
 
     /// The leaf under parameters (u, v) of a primitive's part, with the point's parameters
-    /// within that leaf in [0,1]².
+    /// within that leaf in \[0,1\]².
     pub fn locate(&self, prim: PrimRef, part: u32, u: f32, v: f32) -> Option<(u32, f32, f32)> {
         let &Roots {
             first,
@@ -379,7 +379,7 @@ fn is_back(prim: PrimRef, part: u32) -> bool {
     prim.kind != PrimKind::Shape && part == BACK
 }
 
-/// The parameter rectangle of cell (col, row) of a cols × rows grid over [0,1]².
+/// The parameter rectangle of cell (col, row) of a cols × rows grid over \[0,1\]².
 fn cell(col: u32, row: u32, cols: u32, rows: u32) -> [f32; 4] {
     [
         col as f32 / cols as f32,

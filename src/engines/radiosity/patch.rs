@@ -26,7 +26,7 @@ pub struct Patch {
 }
 
 impl Patch {
-    /// The point of the patch at (s, t) ∈ [0,1]², uniform in area.
+    /// The point of the patch at (s, t) ∈ \[0,1\]², uniform in area.
     pub fn point(&self, s: f32, t: f32) -> Vec3 {
         let c = &self.corners;
         let (a, b, d, s) = if s < self.first_share {

@@ -335,7 +335,7 @@ pub struct Element {
     /// The input patch it lies on.
     pub patch: u32,
     /// Corners in the patch's order (a triangle's as [a, b, c, c]); its four children cover
-    /// the quarters (s, t) ∈ [0,½]², [½,1]×[0,½], [½,1]², [0,½]×[½,1] of its bilinear
+    /// the quarters (s, t) ∈ \[0,½\]², \[½,1\]×\[0,½\], \[½,1\]², \[0,½\]×\[½,1\] of its bilinear
     /// parameters, in that order.
     pub corners: [Vec3; 4],
     /// The first of four consecutive children, or `NONE` for a leaf.

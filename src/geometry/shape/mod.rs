@@ -27,7 +27,7 @@ pub struct Tessellation {
 }
 
 /// A closed analytic surface made of one or more smooth parts (a sphere has one; a ring its
-/// outer and inner walls and two caps), each parameterized over (u, v) ∈ [0,1]². Normals
+/// outer and inner walls and two caps), each parameterized over (u, v) ∈ \[0,1\]². Normals
 /// point out of the solid.
 pub trait Shape {
     /// The name `--plan` counts it under ("sphere").
