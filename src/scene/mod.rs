@@ -189,6 +189,9 @@ pub struct Scene {
     /// The sky that lights the scene (`sky_color`, `sky_gradient`; None: the background,
     /// which lights nothing).
     pub sky: Option<sky::Sky>,
+    /// Lights without area (a Mitsuba scene's `point`, `spot` and `directional` emitters),
+    /// which only next-event estimation finds: the path tracer's.
+    pub delta_lights: Vec<DeltaLight>,
     /// Quads are opaque from both sides (`--two-sided`); by default they are one-sided for
     /// every query, as in the course program.
     pub two_sided_quads: bool,
@@ -203,6 +206,73 @@ pub struct Scene {
     pub render_hints: RenderHints,
     /// Problems that did not stop loading (e.g. a material that does not conserve energy).
     pub warnings: Vec<String>,
+}
+
+/// A light without area: a point (`intensity` in W·sr⁻¹, per colour channel), a spot (the
+/// same, within a cone), or a directional light (`intensity` the irradiance, W·m⁻², on a
+/// surface facing it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DeltaLight {
+    pub kind: DeltaKind,
+    pub intensity: Color,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DeltaKind {
+    Point {
+        position: Vec3,
+    },
+    /// Full intensity within `cos_beam` of `axis` (unit), falling linearly in the angle to
+    /// zero at `cutoff` (radians) — Mitsuba's `spot`.
+    Spot {
+        position: Vec3,
+        axis: Vec3,
+        beam: f32,
+        cutoff: f32,
+    },
+    /// Light travelling along the unit `direction`.
+    Directional {
+        direction: Vec3,
+    },
+}
+
+impl DeltaLight {
+    /// What the light sends to point `x`: the unit direction towards it, the distance
+    /// (infinite for a directional light) and the irradiance on a surface facing it; None
+    /// where it sends nothing.
+    pub fn towards(&self, x: Vec3) -> Option<(Vec3, f32, Color)> {
+        match self.kind {
+            DeltaKind::Directional { direction } => {
+                Some((-direction, f32::INFINITY, self.intensity))
+            }
+            DeltaKind::Point { position } | DeltaKind::Spot { position, .. } => {
+                let to = position - x;
+                let d2 = to.length_squared();
+                if d2.is_nan() || d2 <= 0.0 {
+                    return None;
+                }
+                let d = d2.sqrt();
+                let dir = to / d;
+                let falloff = match self.kind {
+                    DeltaKind::Spot {
+                        axis, beam, cutoff, ..
+                    } => {
+                        let angle = (-dir).dot(axis).clamp(-1.0, 1.0).acos();
+                        if angle >= cutoff {
+                            return None;
+                        }
+                        if angle <= beam {
+                            1.0
+                        } else {
+                            (cutoff - angle) / (cutoff - beam)
+                        }
+                    }
+                    _ => 1.0,
+                };
+                Some((dir, d, self.intensity * (falloff / d2)))
+            }
+        }
+    }
 }
 
 /// The largest image side a render takes (`-size`, a scene's film): the EXR and PNG

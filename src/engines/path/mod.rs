@@ -340,6 +340,49 @@ impl PathTracer<'_> {
         sky.radiance(dir) * transmittance * (value * power_heuristic(pdf, lobe_pdf))
     }
 
+    /// What the lights without area send a diffuse point (`lobe` None, per unit albedo:
+    /// irradiance × cos/π) or a glossy lobe (per unit reflectance: irradiance × the lobe's
+    /// density, which is its BRDF × cos), one shadow ray each: no other strategy finds them.
+    fn delta_lights(
+        &self,
+        s: &SurfaceHit,
+        n: Vec3,
+        lobe: Option<&GlossyLobe>,
+        medium: Option<&Medium>,
+        counts: &mut Counts,
+    ) -> Color {
+        let mut sum = Vec3::ZERO;
+        for light in &self.scene.delta_lights {
+            let Some((dir, distance, irradiance)) = light.towards(s.point) else {
+                continue;
+            };
+            let cos = n.dot(dir);
+            if cos <= 0.0 {
+                continue;
+            }
+            let value = match lobe {
+                None => cos / std::f32::consts::PI,
+                Some(lobe) => lobe.pdf(dir),
+            };
+            if value <= 0.0 {
+                continue;
+            }
+            counts.shadow += 1;
+            let origin = offset_ray_origin(s.point, n, s.error);
+            let ray = if distance.is_finite() {
+                shadow_ray(origin, s.point + dir * distance)
+            } else {
+                Ray::new(origin, dir)
+            };
+            if self.accel.occluded(&ray) {
+                continue;
+            }
+            let transmittance = medium.map_or(Vec3::ONE, |m| m.transmittance(distance));
+            sum += irradiance * transmittance * value;
+        }
+        sum
+    }
+
     /// The emitted radiance a path of `throughput` arriving at `s` along `dir` from `previous`
     /// takes in: what the surface emits towards it, weighed against next-event estimation
     /// (which could have found the point from `previous`) by the power heuristic.
@@ -512,7 +555,8 @@ impl PathTracer<'_> {
                 let (sampled, pdf) = diffuse_sample(n, u, v);
                 radiance += throughput
                     * (self.unblocked(self.light_sample(&s, n, None, medium, light_draw), counts)
-                        + self.sample_sky(&s, n, None, medium, sky_draw, counts));
+                        + self.sample_sky(&s, n, None, medium, sky_draw, counts)
+                        + self.delta_lights(&s, n, None, medium, counts));
                 if m.bump.is_some() && !s.leaves_on_side_of(n, sampled) {
                     break;
                 }
@@ -538,7 +582,8 @@ impl PathTracer<'_> {
                             * (self.unblocked(
                                 self.light_sample(&s, n, Some(&glossy), medium, light_draw),
                                 counts,
-                            ) + self.sample_sky(&s, n, Some(&glossy), medium, sky_draw, counts));
+                            ) + self.sample_sky(&s, n, Some(&glossy), medium, sky_draw, counts)
+                                + self.delta_lights(&s, n, Some(&glossy), medium, counts));
                         let (u, v) = samples.next_2d();
                         let (sampled, pdf) = glossy.sample(u, v);
                         dir = sampled;

@@ -41,6 +41,8 @@ impl PathTracer<'_> {
         let scene = self.scene;
         scene.media.is_empty()
             && scene.sky.is_none()
+            && scene.delta_lights.is_empty()
+            && !scene.smooth_normals
             && scene.materials.iter().all(|m| {
                 m.reflective.max_element() <= 0.0
                     && m.transmitted.max_element() <= 0.0

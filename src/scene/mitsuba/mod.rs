@@ -32,7 +32,7 @@ use self::xml::{Plugin, Value};
 use super::camera::{Camera, Projection};
 use super::medium::Medium;
 use super::sky::{Sky, SkyMap};
-use super::{Material, Scene, SceneError, ShapePrim};
+use super::{DeltaKind, DeltaLight, Material, Scene, SceneError, ShapePrim};
 use crate::color::Color;
 use crate::geometry::{SphereShape, Vec2, Vec3};
 
@@ -192,23 +192,26 @@ impl Builder {
         let aspect = width as f64 / height as f64;
         let projection = match p.kind.as_str() {
             "perspective" | "thinlens" => {
-                let fov = match p.property("fov") {
-                    Some(_) => p.float("fov", 0.0)?,
+                // Mitsuba's default: a 50 mm lens on 36 × 24 mm film, across its diagonal.
+                let (fov, axis) = match p.property("fov") {
+                    Some(_) => {
+                        let axis = p.string("fov_axis")?.map_or("x", |(a, _)| a).to_string();
+                        (p.float("fov", 0.0)?, axis)
+                    }
                     None => {
-                        // Mitsuba's default: a 50 mm lens on 36 mm film, across x.
                         let focal = match p.string("focal_length")? {
                             Some((f, at)) => f.trim_end_matches("mm").parse::<f64>().map_err(|_| {
                                 at.error(format!("focal_length \"{f}\": expected e.g. 50mm"))
                             })?,
                             None => 50.0,
                         };
-                        2.0 * (18.0 / focal).atan().to_degrees()
+                        let diagonal = (36.0f64 * 36.0 + 24.0 * 24.0).sqrt();
+                        (2.0 * (diagonal / (2.0 * focal)).atan().to_degrees(), "diagonal".to_string())
                     }
                 };
                 if !(fov > 0.0 && fov < 180.0) {
                     return Err(p.at.error(format!("fov {fov}: expected (0, 180) degrees")));
                 }
-                let axis = p.string("fov_axis")?.map_or("x", |(a, _)| a).to_string();
                 let t = (fov.to_radians() / 2.0).tan();
                 let diagonal = (aspect * aspect + 1.0).sqrt();
                 // The half-width's tangent along x.
@@ -783,17 +786,14 @@ impl Builder {
                 map.mitsuba_frame = Some(rotation.transpose());
                 Sky::Map(std::sync::Arc::new(map))
             }
-            "point" | "spot" | "directional" | "area" => {
-                self.warn(
-                    &p.at,
-                    format!("emitter \"{}\" is not supported yet: left out", p.kind),
-                );
-                mark_all_used(p);
+            "point" | "spot" | "directional" => {
+                let light = self.delta_light(p)?;
+                self.scene.delta_lights.push(light);
                 return Ok(());
             }
             other => {
                 return Err(p.at.error(format!(
-                    "emitter \"{other}\" is not supported: expected constant, envmap (and, inside shapes, area)"
+                    "emitter \"{other}\" is not supported: expected constant, envmap, point, spot, directional (and, inside shapes, area)"
                 )))
             }
         };
@@ -806,6 +806,66 @@ impl Builder {
         }
         self.scene.sky = Some(sky);
         Ok(())
+    }
+}
+
+impl Builder {
+    /// A `point`, `spot` or `directional` emitter.
+    fn delta_light(&mut self, p: &Plugin) -> Result<DeltaLight, SceneError> {
+        let to_world = p.transform("to_world")?;
+        let unit = |v: DVec3, what: &str| {
+            v.try_normalize()
+                .map(|v| v.as_vec3())
+                .ok_or_else(|| p.at.error(format!("the {what} is zero")))
+        };
+        let kind = match p.kind.as_str() {
+            "point" => DeltaKind::Point {
+                position: match p.property("position") {
+                    Some(_) => p.point("position", DVec3::ZERO)?,
+                    None => to_world.transform_point3(DVec3::ZERO),
+                }
+                .as_vec3(),
+            },
+            "spot" => {
+                let cutoff = p.float("cutoff_angle", 20.0)?;
+                let beam = p.float("beam_width", cutoff * 0.75)?;
+                if !(0.0 < beam && beam <= cutoff && cutoff < 180.0) {
+                    return Err(p.at.error(format!(
+                        "beam_width {beam}, cutoff_angle {cutoff}: expected 0 < beam_width ≤ cutoff_angle < 180"
+                    )));
+                }
+                if let Some(t) = p.child_named("intensity") {
+                    mark_all_used(t);
+                    self.warn(&t.at, "a spot's texture is not supported: its mean colour is not known either, so the spot is white");
+                }
+                DeltaKind::Spot {
+                    position: to_world.transform_point3(DVec3::ZERO).as_vec3(),
+                    axis: unit(to_world.transform_vector3(DVec3::Z), "spot's axis")?,
+                    beam: beam.to_radians() as f32,
+                    cutoff: cutoff.to_radians() as f32,
+                }
+            }
+            _ => DeltaKind::Directional {
+                direction: unit(
+                    match p.property("direction") {
+                        Some(_) => p.point("direction", DVec3::Z)?,
+                        None => to_world.transform_vector3(DVec3::Z),
+                    },
+                    "direction",
+                )?,
+            },
+        };
+        let name = if p.kind == "directional" {
+            "irradiance"
+        } else {
+            "intensity"
+        };
+        let intensity = if p.child_named(name).is_some() {
+            Color::ONE
+        } else {
+            self.colour(p, name, 1.0, SpectrumUse::Emission)?
+        };
+        Ok(DeltaLight { kind, intensity })
     }
 }
 

@@ -466,6 +466,41 @@ mod tests {
         assert!(spectrum_to_rgb(&invisible, SpectrumUse::Emission).max_element() < 1e-3);
     }
 
+    /// Two spectra of Mitsuba's own render tests, against what Mitsuba 3.9's
+    /// `spectrum_list_to_srgb` gives for them (computed with its Python module).
+    #[test]
+    fn spectra_convert_as_mitsuba_converts_them() {
+        let pairs = |v: [f64; 4]| {
+            Spectrum::Pairs(vec![
+                (400.0, v[0]),
+                (500.0, v[1]),
+                (600.0, v[2]),
+                (700.0, v[3]),
+            ])
+        };
+        let cases = [
+            (
+                pairs([0.0, 8.0, 15.6, 18.4]),
+                SpectrumUse::Emission,
+                [20.7108, 10.8546, 2.77115],
+            ),
+            (
+                pairs([0.78; 4]),
+                SpectrumUse::Bounded,
+                [0.776368, 0.779809, 0.776029],
+            ),
+        ];
+        for (spectrum, usage, expected) in cases {
+            let rgb = spectrum_to_rgb(&spectrum, usage);
+            for (c, e) in rgb.to_array().into_iter().zip(expected) {
+                assert!(
+                    (c as f64 / e - 1.0).abs() < 1e-3,
+                    "{rgb} against {expected:?}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn named_indices_are_found() {
         assert_eq!(named_ior("bk7"), Some(1.5046));

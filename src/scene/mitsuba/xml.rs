@@ -632,9 +632,11 @@ impl Reader {
                     at.error("<lookat>: origin and target coincide, or up is along the view")
                 })?
             }
-            other => return Err(at.error(format!(
+            other => {
+                return Err(at.error(format!(
                 "unknown transform <{other}>: expected translate, rotate, scale, matrix or lookat"
-            ))),
+            )))
+            }
         };
         if !m.is_finite() {
             return Err(at.error("the transform is not finite"));
