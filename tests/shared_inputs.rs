@@ -1,5 +1,5 @@
-//! The reference inputs beside the checkout, in `../shared/`: the course's scenes and
-//! RenderPark's MGF scenes. Every other test reads the project's own `scenes/` (or builds its
+//! The reference inputs beside the checkout, in `../shared/`: the course's scenes,
+//! RenderPark's MGF scenes and Mitsuba 3's render-test scenes with its reference images. Every other test reads the project's own `scenes/` (or builds its
 //! scene in code); these check that the course's files are what `scenes/` copies, that the
 //! course's command lines run on them verbatim, and the measured figures of the MGF scenes
 //! the project does not ship.
@@ -32,6 +32,11 @@ fn main() {
             "shipped_mgf_scenes_load_with_renderparks_patch_counts",
             "mgf-scenes",
             shipped_mgf_scenes_load_with_renderparks_patch_counts,
+        ),
+        shared_input_trial(
+            "mitsuba_render_tests_against_mitsubas_references",
+            "mitsuba-tests/tests/scenes",
+            mitsuba_render_tests_against_mitsubas_references,
         ),
         shared_input_trial(
             "office3_against_path_traced_references",
@@ -296,4 +301,142 @@ fn reference_paths(solution: &Solution, total: f64) -> Vec<u32> {
         .zip(&reflected)
         .map(|(a, r)| ((total * (0.5 * a / area_sum + 0.5 * r / power)) as u32).max(16))
         .collect()
+}
+
+/// Mitsuba 3's render tests that our path tracer passes today: each must keep passing.
+const MITSUBA_TESTS_PASSING: [&str; 2] = [
+    "test_textured_diffuse_path",
+    "test_homo_dielectric_envmap_volpath",
+];
+
+/// Scenes whose images differ between the Accels, each lit by an emitter made of an OBJ
+/// mesh whose faces are pairs of coplanar triangles. `test_arealight_path` differs in 7 of its
+/// 2,304 pixels by at most 1e-14 of radiance, in direct light alone (`--max-depth 1`), not in
+/// camera rays (`--engine raycast`); the two media scenes with the `angled_cube` emitter
+/// differ by up to 5e-5. Where the Accels part there is not yet found; this list keeps it
+/// from growing, and from shrinking unnoticed.
+const ACCELS_DIFFER: [&str; 3] = [
+    "test_arealight_path",
+    "test_homo_area_light_volpath",
+    "test_surf_area_light_volpath",
+];
+
+/// Samples per pixel of the comparison (the acceptance figure's).
+const MITSUBA_TEST_SPP: u32 = 256;
+
+/// Every scene of Mitsuba 3's render tests rendered by our path tracer at 256 samples a
+/// pixel, against Mitsuba's reference image: a scene passes when its relMSE is at most 1.5×
+/// the relMSE Mitsuba's own estimator has at 256 samples (its per-sample variance, which the
+/// suite ships, over 256) plus 2e-4, and its mean is within 2% of the reference's. The table
+/// of every scene is printed; the scenes of `MITSUBA_TESTS_PASSING` must pass. A scene that
+/// holds what trilux does not read (a heterogeneous medium) must be refused with its file and
+/// line. Both Accels must give the same image of every scene.
+fn mitsuba_render_tests_against_mitsubas_references(dir: &Path) {
+    use trilux::accel::{self, AccelOptions};
+    use trilux::engines::{path, RenderSettings};
+    use trilux::film::metrics::{compare, read_image, RELMSE_EPSILON};
+
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("the scene groups")
+        .flat_map(|group| std::fs::read_dir(group.expect("a group").path()).expect("a group"))
+        .map(|e| e.expect("an entry").path())
+        .filter(|p| {
+            let name = p.file_name().unwrap_or_default().to_string_lossy();
+            name.starts_with("test_") && name.ends_with(".xml")
+        })
+        .collect();
+    scenes.sort();
+    assert!(
+        scenes.len() >= 23,
+        "{} scenes in {}",
+        scenes.len(),
+        dir.display()
+    );
+    let mut passed = Vec::new();
+    let mut differ = Vec::new();
+    for file in &scenes {
+        let name = file
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .to_string();
+        let scene = match Scene::load(file) {
+            Ok(scene) => scene,
+            Err(e) => {
+                let message = e.to_string();
+                assert!(
+                    message.contains(&format!("{}:", file.display())) && e.line().is_some(),
+                    "{name}: refused without its file and line: {message}"
+                );
+                println!("{name:48} refused: {message}");
+                continue;
+            }
+        };
+        let (width, height) = scene.render_hints.size.expect("a film");
+        let settings = |spp| RenderSettings {
+            width,
+            height,
+            num_antialias_samples: spp,
+            max_depth: scene.render_hints.max_depth,
+            quiet: true,
+            ..RenderSettings::default()
+        };
+        let mut images = Vec::new();
+        for kind in common::backends() {
+            let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+            images.push(path::render(&scene, accel.as_ref(), &settings(8)).0.pixels);
+        }
+        let largest_difference = images
+            .windows(2)
+            .flat_map(|w| {
+                w[0].iter()
+                    .zip(&w[1])
+                    .map(|(a, b)| (*a - *b).abs().max_element())
+            })
+            .fold(0.0f32, f32::max);
+        if largest_difference > 0.0 {
+            println!("{name:48} the Accels differ by up to {largest_difference:e}");
+            differ.push(name.clone());
+        }
+        let accel =
+            accel::build(&scene, common::backends()[0], &AccelOptions::default()).expect("builds");
+        let (film, _) = path::render(&scene, accel.as_ref(), &settings(MITSUBA_TEST_SPP));
+        let stem = name.rsplit_once('_').map_or(name.as_str(), |(t, _)| t);
+        let refs = file.parent().expect("a folder").join("refs");
+        let reference = read_image(&refs.join(format!("{stem}_ref_rgb.exr"))).expect("reference");
+        let variance = read_image(&refs.join(format!("{stem}_ref_rgb_var.exr"))).expect("variance");
+        let ours = compare(&film, &reference).expect("same size").relmse;
+        let n = (reference.pixels.len() * 3) as f64;
+        let mitsuba: f64 = reference
+            .pixels
+            .iter()
+            .zip(&variance.pixels)
+            .flat_map(|(r, v)| r.to_array().into_iter().zip(v.to_array()))
+            .map(|(r, v)| {
+                let r = r as f64;
+                (v as f64).max(0.0) / MITSUBA_TEST_SPP as f64 / (r * r + RELMSE_EPSILON)
+            })
+            .sum::<f64>()
+            / n;
+        let mean = |f: &trilux::film::Film| {
+            f.pixels.iter().map(|p| p.element_sum() as f64).sum::<f64>() / n
+        };
+        let ratio = mean(&film) / mean(&reference);
+        let pass = ours <= 1.5 * mitsuba + 2e-4 && (ratio - 1.0).abs() <= 0.02;
+        println!(
+            "{name:48} mean {ratio:.3}× Mitsuba's, relMSE {ours:.2e} (Mitsuba's at {MITSUBA_TEST_SPP} spp: {mitsuba:.2e}){}",
+            if pass { "  pass" } else { "" }
+        );
+        if pass {
+            passed.push(name);
+        }
+    }
+    println!("{} of {} scenes pass", passed.len(), scenes.len());
+    assert_eq!(
+        differ, ACCELS_DIFFER,
+        "the scenes whose images differ between the Accels"
+    );
+    for name in MITSUBA_TESTS_PASSING {
+        assert!(passed.iter().any(|p| p == name), "{name} no longer passes");
+    }
 }
