@@ -31,6 +31,11 @@ pub struct Material {
     /// Index into `Scene::textures` once decoded; the file it comes from is `texture_file`.
     pub texture: Option<usize>,
     pub texture_file: Option<PathBuf>,
+    /// The texture file's coordinates mapped by this affine map (`Texture::to_uv`; default
+    /// none).
+    pub texture_to_uv: Option<[[f32; 3]; 2]>,
+    /// The texture file looked up at its nearest texel (`Texture::nearest`; default false).
+    pub texture_nearest: bool,
     /// Perfect-mirror reflectance.
     pub reflective: Color,
     /// Emitted radiance (W·sr⁻¹·m⁻²).
@@ -58,6 +63,8 @@ impl Default for Material {
             diffuse: Vec3::ZERO,
             texture: None,
             texture_file: None,
+            texture_to_uv: None,
+            texture_nearest: false,
             reflective: Vec3::ZERO,
             emitted: Vec3::ZERO,
             transmitted: Vec3::ZERO,
@@ -75,6 +82,17 @@ impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emitted.max_element() > 0.0
     }
+    /// Whether the surface changes nothing that crosses it: clear glass of index 1, which
+    /// neither reflects nor bends (Mitsuba's `null`, a medium's boundary).
+    pub fn is_index_matched(&self) -> bool {
+        self.transmitted == Vec3::ONE
+            && self.ior == 1.0
+            && self.diffuse == Vec3::ZERO
+            && self.reflective == Vec3::ZERO
+            && self.texture.is_none()
+            && self.procedural.is_none()
+    }
+
     pub fn is_specular(&self) -> bool {
         self.reflective.max_element() > 0.0 || self.transmitted.max_element() > 0.0
     }
@@ -622,7 +640,11 @@ impl Scene {
                 ),
             })?;
             m.texture = Some(self.textures.len());
-            self.textures.push(texture);
+            self.textures.push(Texture {
+                to_uv: m.texture_to_uv,
+                nearest: m.texture_nearest,
+                ..texture
+            });
         }
         for (i, m) in self.materials.iter_mut().enumerate() {
             let Some(procedural::Bump {

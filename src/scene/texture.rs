@@ -16,6 +16,12 @@ pub struct Texture {
     pub height: u32,
     /// Linear RGB, row 0 at the top of the image.
     pub texels: Vec<Vec3>,
+    /// The affine map from a surface's texture coordinates to the image's, row by row
+    /// (Mitsuba's `to_uv`; default: none, the coordinates as they are).
+    pub to_uv: Option<[[f32; 3]; 2]>,
+    /// The nearest texel rather than the bilinear mean of four (Mitsuba's `filter_type
+    /// nearest`, and its `checkerboard`; default false).
+    pub nearest: bool,
 }
 
 impl Texture {
@@ -52,7 +58,22 @@ impl Texture {
             width,
             height,
             texels,
+            to_uv: None,
+            nearest: false,
         })
+    }
+
+    /// Mitsuba's `checkerboard`: `color0` where u and v (Mitsuba's, whose v runs down the
+    /// image) both lie in the lower or both in the upper half of their unit interval,
+    /// `color1` elsewhere; `to_uv` as `lookup` takes it.
+    pub fn checkerboard(color0: Vec3, color1: Vec3, to_uv: Option<[[f32; 3]; 2]>) -> Texture {
+        Texture {
+            width: 2,
+            height: 2,
+            texels: vec![color0, color1, color1, color0],
+            to_uv,
+            nearest: true,
+        }
     }
 
     fn texel(&self, x: i64, y: i64) -> Vec3 {
@@ -66,6 +87,21 @@ impl Texture {
     pub fn lookup(&self, st: Vec2) -> Vec3 {
         if self.texels.is_empty() {
             return Vec3::ZERO;
+        }
+        let st = match &self.to_uv {
+            None => st,
+            Some([a, b]) => Vec2::new(
+                a[0] * st.x + a[1] * st.y + a[2],
+                b[0] * st.x + b[1] * st.y + b[2],
+            ),
+        };
+        if self.nearest {
+            let x = (st.x * self.width as f32).floor();
+            let y = ((1.0 - st.y) * self.height as f32).floor();
+            if !x.is_finite() || !y.is_finite() {
+                return self.texel(0, 0);
+            }
+            return self.texel(x as i64, y as i64);
         }
         let x = st.x * self.width as f32 - 0.5;
         let y = (1.0 - st.y) * self.height as f32 - 0.5;

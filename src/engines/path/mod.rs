@@ -472,7 +472,11 @@ impl PathTracer<'_> {
         // mirrors and glass; it does not light diffuse surfaces (as in the course program and
         // the other engines, which take light from the emitters only).
         let mut diffuse_bounce = false;
-        for vertex in 0..MAX_VERTICES {
+        // Scatterings so far: what `--max-depth` and roulette count. A boundary that changes
+        // nothing (index-matched, clear: Mitsuba's `null`) is crossed without counting, as
+        // Mitsuba's volumetric path tracer crosses it.
+        let mut depth = 0u32;
+        for _ in 0..MAX_VERTICES {
             if let Some(m) = medium {
                 let travel = ray.direction.normalize();
                 let t_surface = hit
@@ -482,7 +486,7 @@ impl PathTracer<'_> {
                 match m.sample_flight(t_surface, throughput, u, v) {
                     // A path at its depth limit takes no more scatterings (those that pass are
                     // weighed for the ones that would not have).
-                    Flight::Scattered { .. } if vertex >= self.max_depth => break,
+                    Flight::Scattered { .. } if depth >= self.max_depth => break,
                     Flight::Scattered { t, weight } => {
                         throughput *= weight;
                         let x = ray.origin + travel * t;
@@ -499,9 +503,10 @@ impl PathTracer<'_> {
                             in_medium: true,
                         };
                         diffuse_bounce = true;
-                        if !survives_roulette(vertex, &mut throughput, samples) {
+                        if !survives_roulette(depth, &mut throughput, samples) {
                             break;
                         }
+                        depth += 1;
                         ray = Ray::new(x, dir);
                         counts.secondary += 1;
                         samples.prepare();
@@ -531,7 +536,8 @@ impl PathTracer<'_> {
             let m = &self.scene.materials[s.material as usize];
             let (front, n) = s.facing(ray.direction);
             radiance += self.emission(&s, ray.direction, &previous, throughput);
-            if vertex >= self.max_depth {
+            let passes_through = m.is_index_matched();
+            if depth >= self.max_depth && !passes_through {
                 break;
             }
             let Some((lobe, weight)) = self.choose_lobe(&s, samples) else {
@@ -609,8 +615,11 @@ impl PathTracer<'_> {
                     };
                 }
             }
-            if !survives_roulette(vertex, &mut throughput, samples) {
-                break;
+            if !passes_through {
+                if !survives_roulette(depth, &mut throughput, samples) {
+                    break;
+                }
+                depth += 1;
             }
             ray = s.spawn_ray(dir);
             counts.secondary += 1;
@@ -652,12 +661,12 @@ fn sky_pdf(sky: &Sky, n: Vec3, towards: Vec3) -> f32 {
 /// at any vertex, as Mitsuba's does: all it could still bring is zero (on the Cornell box,
 /// a bounce off the red wall and then the blue one), and its random numbers are its own, so
 /// the image is the same without its rays.
-fn survives_roulette(vertex: u32, throughput: &mut Color, samples: &mut PathSamples) -> bool {
+fn survives_roulette(depth: u32, throughput: &mut Color, samples: &mut PathSamples) -> bool {
     let largest = throughput.max_element();
     if largest == 0.0 {
         return false;
     }
-    if vertex < ROULETTE_FROM {
+    if depth < ROULETTE_FROM {
         return true;
     }
     roulette(throughput, samples.next_1d())

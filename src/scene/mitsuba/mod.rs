@@ -32,7 +32,7 @@ use self::xml::{Plugin, Value};
 use super::camera::{Camera, Projection};
 use super::medium::Medium;
 use super::sky::{Sky, SkyMap};
-use super::{DeltaKind, DeltaLight, Material, Scene, SceneError, ShapePrim};
+use super::{DeltaKind, DeltaLight, Material, Scene, SceneError, ShapePrim, Texture};
 use crate::color::Color;
 use crate::geometry::{SphereShape, Vec2, Vec3};
 
@@ -642,18 +642,28 @@ impl Builder {
                         .file("filename")?
                         .ok_or_else(|| t.at.error("bitmap needs a filename"))?;
                     m.texture_file = Some(file);
-                    for name in ["filter_type", "wrap_mode", "format"] {
-                        let _ = t.string(name)?;
+                    m.texture_to_uv = to_uv(&t)?;
+                    if let Some((filter, _)) = t.string("filter_type")? {
+                        m.texture_nearest = filter == "nearest";
                     }
-                    let _ = t.boolean("raw", false)?;
-                    let _ = t.transform("to_uv")?;
+                    if let Some((wrap, at)) = t.string("wrap_mode")? {
+                        if wrap != "repeat" {
+                            self.warn(at, format!("wrap_mode \"{wrap}\": trilux repeats textures"));
+                        }
+                    }
+                    let _ = t.string("format")?;
+                    if t.boolean("raw", false)? {
+                        self.warn(&t.at, "raw: trilux decodes 8-bit textures from sRGB");
+                    }
                 }
                 "checkerboard" => {
                     let a = self.colour(&t, "color0", 0.4, SpectrumUse::Bounded)?;
                     let b = self.colour(&t, "color1", 0.2, SpectrumUse::Bounded)?;
-                    let _ = t.transform("to_uv")?;
                     m.diffuse = (a + b) * 0.5;
-                    self.warn(&t.at, "checkerboard is rendered as its mean colour");
+                    m.texture = Some(self.scene.textures.len());
+                    self.scene
+                        .textures
+                        .push(Texture::checkerboard(a, b, to_uv(&t)?));
                 }
                 other => {
                     return Err(t.at.error(format!(
@@ -867,6 +877,21 @@ impl Builder {
         };
         Ok(DeltaLight { kind, intensity })
     }
+}
+
+/// A texture's `to_uv` as trilux's textures take it: Mitsuba's 2D affine map (the upper
+/// left 3×3 of the 4×4 given, as Mitsuba extracts it) applied to Mitsuba's (u, v), whose v
+/// runs down the image, expressed on trilux's (s, t) = (u, 1 − v) on both sides.
+fn to_uv(t: &Plugin) -> Result<Option<[[f32; 3]; 2]>, SceneError> {
+    if t.property("to_uv").is_none() {
+        return Ok(None);
+    }
+    let m = t.transform("to_uv")?;
+    let a = |r: usize, c: usize| m.col(c)[r] as f32;
+    Ok(Some([
+        [a(0, 0), -a(0, 1), a(0, 1) + a(0, 2)],
+        [-a(1, 0), a(1, 1), 1.0 - a(1, 1) - a(1, 2)],
+    ]))
 }
 
 /// Marks a plugin and everything in it as read: for what a warning has already named as
