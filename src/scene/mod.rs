@@ -89,6 +89,7 @@ impl Material {
             && self.ior == 1.0
             && self.diffuse == Vec3::ZERO
             && self.reflective == Vec3::ZERO
+            && self.emitted == Vec3::ZERO
             && self.texture.is_none()
             && self.procedural.is_none()
     }

@@ -27,7 +27,7 @@ use crate::render::{render_pixel_batches, render_pixels, Counts, RenderStats};
 use crate::sampling::{LightSampling, PathSamples};
 use crate::scene::medium::{Flight, Medium};
 use crate::scene::sky::Sky;
-use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
+use crate::scene::{Color, Material, PrimRef, Scene, SurfaceHit};
 
 /// Vertices after which Russian roulette may end a path (0-based: the sixth vertex is the
 /// first it may end at). From the third, the Cornell box's relMSE at 64
@@ -48,6 +48,8 @@ const MAX_SURVIVAL: f32 = 0.999;
 /// samples of `render_pixels`, whose state no longer fits the caches) and 16 took 1.18×;
 /// with it, 128, 512 and 1024 were within 3% of 256.
 const WAVEFRONT_PATHS: usize = 256;
+/// Index-matched boundaries a shadow ray crosses at most (it is blocked after them).
+const MAX_CROSSINGS: u32 = 64;
 /// A hard bound on path length, far beyond what roulette lets through (reached with
 /// probability 0.999^20000 < 1e-8 even in a closed white room).
 const MAX_VERTICES: u32 = 20_000;
@@ -69,6 +71,10 @@ pub struct PathTracer<'a> {
     /// rectangles and spheres (the default): on the Cornell box about 0.6× the time a path
     /// for 1.5× the relMSE at equal paths, and no bound on a sample's weight near a light.
     by_area: bool,
+    /// The scene has index-matched boundaries (Mitsuba's `null`): shadow rays cross them,
+    /// taking each medium's transmittance on the way, as Mitsuba's volumetric path tracer's
+    /// do; elsewhere a surface in the way blocks a shadow ray.
+    crosses_boundaries: bool,
     /// The widest SIMD instructions this processor has (the wavefront's vertex kernel).
     arch: pulp::Arch,
 }
@@ -94,9 +100,12 @@ enum Lobe {
 
 /// A light sample before its shadow ray is traced: the ray, and the radiance the sample
 /// brings (weighted) if nothing blocks it.
-struct ShadowedSample {
+struct ShadowedSample<'m> {
     shadow_ray: Ray,
     radiance: Color,
+    /// The medium the ray starts in, where shadow rays cross boundaries (`crosses_boundaries`:
+    /// the radiance is then without its transmittance, which the crossing gives).
+    medium: Option<&'m Medium>,
 }
 
 /// What the previous vertex of a path tells the next: where it was and with what density the
@@ -130,6 +139,7 @@ impl PathTracer<'_> {
             cdf,
             max_depth: MAX_VERTICES,
             by_area: false,
+            crosses_boundaries: scene.materials.iter().any(Material::is_index_matched),
             arch: pulp::Arch::new(),
         }
     }
@@ -202,6 +212,28 @@ impl PathTracer<'_> {
         samples: &mut PathSamples,
         counts: &mut Counts,
     ) -> Color {
+        let from_lights = self.sample_area_light_in_medium(x, travel, medium, samples, counts);
+        let Some((sky, (u, v))) = self.scene.sky.as_ref().zip(self.draw_sky(samples)) else {
+            return from_lights;
+        };
+        let Some((dir, pdf)) = medium_sky_sample(sky, u, v) else {
+            return from_lights;
+        };
+        let phase = medium.phase(travel, dir);
+        let seen =
+            self.shadow_transmittance(&Ray::new(x, dir), f32::INFINITY, Some(medium), counts);
+        from_lights + sky.radiance(dir) * seen * (phase / pdf * power_heuristic(pdf, phase))
+    }
+
+    /// `sample_light_in_medium`'s light sample on the area lights.
+    fn sample_area_light_in_medium(
+        &self,
+        x: Vec3,
+        travel: Vec3,
+        medium: &Medium,
+        samples: &mut PathSamples,
+        counts: &mut Counts,
+    ) -> Color {
         let Some(k) = self.choose_light(samples) else {
             return Vec3::ZERO;
         };
@@ -214,12 +246,8 @@ impl PathTracer<'_> {
         let distance = to_light.length();
         let phase = medium.phase(travel, to_light / distance);
         let light_pdf = self.selection_probability(k) * d.pdf;
-        counts.shadow += 1;
-        if self.accel.occluded(&shadow_ray(x, d.point)) {
-            return Vec3::ZERO;
-        }
         light.emitted
-            * medium.transmittance(distance)
+            * self.shadow_transmittance(&shadow_ray(x, d.point), distance, Some(medium), counts)
             * (phase / light_pdf * power_heuristic(light_pdf, phase))
     }
 
@@ -246,6 +274,10 @@ impl PathTracer<'_> {
         let Some(sample) = sample else {
             return Vec3::ZERO;
         };
+        if self.crosses_boundaries {
+            return sample.radiance
+                * self.crossing_transmittance(&sample.shadow_ray, sample.medium, counts);
+        }
         counts.shadow += 1;
         if self.accel.occluded(&sample.shadow_ray) {
             return Vec3::ZERO;
@@ -258,14 +290,14 @@ impl PathTracer<'_> {
     /// per unit albedo (or reflectance) from one light sample, weighted against sampling the
     /// lobe by the power heuristic, if nothing blocks it (None: the sample brings nothing,
     /// and casts no ray).
-    fn light_sample(
+    fn light_sample<'m>(
         &self,
         s: &SurfaceHit,
         n: Vec3,
         lobe: Option<&GlossyLobe>,
-        medium: Option<&Medium>,
+        medium: Option<&'m Medium>,
         draw: Option<LightDraw>,
-    ) -> Option<ShadowedSample> {
+    ) -> Option<ShadowedSample<'m>> {
         let LightDraw { k, u, v } = draw?;
         let light = &self.lights[k];
         // By area with `--light-sampling random`; else by solid angle for rectangles and
@@ -292,11 +324,14 @@ impl PathTracer<'_> {
         }
         let mis = power_heuristic(light_pdf, bsdf_pdf);
         let origin = offset_ray_origin(s.point, n, s.error);
-        let transmittance =
-            medium.map_or(Vec3::ONE, |m| m.transmittance(s.point.distance(d.point)));
+        let transmittance = match medium {
+            Some(m) if !self.crosses_boundaries => m.transmittance(s.point.distance(d.point)),
+            _ => Vec3::ONE,
+        };
         Some(ShadowedSample {
             shadow_ray: shadow_ray(origin, d.point),
             radiance: light.emitted * transmittance * (value * mis / self.selection_probability(k)),
+            medium,
         })
     }
 
@@ -332,11 +367,8 @@ impl PathTracer<'_> {
         if pdf <= 0.0 || lobe_pdf <= 0.0 {
             return Vec3::ZERO;
         }
-        counts.shadow += 1;
-        if self.accel.occluded(&s.spawn_ray(dir)) {
-            return Vec3::ZERO;
-        }
-        let transmittance = medium.map_or(Vec3::ONE, |m| m.transmittance(f32::INFINITY));
+        let transmittance =
+            self.shadow_transmittance(&s.spawn_ray(dir), f32::INFINITY, medium, counts);
         sky.radiance(dir) * transmittance * (value * power_heuristic(pdf, lobe_pdf))
     }
 
@@ -367,18 +399,13 @@ impl PathTracer<'_> {
             if value <= 0.0 {
                 continue;
             }
-            counts.shadow += 1;
             let origin = offset_ray_origin(s.point, n, s.error);
             let ray = if distance.is_finite() {
                 shadow_ray(origin, s.point + dir * distance)
             } else {
                 Ray::new(origin, dir)
             };
-            if self.accel.occluded(&ray) {
-                continue;
-            }
-            let transmittance = medium.map_or(Vec3::ONE, |m| m.transmittance(distance));
-            sum += irradiance * transmittance * value;
+            sum += irradiance * value * self.shadow_transmittance(&ray, distance, medium, counts);
         }
         sum
     }
@@ -524,7 +551,8 @@ impl PathTracer<'_> {
                             Some(pdf) if !previous.in_medium => {
                                 power_heuristic(pdf, sky_pdf(sky, previous.normal, towards))
                             }
-                            _ => 1.0,
+                            Some(pdf) => power_heuristic(pdf, medium_sky_pdf(sky, towards)),
+                            None => 1.0,
                         };
                         radiance += throughput * sky.radiance(towards) * weight;
                     }
@@ -536,8 +564,21 @@ impl PathTracer<'_> {
             let m = &self.scene.materials[s.material as usize];
             let (front, n) = s.facing(ray.direction);
             radiance += self.emission(&s, ray.direction, &previous, throughput);
-            let passes_through = m.is_index_matched();
-            if depth >= self.max_depth && !passes_through {
+            // An index-matched boundary changes only the medium: the path goes on as it was
+            // (its previous vertex still the one whose density weighs what it meets next).
+            if m.is_index_matched() {
+                if ray.direction.dot(s.geometric_normal) < 0.0 {
+                    medium = self.scene.interior_medium(m);
+                } else {
+                    medium = fog;
+                }
+                ray = s.spawn_ray(ray.direction);
+                counts.secondary += 1;
+                samples.prepare();
+                hit = closest_surface(self.accel, self.scene, &ray);
+                continue;
+            }
+            if depth >= self.max_depth {
                 break;
             }
             let Some((lobe, weight)) = self.choose_lobe(&s, samples) else {
@@ -615,18 +656,75 @@ impl PathTracer<'_> {
                     };
                 }
             }
-            if !passes_through {
-                if !survives_roulette(depth, &mut throughput, samples) {
-                    break;
-                }
-                depth += 1;
+            if !survives_roulette(depth, &mut throughput, samples) {
+                break;
             }
+            depth += 1;
             ray = s.spawn_ray(dir);
             counts.secondary += 1;
             samples.prepare();
             hit = closest_surface(self.accel, self.scene, &ray);
         }
         radiance
+    }
+}
+
+impl PathTracer<'_> {
+    /// What a shadow ray lets through, starting in `medium` and `distance` long in the scene
+    /// (∞ to the sky): the medium's transmittance if nothing blocks it, 0 if something does;
+    /// across index-matched boundaries where the scene has them (`crossing_transmittance`).
+    fn shadow_transmittance(
+        &self,
+        ray: &Ray,
+        distance: f32,
+        medium: Option<&Medium>,
+        counts: &mut Counts,
+    ) -> Color {
+        if self.crosses_boundaries {
+            return self.crossing_transmittance(ray, medium, counts);
+        }
+        counts.shadow += 1;
+        if self.accel.occluded(ray) {
+            return Vec3::ZERO;
+        }
+        medium.map_or(Vec3::ONE, |m| m.transmittance(distance))
+    }
+
+    /// The transmittance along a shadow ray that starts in `medium`, crossing index-matched
+    /// boundaries (each into its material's interior medium from the front, out to the fog
+    /// from the back) and multiplying the media's transmittance over each stretch; 0 where
+    /// any other surface is in the way, or after `MAX_CROSSINGS` boundaries.
+    fn crossing_transmittance(
+        &self,
+        ray: &Ray,
+        medium: Option<&Medium>,
+        counts: &mut Counts,
+    ) -> Color {
+        let fog = self.scene.fog.map(|k| &self.scene.media[k]);
+        let mut medium = medium;
+        let scale = ray.direction.length();
+        let mut ray = *ray;
+        let mut transmittance = Vec3::ONE;
+        for _ in 0..MAX_CROSSINGS {
+            counts.shadow += 1;
+            let Some(hit) = closest_surface(self.accel, self.scene, &ray) else {
+                let rest = (ray.t_max - ray.t_min) * scale;
+                return transmittance * medium.map_or(Vec3::ONE, |m| m.transmittance(rest));
+            };
+            let m = &self.scene.materials[hit.material as usize];
+            if !m.is_index_matched() {
+                return Vec3::ZERO;
+            }
+            transmittance *= medium.map_or(Vec3::ONE, |md| md.transmittance(hit.t * scale));
+            medium = if ray.direction.dot(hit.geometric_normal) < 0.0 {
+                self.scene.interior_medium(m)
+            } else {
+                fog
+            };
+            let next = hit.spawn_ray(ray.direction);
+            ray = Ray::with_range(next.origin, ray.direction, 0.0, ray.t_max - hit.t);
+        }
+        Vec3::ZERO
     }
 }
 
@@ -644,6 +742,31 @@ fn sky_sample(sky: &Sky, n: Vec3, u: f32, v: f32) -> Option<(Vec3, f32)> {
     match sky.map() {
         Some(map) => map.sample(u, v),
         None => Some(diffuse_sample(n, u, v)),
+    }
+}
+
+/// A direction towards `sky` from a point in a medium, and its density: the map's importance
+/// for a map, uniform over the sphere for the smooth skies. None where a map is black.
+fn medium_sky_sample(sky: &Sky, u: f32, v: f32) -> Option<(Vec3, f32)> {
+    match sky.map() {
+        Some(map) => map.sample(u, v),
+        None => {
+            let z = 1.0 - 2.0 * u;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = std::f32::consts::TAU * v;
+            Some((
+                Vec3::new(r * phi.cos(), r * phi.sin(), z),
+                0.25 * std::f32::consts::FRAC_1_PI,
+            ))
+        }
+    }
+}
+
+/// The density with which `medium_sky_sample` picks the unit direction `towards`.
+fn medium_sky_pdf(sky: &Sky, towards: Vec3) -> f32 {
+    match sky.map() {
+        Some(map) => map.pdf(towards),
+        None => 0.25 * std::f32::consts::FRAC_1_PI,
     }
 }
 
