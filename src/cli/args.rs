@@ -72,7 +72,7 @@ pub struct CommonArgs {
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [rs().width, rs().height])]
     pub size: Vec<u32>,
     /// Lighting engine (default: photon when a photon flag is given, radiosity when a
-    /// radiosity flag is given, else raytrace).
+    /// radiosity flag is given, path for a Mitsuba scene, else raytrace).
     #[arg(long, value_enum)]
     pub engine: Option<EngineKind>,
     /// What to show instead of the rendered image: a radiosity mode (implies the radiosity
@@ -753,7 +753,18 @@ impl RenderArgs {
                 return owner;
             }
         }
-        EngineKind::Raytrace
+        // A Mitsuba scene is written for a path tracer: its integrator is one.
+        let mitsuba = self
+            .common
+            .input
+            .as_ref()
+            .and_then(|p| p.extension())
+            .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+        if mitsuba {
+            EngineKind::Path
+        } else {
+            EngineKind::Raytrace
+        }
     }
 
     /// Flags given that the chosen engine does not read, as the user would type them.

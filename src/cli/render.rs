@@ -237,6 +237,12 @@ fn refuse_unrendered_media(
     engine: EngineKind,
     scene: &Scene,
 ) -> Result<(), String> {
+    if !scene.delta_lights.is_empty() && !matches!(engine, EngineKind::Path | EngineKind::Raycast) {
+        return Err(format!(
+            "{}: the scene has lights without area (Mitsuba's point, spot or directional lights), which only the path tracer renders so far (--engine path); the {engine} engine would leave them out",
+            input.display()
+        ));
+    }
     let radiosity_indirect = args.ray_trace.indirect == engines::IndirectKind::Radiosity;
     let (media, sky) = (scene.has_media(), scene.sky.is_some());
     let refused = match engine {

@@ -1,0 +1,113 @@
+#!/usr/bin/env python3
+"""Mitsuba 3's render-test scenes rendered by Mitsuba 3 and by trilux, side by side.
+
+Usage: scripts/mitsuba_render_tests.py [RENDER] [--spp N] [--size S] [--repeats R]
+
+For each scene of ../shared/mitsuba-tests (both renderers reading the same XML), at equal
+samples per pixel: the wall time of each (median of R runs, the two interleaved), the relMSE
+of each against Mitsuba's reference image, and time × relMSE, ours over Mitsuba's. With
+--size S both render at S×S (trilux's -size, Mitsuba's film overridden), where the reference
+no longer applies and only the times are compared.
+
+Mitsuba runs as its users run it: variant llvm_ad_rgb at the host's own vector width
+(DRJIT_LIBLLVM_PATH is set to Debian's libLLVM.so.19 unless given), scalar_rgb where that
+cannot load. RENDER is trilux's binary (default target/release/render).
+"""
+
+import argparse
+import glob
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    parser = argparse.ArgumentParser()
+    parser.add_argument("render", nargs="?", default=os.path.join(here, "..", "target", "release", "render"))
+    parser.add_argument("--spp", type=int, default=256)
+    parser.add_argument("--size", type=int, default=None)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+
+    if not os.environ.get("DRJIT_LIBLLVM_PATH"):
+        for candidate in glob.glob("/usr/lib/x86_64-linux-gnu/libLLVM.so.19*") + glob.glob("/usr/lib/llvm-19/lib/libLLVM.so*"):
+            os.environ["DRJIT_LIBLLVM_PATH"] = candidate
+            break
+    import mitsuba as mi
+
+    variant = "llvm_ad_rgb"
+    try:
+        mi.set_variant(variant)
+    except Exception:
+        variant = "scalar_rgb"
+        mi.set_variant(variant)
+    cpu = subprocess.run(["sh", "-c", "grep -m1 'model name' /proc/cpuinfo | cut -d: -f2"], capture_output=True, text=True).stdout.strip()
+    width = "AVX-512 (16 lanes)" if "avx512f" in open("/proc/cpuinfo").read() else "AVX2 (8 lanes)"
+    print(f"# host: {cpu}, {width}; Mitsuba {mi.__version__} {variant}; {args.spp} spp" + (f", {args.size}x{args.size}" if args.size else ", the scenes' own film"))
+
+    root = os.path.join(here, "..", "..", "shared", "mitsuba-tests", "tests", "scenes")
+    scenes = sorted(glob.glob(os.path.join(root, "*", "test_*.xml")))
+    out = tempfile.mkdtemp()
+    print(f"{'scene':44} {'ours s':>8} {'Mitsuba s':>9} {'time x':>7} {'ours relMSE':>11} {'Mitsuba':>9} {'t*relMSE x':>10}")
+    ratios = []
+    for scene in scenes:
+        name = os.path.basename(scene)[:-4]
+        folder = os.path.dirname(scene)
+        ours_exr = os.path.join(out, name + ".exr")
+        ours_cmd = [args.render, "-input", scene, "--engine", "path", "-num_antialias_samples", str(args.spp), "-o", ours_exr, "--quiet"]
+        if args.size:
+            ours_cmd += ["-size", str(args.size), str(args.size)]
+        try:
+            params = {"res": args.size} if args.size else {}
+            mi_scene = mi.load_file(scene, **{k: v for k, v in params.items()})
+        except Exception as e:
+            print(f"{name:44} Mitsuba cannot load it: {str(e)[:60]}")
+            continue
+        if args.size:
+            film = mi.traverse(mi_scene)
+        ours_times, theirs_times = [], []
+        theirs_img = None
+        ok = True
+        for _ in range(args.repeats):
+            start = time.perf_counter()
+            done = subprocess.run(ours_cmd, capture_output=True, text=True)
+            ours_times.append(time.perf_counter() - start)
+            if done.returncode != 0:
+                print(f"{name:44} trilux refuses it: {done.stderr.strip().splitlines()[-1][:70]}")
+                ok = False
+                break
+            sensor = mi_scene.sensors()[0]
+            if args.size:
+                sensor = mi.load_dict({"type": "perspective", "to_world": sensor.world_transform(),
+                                       "fov": float(mi.traverse(sensor)["x_fov"][0]) if "x_fov" in mi.traverse(sensor) else 40.0,
+                                       "film": {"type": "hdrfilm", "width": args.size, "height": args.size, "rfilter": {"type": "box"}}})
+            start = time.perf_counter()
+            image = mi.render(mi_scene, sensor=sensor, spp=args.spp)
+            theirs_img = np.array(image)[..., :3]
+            theirs_times.append(time.perf_counter() - start)
+        if not ok:
+            continue
+        ours_t, theirs_t = statistics.median(ours_times), statistics.median(theirs_times)
+        stem = name.rsplit("_", 1)[0]
+        if args.size:
+            print(f"{name:44} {ours_t:8.3f} {theirs_t:9.3f} {ours_t / theirs_t:7.2f}")
+            ratios.append(ours_t / theirs_t)
+            continue
+        ref = np.array(mi.Bitmap(os.path.join(folder, "refs", stem + "_ref_rgb.exr")))[..., :3]
+        ours_img = np.array(mi.Bitmap(ours_exr))[..., :3]
+        relmse = lambda a: float(np.mean((a - ref) ** 2 / (ref ** 2 + 1e-2)))
+        ours_e, theirs_e = relmse(ours_img), relmse(theirs_img)
+        print(f"{name:44} {ours_t:8.3f} {theirs_t:9.3f} {ours_t / theirs_t:7.2f} {ours_e:11.2e} {theirs_e:9.2e} {ours_t * ours_e / (theirs_t * theirs_e):10.2f}")
+        ratios.append(ours_t / theirs_t)
+    if ratios:
+        print(f"# median time ratio, ours over Mitsuba's: {statistics.median(ratios):.2f} over {len(ratios)} scenes")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
