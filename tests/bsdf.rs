@@ -934,7 +934,7 @@ fn chi2_test(b: &Bsdf, wi: Vec3, n: usize, rng: &mut Rng) -> (f64, f64, String) 
         let u = rng.next_f32();
         let u2 = (rng.next_f32(), rng.next_f32());
         if let Some(s) = b.sample(wi, u, u2).filter(|s| !s.delta) {
-            if !(b.pdf(wi, s.wo) > 0.0) {
+            if b.pdf(wi, s.wo).is_nan() || b.pdf(wi, s.wo) <= 0.0 {
                 return (0.0, 0.0, format!("drew {} where pdf is 0", s.wo));
             }
             observed[bin_of(s.wo)] += 1

@@ -1635,7 +1635,7 @@ impl Principled {
             (wo, 1.0)
         };
         let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         Some(BsdfSample {
