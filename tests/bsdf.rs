@@ -1070,3 +1070,54 @@ fn sampling_matches_pdf_chi2() {
     }
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }
+
+#[test]
+fn one_sided_bsdfs_are_black_from_behind() {
+    let names = [
+        "diffuse",
+        "conductor_ggx",
+        "conductor_smooth",
+        "plastic_smooth",
+        "plastic_rough_ggx",
+        "principled_opaque",
+    ];
+    let mut rng = Rng::new(9, 9, 9);
+    for name in names {
+        let b = named(name);
+        assert!(!b.has_transmission(), "{name}");
+        for _ in 0..200 {
+            let front = dir(85.0 * rng.next_f32(), 6.0 * rng.next_f32());
+            let back = vec3(front.x, front.y, -front.z);
+            let other = dir(85.0 * rng.next_f32(), 6.0 * rng.next_f32());
+            assert!(
+                b.sample(back, rng.next_f32(), (0.3, 0.7)).is_none(),
+                "{name}"
+            );
+            assert_eq!(b.eval(back, other), Vec3::ZERO, "{name}");
+            assert_eq!(b.eval(other, back), Vec3::ZERO, "{name}");
+            assert_eq!(b.pdf(back, other), 0.0, "{name}");
+            assert_eq!(b.pdf(other, back), 0.0, "{name}");
+        }
+    }
+}
+
+#[test]
+fn diffuse_parts_and_flags() {
+    assert_eq!(named("diffuse").diffuse_part(), vec3(0.3, 0.6, 0.9));
+    assert_eq!(named("plastic_smooth").diffuse_part(), vec3(0.2, 0.5, 0.7));
+    assert_eq!(
+        named("principled_glass").diffuse_part(),
+        vec3(0.9, 0.7, 0.5)
+    );
+    assert_eq!(named("conductor_ggx").diffuse_part(), Vec3::ZERO);
+    assert_eq!(named("dielectric_ggx").diffuse_part(), Vec3::ZERO);
+    assert!(named("principled_glass").has_transmission());
+    assert!(!named("dielectric_ggx").is_delta());
+    // Radiance leaving glass of η = 1.5 for the air is divided by η² (its solid angle
+    // widens), radiance entering it multiplied by η².
+    let d = named("dielectric_smooth");
+    let (down, up) = (vec3(0.0, 0.0, -1.0), vec3(0.0, 0.0, 1.0));
+    assert!((d.radiance_scale(up, down) - 1.0 / 2.25).abs() < 1e-6);
+    assert!((d.radiance_scale(down, up) - 2.25).abs() < 1e-5);
+    assert_eq!(d.radiance_scale(up, up), 1.0);
+}
