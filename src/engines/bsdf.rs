@@ -704,8 +704,9 @@ impl Plastic {
 /// per distinct coat in the process (a scene's many plastics often share one; a
 /// Beckmann coat's tables take a few hundred milliseconds), the angles on rayon's threads.
 fn rough_coat_tables(kind: MicrofacetKind, alpha: f32, eta: f32) -> (f32, Vec<f32>) {
-    type Key = (bool, u32, u32);
-    static CACHE: OnceLock<Mutex<HashMap<Key, (f32, Vec<f32>)>>> = OnceLock::new();
+    // (GGX?, α's bits, η's bits) → (internal reflectance, transmittance table).
+    type Cache = Mutex<HashMap<(bool, u32, u32), (f32, Vec<f32>)>>;
+    static CACHE: OnceLock<Cache> = OnceLock::new();
     let key = (kind == MicrofacetKind::Ggx, alpha.to_bits(), eta.to_bits());
     let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
     if let Some(t) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
