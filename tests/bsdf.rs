@@ -1,14 +1,14 @@
-//! The Mitsuba 3 BSDFs of `engines::bsdf` against four checks that each fail on a wrong
+//! The Mitsuba 3 BSDFs of `scene::bsdf` against four checks that each fail on a wrong
 //! model: a white furnace (no BSDF returns more energy than it receives, and the lossless
 //! ones return all of it), a χ² test of `sample`'s directions against `pdf` (the density
 //! the path tracer's multiple importance sampling divides by), `sample`'s weight against
 //! `eval / pdf`, and values of `eval`, `pdf` and `sample` against Mitsuba 3's own.
 
-use trilux::engines::bsdf::{
-    fresnel_dielectric, Bsdf, BsdfSample, Microfacet, MicrofacetKind, Plastic, Principled,
-};
 use trilux::geometry::{vec3, Vec3};
 use trilux::sampling::Rng;
+use trilux::scene::bsdf::{
+    fresnel_dielectric, Bsdf, BsdfSample, Microfacet, MicrofacetKind, Plastic, Principled,
+};
 
 use MicrofacetKind::{Beckmann, Ggx};
 

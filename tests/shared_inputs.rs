@@ -304,12 +304,17 @@ fn reference_paths(solution: &Solution, total: f64) -> Vec<u32> {
 }
 
 /// Mitsuba 3's render tests that our path tracer passes today: each must keep passing.
-const MITSUBA_TESTS_PASSING: [&str; 4] = [
+const MITSUBA_TESTS_PASSING: [&str; 9] = [
+    "test_roughdielectric_path",
+    "test_roughplastic_linear_path",
+    "test_roughplastic_nonlinear_path",
     "test_textured_diffuse_path",
     "test_homo_area_light_volpath",
     "test_homo_dielectric_envmap_volpath",
     "test_homo_null_envmap_volpath",
-];
+    "test_homo_roughdielectric_spot_volpath",
+    "test_surf_area_light_volpath",
+]
 
 /// Scenes whose images differ between the Accels, each lit by an emitter made of an OBJ
 /// mesh whose faces are pairs of coplanar triangles. `test_arealight_path` differs in 7 of its

@@ -4,7 +4,6 @@
 //! no other engine; `compose` wires the two that combine them (the ray tracer with its
 //! `--indirect` light, the photon engine). `engine()` is the one registration point.
 
-pub mod bsdf;
 pub mod compose;
 pub mod engine;
 pub mod path;

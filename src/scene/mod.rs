@@ -1,6 +1,7 @@
 //! The scene: plain data (materials, primitives, camera, background) read from a course-dialect
 //! file or a standard OBJ/MTL file. Nothing here knows about any acceleration structure.
 
+pub mod bsdf;
 mod camera;
 mod dialect;
 mod error;
@@ -53,6 +54,12 @@ pub struct Material {
     pub procedural: Option<procedural::ProceduralTexture>,
     /// A bump map that tilts the shading normal (`bump_procedural`, `bump_file`).
     pub bump: Option<procedural::Bump>,
+    /// A Mitsuba BSDF the course's lobes above only approximate (`scene::bsdf`): the path
+    /// tracer scatters by it; the other engines by the approximation (default none).
+    pub bsdf: Option<bsdf::Bsdf>,
+    /// `bsdf` reflects on both sides (Mitsuba's `twosided`; default false: a one-sided
+    /// BSDF's back is black).
+    pub two_sided: bool,
     /// Line of the file where the material starts (0 for materials not from a file).
     pub line: u32,
 }
@@ -73,6 +80,8 @@ impl Default for Material {
             interior_medium: None,
             procedural: None,
             bump: None,
+            bsdf: None,
+            two_sided: false,
             line: 0,
         }
     }

@@ -18,13 +18,16 @@
 mod wavefront;
 
 use super::engine::{Budget, Engine, EngineKind, RenderSettings, Rendered};
-use super::scattering::{diffuse_sample, power_heuristic, reflect, Dielectric, GlossyLobe};
+use super::scattering::{
+    diffuse_sample, orthonormal_basis, power_heuristic, reflect, Dielectric, GlossyLobe,
+};
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
 use crate::render::lights::Light;
 use crate::render::{render_pixel_batches, render_pixels, Counts, RenderStats};
 use crate::sampling::{LightSampling, PathSamples};
+use crate::scene::bsdf::Bsdf;
 use crate::scene::medium::{Flight, Medium};
 use crate::scene::sky::Sky;
 use crate::scene::{Color, Material, PrimRef, Scene, SurfaceHit};
@@ -581,6 +584,45 @@ impl PathTracer<'_> {
             if depth >= self.max_depth {
                 break;
             }
+            if let Some(bsdf) = &m.bsdf {
+                let (light, scattered) = self.bsdf_vertex(
+                    &s,
+                    ray.direction,
+                    bsdf,
+                    m.two_sided,
+                    medium,
+                    samples,
+                    counts,
+                );
+                radiance += throughput * light;
+                let Some((dir, weight, pdf)) = scattered else {
+                    break;
+                };
+                throughput *= weight;
+                previous = Previous {
+                    point: s.point,
+                    normal: s.shading_normal,
+                    bsdf_pdf: pdf,
+                    in_medium: true,
+                };
+                diffuse_bounce = true;
+                if dir.dot(s.geometric_normal) * ray.direction.dot(s.geometric_normal) > 0.0 {
+                    medium = if front {
+                        self.scene.interior_medium(m)
+                    } else {
+                        fog
+                    };
+                }
+                if !survives_roulette(depth, &mut throughput, samples) {
+                    break;
+                }
+                depth += 1;
+                ray = s.spawn_ray(dir);
+                counts.secondary += 1;
+                samples.prepare();
+                hit = closest_surface(self.accel, self.scene, &ray);
+                continue;
+            }
             let Some((lobe, weight)) = self.choose_lobe(&s, samples) else {
                 break;
             };
@@ -670,6 +712,120 @@ impl PathTracer<'_> {
 }
 
 impl PathTracer<'_> {
+    /// A vertex at a surface of a Mitsuba BSDF, met by a ray travelling along `incoming` in
+    /// `medium`: the light it reflects from one sample of the area lights, one of the sky
+    /// and every light without area, each weighed against sampling the BSDF by the power
+    /// heuristic (the lights sampled as from a point in a medium, without the receiver's
+    /// cosine, since a BSDF may transmit), per unit throughput; and the direction the BSDF
+    /// samples next with the throughput's factor and its density (None for a delta lobe).
+    /// `two_sided`: the BSDF's front is the side the ray arrives on.
+    #[allow(clippy::too_many_arguments)]
+    fn bsdf_vertex(
+        &self,
+        s: &SurfaceHit,
+        incoming: Vec3,
+        bsdf: &Bsdf,
+        two_sided: bool,
+        medium: Option<&Medium>,
+        samples: &mut PathSamples,
+        counts: &mut Counts,
+    ) -> (Color, Option<(Vec3, Color, Option<f32>)>) {
+        let n = if two_sided && s.shading_normal.dot(incoming) > 0.0 {
+            -s.shading_normal
+        } else {
+            s.shading_normal
+        };
+        let (t, b) = orthonormal_basis(n);
+        let local = |v: Vec3| Vec3::new(v.dot(t), v.dot(b), v.dot(n));
+        let wi = local(-incoming);
+        // The medium on the side a direction leaves into: a transmitted direction is in the
+        // object's interior (from its front) or out in the fog (from its back).
+        let fog = self.scene.fog.map(|k| &self.scene.media[k]);
+        let front = s.geometric_normal.dot(incoming) < 0.0;
+        let m = &self.scene.materials[s.material as usize];
+        let medium_towards = |dir: Vec3| {
+            if dir.dot(s.geometric_normal) * incoming.dot(s.geometric_normal) > 0.0 {
+                if front {
+                    self.scene.interior_medium(m)
+                } else {
+                    fog
+                }
+            } else {
+                medium
+            }
+        };
+        let mut light = Vec3::ZERO;
+        if !bsdf.is_delta() {
+            if let Some(k) = self.choose_light(samples) {
+                let (u, v) = samples.next_2d();
+                let emitter = &self.lights[k];
+                if let Some(d) = emitter
+                    .sample_from_medium(s.point, u, v)
+                    .filter(|_| emitter.prim != s.prim)
+                {
+                    let to = d.point - s.point;
+                    let dir = to.normalize_or_zero();
+                    let wo = local(dir);
+                    let f = bsdf.eval(wi, wo);
+                    let light_pdf = self.selection_probability(k) * d.pdf;
+                    if f.max_element() > 0.0 && light_pdf > 0.0 {
+                        let mis = power_heuristic(light_pdf, bsdf.pdf(wi, wo));
+                        let origin = s.spawn_ray(dir).origin;
+                        let seen = self.shadow_transmittance(
+                            &shadow_ray(origin, d.point),
+                            to.length(),
+                            medium_towards(dir),
+                            counts,
+                        );
+                        light += emitter.emitted * f * seen * (mis / light_pdf);
+                    }
+                }
+            }
+            if let Some((sky, (u, v))) = self.scene.sky.as_ref().zip(self.draw_sky(samples)) {
+                if let Some((dir, pdf)) = medium_sky_sample(sky, u, v) {
+                    let wo = local(dir);
+                    let f = bsdf.eval(wi, wo);
+                    if f.max_element() > 0.0 {
+                        let mis = power_heuristic(pdf, bsdf.pdf(wi, wo));
+                        let seen = self.shadow_transmittance(
+                            &s.spawn_ray(dir),
+                            f32::INFINITY,
+                            medium_towards(dir),
+                            counts,
+                        );
+                        light += sky.radiance(dir) * f * seen * (mis / pdf);
+                    }
+                }
+            }
+            for delta in &self.scene.delta_lights {
+                let Some((dir, distance, irradiance)) = delta.towards(s.point) else {
+                    continue;
+                };
+                let f = bsdf.eval(wi, local(dir));
+                if f.max_element() <= 0.0 {
+                    continue;
+                }
+                let origin = s.spawn_ray(dir).origin;
+                let ray = if distance.is_finite() {
+                    shadow_ray(origin, s.point + dir * distance)
+                } else {
+                    Ray::new(origin, dir)
+                };
+                light += irradiance
+                    * f
+                    * self.shadow_transmittance(&ray, distance, medium_towards(dir), counts);
+            }
+        }
+        let u = samples.next_1d();
+        let u2 = samples.next_2d();
+        let scattered = bsdf.sample(wi, u, u2).and_then(|bs| {
+            let dir = (t * bs.wo.x + b * bs.wo.y + n * bs.wo.z).normalize_or_zero();
+            let usable = bs.weight.is_finite() && bs.weight.max_element() > 0.0;
+            usable.then_some((dir, bs.weight, (!bs.delta).then_some(bs.pdf)))
+        });
+        (light, scattered)
+    }
+
     /// What a shadow ray lets through, starting in `medium` and `distance` long in the scene
     /// (∞ to the sky): the medium's transmittance if nothing blocks it, 0 if something does;
     /// across index-matched boundaries where the scene has them (`crossing_transmittance`).

@@ -47,6 +47,7 @@ impl PathTracer<'_> {
                 m.reflective.max_element() <= 0.0
                     && m.transmitted.max_element() <= 0.0
                     && m.bump.is_none()
+                    && m.bsdf.is_none()
             })
     }
 

@@ -29,6 +29,7 @@ use glam::{DMat4, DVec3, Mat3};
 use self::meshes::Mesh;
 use self::spectrum::{spectrum_to_rgb, SpectrumUse};
 use self::xml::{Plugin, Value};
+use super::bsdf::{Bsdf, Microfacet, MicrofacetKind, Plastic, Principled};
 use super::camera::{Camera, Projection};
 use super::medium::Medium;
 use super::sky::{Sky, SkyMap};
@@ -474,8 +475,10 @@ impl Builder {
                 m
             }
             "twosided" => match inner(p) {
-                // trilux's triangles and spheres already reflect on both sides.
-                Some(b) => self.bsdf(&b)?,
+                Some(b) => Material {
+                    two_sided: true,
+                    ..self.bsdf(&b)?
+                },
                 None => return Err(p.at.error("twosided needs a nested bsdf")),
             },
             "mask" | "bumpmap" | "normalmap" => {
@@ -501,102 +504,147 @@ impl Builder {
                 ..Material::default()
             },
             "dielectric" | "roughdielectric" | "thindielectric" => {
-                let eta = self.ior(p, "int_ior", "bk7")? / self.ior(p, "ext_ior", "air")?;
-                let transmitted = self.colour(p, "specular_transmittance", 1.0, SpectrumUse::Bounded)?;
-                let _ = self.colour(p, "specular_reflectance", 1.0, SpectrumUse::Bounded)?;
-                if p.kind == "roughdielectric" {
-                    let _ = p.string("distribution")?;
-                    let _ = p.float("alpha", 0.1)?;
-                    self.warn(&p.at, "roughdielectric is rendered as a smooth dielectric");
-                }
-                let ior = if p.kind == "thindielectric" {
-                    self.warn(
-                        &p.at,
-                        "thindielectric is rendered as a boundary light passes straight through (its reflection is left out)",
-                    );
-                    1.0
-                } else {
-                    eta as f32
+                let eta = (self.ior(p, "int_ior", "bk7")? / self.ior(p, "ext_ior", "air")?) as f32;
+                let transmittance =
+                    self.colour(p, "specular_transmittance", 1.0, SpectrumUse::Bounded)?;
+                let reflectance = self.colour(p, "specular_reflectance", 1.0, SpectrumUse::Bounded)?;
+                let distribution = self.distribution(p)?;
+                let bsdf = match p.kind.as_str() {
+                    "thindielectric" => Some(Bsdf::ThinDielectric {
+                        eta,
+                        reflectance,
+                        transmittance,
+                    }),
+                    "roughdielectric" => Some(Bsdf::Dielectric {
+                        eta,
+                        reflectance,
+                        transmittance,
+                        distribution,
+                    }),
+                    // The course's glass is exact when both factors are one.
+                    _ if reflectance == Color::ONE => None,
+                    _ => Some(Bsdf::Dielectric {
+                        eta,
+                        reflectance,
+                        transmittance,
+                        distribution: None,
+                    }),
                 };
+                self.approximated(p, bsdf.is_some(), "smooth glass");
                 Material {
-                    transmitted,
-                    ior,
+                    transmitted: transmittance,
+                    // A thin sheet does not bend light: the other engines pass through it.
+                    ior: if p.kind == "thindielectric" { 1.0 } else { eta },
+                    bsdf,
                     line,
                     ..Material::default()
                 }
             }
             "conductor" | "roughconductor" => {
-                let reflectance = self.colour(p, "specular_reflectance", 1.0, SpectrumUse::Bounded)?;
+                let specular = self.colour(p, "specular_reflectance", 1.0, SpectrumUse::Bounded)?;
                 let name = p.string("material")?.map(|(m, at)| (m.to_string(), at.clone()));
                 let given = p.property("eta").is_some() || p.property("k").is_some();
-                let fresnel = if given {
-                    let eta = self.colour(p, "eta", 0.0, SpectrumUse::Unbounded)?;
-                    let k = self.colour(p, "k", 1.0, SpectrumUse::Unbounded)?;
-                    conductor_reflectance(eta, k)
+                let (eta, k) = if given {
+                    (
+                        self.colour(p, "eta", 0.0, SpectrumUse::Unbounded)?,
+                        self.colour(p, "k", 1.0, SpectrumUse::Unbounded)?,
+                    )
                 } else {
                     match name {
-                        None => Color::ONE,
-                        Some((m, _)) if m == "none" => Color::ONE,
-                        Some((m, at)) => {
-                            let (eta, k) = spectrum::named_conductor(&m).ok_or_else(|| {
-                                at.error(format!(
-                                    "conductor material \"{m}\" is unknown: expected none or one of {}",
-                                    spectrum::conductor_names()
-                                ))
-                            })?;
-                            conductor_reflectance(eta, k)
-                        }
+                        None => (Color::ZERO, Color::ONE),
+                        Some((m, _)) if m == "none" => (Color::ZERO, Color::ONE),
+                        Some((m, at)) => spectrum::named_conductor(&m).ok_or_else(|| {
+                            at.error(format!(
+                                "conductor material \"{m}\" is unknown: expected none or one of {}",
+                                spectrum::conductor_names()
+                            ))
+                        })?,
                     }
                 };
-                let roughness = self.roughness(p)?;
-                self.warn(
-                    &p.at,
-                    format!("{} is approximated: Fresnel reflectance at normal incidence{}", p.kind,
-                        if roughness > 0.0 { ", a Phong lobe of the same width" } else { "" }),
-                );
+                let distribution = self.distribution(p)?;
+                self.approximated(p, true, "a mirror of the Fresnel reflectance at normal incidence, a glossy lobe if rough");
                 Material {
-                    reflective: reflectance * fresnel,
-                    roughness,
+                    reflective: specular * conductor_reflectance(eta, k),
+                    roughness: distribution.map_or(0.0, |d| {
+                        let (u, v) = d.alpha();
+                        0.5 * (u + v)
+                    }),
+                    bsdf: Some(Bsdf::Conductor {
+                        eta,
+                        k,
+                        specular,
+                        distribution,
+                    }),
                     line,
                     ..Material::default()
                 }
             }
             "plastic" | "roughplastic" => {
-                let eta = self.ior(p, "int_ior", "polypropylene")? / self.ior(p, "ext_ior", "air")?;
-                let f0 = (((eta - 1.0) / (eta + 1.0)).powi(2)) as f32;
+                let eta = (self.ior(p, "int_ior", "polypropylene")? / self.ior(p, "ext_ior", "air")?) as f32;
+                let f0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
                 let specular = self.colour(p, "specular_reflectance", 1.0, SpectrumUse::Bounded)?;
-                let _ = p.boolean("nonlinear", false)?;
+                let nonlinear = p.boolean("nonlinear", false)?;
+                let distribution = self.distribution(p)?;
                 let mut m = Material {
                     reflective: specular * f0,
-                    roughness: self.roughness(p)?,
+                    roughness: distribution.map_or(0.0, |d| d.alpha().0),
                     line,
                     ..Material::default()
                 };
                 self.reflectance(p, "diffuse_reflectance", 0.5, &mut m)?;
+                let base = m.diffuse;
                 m.diffuse *= 1.0 - f0;
-                self.warn(
-                    &p.at,
-                    format!("{} is approximated: a Lambertian base under a constant specular layer", p.kind),
-                );
+                m.bsdf = Some(Bsdf::Plastic(Plastic::new(base, specular, eta, nonlinear, distribution)));
+                if m.texture.is_some() || m.texture_file.is_some() {
+                    self.warn(&p.at, format!("{}: a textured diffuse_reflectance is taken at its mean by the path tracer", p.kind));
+                }
+                self.approximated(p, true, "a Lambertian base under a constant specular layer");
                 m
             }
-            "principled" | "principledthin" => {
+            "principled" => {
                 let mut m = Material {
                     line,
                     ..Material::default()
                 };
                 self.reflectance(p, "base_color", 0.5, &mut m)?;
-                let metallic = p.float("metallic", 0.0).unwrap_or(0.0) as f32;
-                let roughness = p.float("roughness", 0.5).unwrap_or(0.5) as f32;
-                for t in p.children_tagged("texture") {
-                    mark_all_used(&t.plugin);
-                }
+                let scalar = |this: &mut Self, name: &str, default: f64| this.scalar(p, name, default);
+                let principled = Principled {
+                    base_color: m.diffuse,
+                    roughness: scalar(self, "roughness", 0.5)?,
+                    anisotropic: scalar(self, "anisotropic", 0.0)?,
+                    metallic: scalar(self, "metallic", 0.0)?,
+                    spec_trans: scalar(self, "spec_trans", 0.0)?,
+                    specular: scalar(self, "specular", 0.5)?,
+                    eta: match p.property("eta") {
+                        Some(_) => Some(p.float("eta", 1.5)? as f32),
+                        None => None,
+                    },
+                    spec_tint: scalar(self, "spec_tint", 0.0)?,
+                    sheen: scalar(self, "sheen", 0.0)?,
+                    sheen_tint: scalar(self, "sheen_tint", 0.0)?,
+                    flatness: scalar(self, "flatness", 0.0)?,
+                    clearcoat: scalar(self, "clearcoat", 0.0)?,
+                    clearcoat_gloss: scalar(self, "clearcoat_gloss", 0.0)?,
+                    ..Principled::default()
+                };
+                let metallic = principled.metallic;
                 m.reflective = m.diffuse * metallic + Color::splat(0.04 * (1.0 - metallic));
                 m.diffuse *= 1.0 - metallic;
-                m.roughness = roughness * roughness;
+                m.roughness = principled.roughness * principled.roughness;
+                m.bsdf = Some(Bsdf::Principled(principled));
+                self.approximated(p, true, "a Lambertian base and a glossy lobe");
+                m
+            }
+            "principledthin" => {
+                let mut m = Material {
+                    line,
+                    ..Material::default()
+                };
+                self.reflectance(p, "base_color", 0.5, &mut m)?;
+                mark_all_used(p);
                 self.warn(
                     &p.at,
-                    format!("{} is approximated: a Lambertian base and a Phong lobe", p.kind),
+                    "principledthin is approximated in every engine: a Lambertian base",
                 );
                 m
             }
@@ -609,20 +657,80 @@ impl Builder {
         Ok(material)
     }
 
-    /// A microfacet BSDF's roughness (`alpha`, or the mean of `alpha_u` and `alpha_v`); 0
-    /// for the smooth kinds.
-    fn roughness(&mut self, p: &Plugin) -> Result<f32, SceneError> {
+    /// A rough BSDF's microfacet distribution (`distribution` beckmann or ggx, `alpha` or
+    /// `alpha_u` and `alpha_v`, `sample_visible`; Mitsuba's defaults beckmann, 0.1, true);
+    /// None for the smooth kinds.
+    fn distribution(&mut self, p: &Plugin) -> Result<Option<Microfacet>, SceneError> {
         if !p.kind.starts_with("rough") {
-            return Ok(0.0);
+            return Ok(None);
         }
-        let _ = p.string("distribution")?;
-        let _ = p.boolean("sample_visible", true)?;
-        let alpha = if p.property("alpha_u").is_some() {
-            0.5 * (p.float("alpha_u", 0.1)? + p.float("alpha_v", 0.1)?)
-        } else {
-            p.float("alpha", 0.1)?
+        let kind = match p.string("distribution")? {
+            None => MicrofacetKind::Beckmann,
+            Some(("beckmann", _)) => MicrofacetKind::Beckmann,
+            Some(("ggx", _)) => MicrofacetKind::Ggx,
+            Some((other, at)) => {
+                return Err(at.error(format!(
+                    "distribution \"{other}\": expected beckmann or ggx"
+                )))
+            }
         };
-        Ok(alpha.max(0.0) as f32)
+        let visible = p.boolean("sample_visible", true)?;
+        let anisotropic = p.property("alpha_u").is_some() || p.child_named("alpha_u").is_some();
+        let (au, av) = if anisotropic {
+            (
+                self.scalar(p, "alpha_u", 0.1)?,
+                self.scalar(p, "alpha_v", 0.1)?,
+            )
+        } else {
+            let a = self.scalar(p, "alpha", 0.1)?;
+            (a, a)
+        };
+        if !(au > 0.0 && av > 0.0 && au.is_finite() && av.is_finite()) {
+            return Err(p
+                .at
+                .error(format!("alpha {au} {av}: expected finite and > 0")));
+        }
+        Ok(Some(Microfacet::new(kind, au, av, visible)))
+    }
+
+    /// A number that may be given as a `float` or as a texture: a `checkerboard`'s is taken
+    /// at the mean of its two values, with a warning.
+    fn scalar(&mut self, p: &Plugin, name: &str, default: f64) -> Result<f32, SceneError> {
+        let Some(t) = p.child_named(name).cloned() else {
+            return Ok(p.float(name, default)? as f32);
+        };
+        t.mark_used();
+        if t.kind != "checkerboard" {
+            return Err(t.at.error(format!(
+                "a {} texture for \"{name}\" is not supported: give a number or a checkerboard",
+                t.kind
+            )));
+        }
+        let a = t.float("color0", 0.4)?;
+        let b = t.float("color1", 0.2)?;
+        let _ = t.transform("to_uv")?;
+        self.warn(
+            &t.at,
+            format!(
+                "a checkerboard for \"{name}\" is taken at its mean, {}",
+                0.5 * (a + b)
+            ),
+        );
+        Ok((0.5 * (a + b)) as f32)
+    }
+
+    /// Warns that `p` is approximated: in the other engines when the path tracer has its
+    /// exact BSDF (`exact_in_path`), else everywhere.
+    fn approximated(&mut self, p: &Plugin, exact_in_path: bool, how: &str) {
+        let message = if exact_in_path {
+            format!(
+                "{}: the path tracer renders it exactly; the other engines approximate it as {how}",
+                p.kind
+            )
+        } else {
+            return;
+        };
+        self.warn(&p.at, message);
     }
 
     /// A reflectance given as a colour, or as a `bitmap` texture (read through the scene's
