@@ -314,7 +314,7 @@ const MITSUBA_TESTS_PASSING: [&str; 9] = [
     "test_homo_null_envmap_volpath",
     "test_homo_roughdielectric_spot_volpath",
     "test_surf_area_light_volpath",
-]
+];
 
 /// Scenes whose images differ between the Accels, each lit by an emitter made of an OBJ
 /// mesh whose faces are pairs of coplanar triangles. `test_arealight_path` differs in 7 of its

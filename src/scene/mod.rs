@@ -2,6 +2,7 @@
 //! file or a standard OBJ/MTL file. Nothing here knows about any acceleration structure.
 
 pub mod bsdf;
+pub mod bsdf_texture;
 mod camera;
 mod dialect;
 mod error;
@@ -60,6 +61,8 @@ pub struct Material {
     /// `bsdf` reflects on both sides (Mitsuba's `twosided`; default false: a one-sided
     /// BSDF's back is black).
     pub two_sided: bool,
+    /// `bsdf`'s parameters that textures give (default none).
+    pub bsdf_textures: Vec<bsdf_texture::TexturedParameter>,
     /// Line of the file where the material starts (0 for materials not from a file).
     pub line: u32,
 }
@@ -82,6 +85,7 @@ impl Default for Material {
             bump: None,
             bsdf: None,
             two_sided: false,
+            bsdf_textures: Vec::new(),
             line: 0,
         }
     }

@@ -199,6 +199,23 @@ impl Scene {
         }
     }
 
+    /// The direction in which the texture's first coordinate grows at a hit, ∂p/∂u (not
+    /// unit): on triangles with texture coordinates, where they are not degenerate; None
+    /// elsewhere. What an anisotropic BSDF's frame is aligned with, as in Mitsuba.
+    pub fn tangent(&self, hit: &SurfaceHit) -> Option<Vec3> {
+        let mesh = &self.triangles;
+        if hit.prim.kind != PrimKind::Triangle || mesh.tex_coords.is_empty() {
+            return None;
+        }
+        let i = hit.prim.index as usize;
+        let [p0, p1, p2] = mesh.vertices(i);
+        let [t0, t1, t2] = mesh.indices[i].map(|k| mesh.tex_coords[k as usize]);
+        let (du1, du2) = (t1 - t0, t2 - t0);
+        let det = du1.x * du2.y - du1.y * du2.x;
+        let dpdu = ((p1 - p0) * du2.y - (p2 - p0) * du1.y) / det;
+        (det != 0.0 && dpdu.is_finite() && dpdu != Vec3::ZERO).then_some(dpdu)
+    }
+
     /// The texture coordinates at a hit: interpolated from the primitive's `vt` where it has
     /// them, else its parameters.
     pub fn tex_coords(&self, hit: &SurfaceHit) -> Vec2 {

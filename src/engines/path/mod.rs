@@ -730,14 +730,30 @@ impl PathTracer<'_> {
         samples: &mut PathSamples,
         counts: &mut Counts,
     ) -> (Color, Option<(Vec3, Color, Option<f32>)>) {
-        let n = if two_sided && s.shading_normal.dot(incoming) > 0.0 {
-            -s.shading_normal
-        } else {
-            s.shading_normal
+        // Mitsuba's shading frame: the normal, its first tangent along ∂p/∂u where the
+        // surface has texture coordinates (an anisotropic BSDF is aligned with them). A
+        // two-sided BSDF seen from behind is the frame mirrored through the tangent plane.
+        let n = s.shading_normal;
+        let (t, b) = match self.scene.tangent(s) {
+            Some(dpdu) => {
+                let t = (dpdu - n * n.dot(dpdu)).normalize_or_zero();
+                if t == Vec3::ZERO {
+                    orthonormal_basis(n)
+                } else {
+                    (t, n.cross(t))
+                }
+            }
+            None => orthonormal_basis(n),
         };
-        let (t, b) = orthonormal_basis(n);
+        let n = if two_sided && n.dot(incoming) > 0.0 {
+            -n
+        } else {
+            n
+        };
         let local = |v: Vec3| Vec3::new(v.dot(t), v.dot(b), v.dot(n));
         let wi = local(-incoming);
+        let textured = self.scene.textured_bsdf(s, bsdf);
+        let bsdf = textured.as_ref().unwrap_or(bsdf);
         // The medium on the side a direction leaves into: a transmitted direction is in the
         // object's interior (from its front) or out in the fog (from its back).
         let fog = self.scene.fog.map(|k| &self.scene.media[k]);

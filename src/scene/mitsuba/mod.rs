@@ -30,6 +30,7 @@ use self::meshes::Mesh;
 use self::spectrum::{spectrum_to_rgb, SpectrumUse};
 use self::xml::{Plugin, Value};
 use super::bsdf::{Bsdf, Microfacet, MicrofacetKind, Plastic, Principled};
+use super::bsdf_texture::{BsdfParameter, TexturedParameter};
 use super::camera::{Camera, Projection};
 use super::medium::Medium;
 use super::sky::{Sky, SkyMap};
@@ -51,6 +52,7 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneErr
         },
         materials: HashMap::new(),
         media: HashMap::new(),
+        bsdf_textures: Vec::new(),
     };
     for child in &root.children {
         let plugin = &child.plugin;
@@ -83,6 +85,9 @@ struct Builder {
     materials: HashMap<*const Plugin, u32>,
     /// The medium made of each medium plugin.
     media: HashMap<*const Plugin, usize>,
+    /// The textured parameters of the BSDF being made (`scalar` adds to them; `bsdf` gives
+    /// them to its material).
+    bsdf_textures: Vec<TexturedParameter>,
 }
 
 impl Builder {
@@ -462,6 +467,15 @@ impl Builder {
     /// A BSDF as a material. Lambertian reflection, smooth dielectrics and `null` are exact;
     /// the others are approximated by the course's lobes, with a warning that says how.
     fn bsdf(&mut self, p: &Plugin) -> Result<Material, SceneError> {
+        let mut material = self.bsdf_alone(p)?;
+        material
+            .bsdf_textures
+            .extend(std::mem::take(&mut self.bsdf_textures));
+        Ok(material)
+    }
+
+    /// `bsdf`, its textured parameters left in `self.bsdf_textures`.
+    fn bsdf_alone(&mut self, p: &Plugin) -> Result<Material, SceneError> {
         p.mark_used();
         let inner = |p: &Plugin| p.children_tagged("bsdf").next().map(|c| c.plugin.clone());
         let line = p.at.line;
@@ -706,17 +720,28 @@ impl Builder {
                 t.kind
             )));
         }
-        let a = t.float("color0", 0.4)?;
-        let b = t.float("color1", 0.2)?;
-        let _ = t.transform("to_uv")?;
+        let a = t.float("color0", 0.4)? as f32;
+        let b = t.float("color1", 0.2)? as f32;
+        let parameter = BsdfParameter::named(name).ok_or_else(|| {
+            t.at.error(format!("\"{name}\" cannot be given by a texture"))
+        })?;
+        self.bsdf_textures.push(TexturedParameter {
+            parameter,
+            texture: self.scene.textures.len(),
+        });
+        self.scene.textures.push(Texture::checkerboard(
+            Color::splat(a),
+            Color::splat(b),
+            to_uv(&t)?,
+        ));
         self.warn(
             &t.at,
             format!(
-                "a checkerboard for \"{name}\" is taken at its mean, {}",
+                "a checkerboard for \"{name}\": the engines but the path tracer take its mean, {}",
                 0.5 * (a + b)
             ),
         );
-        Ok((0.5 * (a + b)) as f32)
+        Ok(0.5 * (a + b))
     }
 
     /// Warns that `p` is approximated: in the other engines when the path tracer has its
