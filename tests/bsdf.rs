@@ -566,7 +566,7 @@ fn furnaces() -> Vec<Furnace> {
         f(
             "conductor GGX 0.05",
             white_conductor(mf(Ggx, 0.05, 0.05, true)),
-            Some(65.0),
+            Some(35.0),
             false,
         ),
         f(
