@@ -1121,3 +1121,61 @@ fn diffuse_parts_and_flags() {
     assert!((d.radiance_scale(down, up) - 2.25).abs() < 1e-5);
     assert_eq!(d.radiance_scale(up, up), 1.0);
 }
+
+#[test]
+fn values_are_finite_and_non_negative_at_degenerate_directions() {
+    let names = [
+        "diffuse",
+        "conductor_ggx",
+        "conductor_beckmann_aniso_plain",
+        "conductor_smooth",
+        "dielectric_ggx",
+        "dielectric_beckmann_plain",
+        "dielectric_smooth",
+        "thin",
+        "plastic_smooth",
+        "plastic_rough_ggx",
+        "principled_opaque",
+        "principled_glass",
+    ];
+    let z = vec3(0.0, 0.0, 1.0);
+    let grazing = vec3(1.0, 0.0, 0.0);
+    let a = dir(40.0, 1.0);
+    let dirs = [
+        z,
+        -z,
+        grazing,
+        -grazing,
+        a,
+        -a,
+        vec3(-a.x, -a.y, a.z),
+        vec3(a.x, a.y, -a.z),
+        dir(89.99, 0.3),
+        dir(0.001, 0.3),
+    ];
+    let mut rng = Rng::new(2, 7, 1);
+    for name in names {
+        let b = named(name);
+        for &wi in &dirs {
+            for &wo in &dirs {
+                let (e, p) = (b.eval(wi, wo), b.pdf(wi, wo));
+                assert!(
+                    e.is_finite() && e.min_element() >= 0.0,
+                    "{name} {wi} {wo}: {e}"
+                );
+                assert!(p.is_finite() && p >= 0.0, "{name} {wi} {wo}: {p}");
+            }
+            for _ in 0..500 {
+                let u2 = (rng.next_f32(), rng.next_f32());
+                if let Some(s) = b.sample(wi, rng.next_f32(), u2) {
+                    assert!(
+                        s.weight.is_finite() && s.weight.min_element() >= 0.0,
+                        "{name} {wi}: {s:?}"
+                    );
+                    assert!(s.pdf.is_finite() && s.pdf > 0.0, "{name} {wi}: {s:?}");
+                    assert!((s.wo.length() - 1.0).abs() < 1e-4, "{name} {wi}: {s:?}");
+                }
+            }
+        }
+    }
+}
