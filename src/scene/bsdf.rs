@@ -1,10 +1,10 @@
 //! Mitsuba 3's BSDFs, so that scenes read from Mitsuba XML render like Mitsuba's reference
 //! images: `diffuse`, `conductor`/`roughconductor`, `dielectric`/`roughdielectric`,
-//! `thindielectric` and `plastic`/`roughplastic`, with the GGX and Beckmann microfacet
-//! distributions (Smith's separable shadowing, visible-normal or plain normal sampling).
-//! The models, their Fresnel terms, their choice probabilities between lobes and their
-//! sample weights follow Mitsuba 3's RGB variants in radiance transport; the course's lobes
-//! stay in `scattering`.
+//! `thindielectric`, `plastic`/`roughplastic` and `principled`, with the GGX and Beckmann
+//! microfacet distributions (Smith's separable shadowing, visible-normal or plain normal
+//! sampling). The models, their Fresnel terms, their choice probabilities between lobes
+//! and their sample weights follow Mitsuba 3's RGB variants in radiance transport; the
+//! course's lobes stay in `scattering`.
 //!
 //! Everything here lives in the local shading frame: z is the shading normal, `wi` points
 //! towards where the light goes (the viewer, the previous vertex of a camera path) and `wo`
@@ -13,9 +13,26 @@
 //! `eval` returns f(wi, wo)·|cos θo| (the cosine included, as Mitsuba does), `pdf` the
 //! solid-angle density with which `sample` picks `wo` among its non-delta lobes.
 //!
-//! Sides: every BSDF but the dielectrics is one-sided, black when wi.z ≤ 0 or wo.z ≤ 0
-//! (Mitsuba's convention; a `twosided` material flips the frame before calling). The
-//! dielectrics take both sides, the relative index inverted from the inside.
+//! Sides: every BSDF but the dielectrics (and `principled` with `spec_trans`) is
+//! one-sided, black when wi.z ≤ 0 or wo.z ≤ 0 (Mitsuba's convention; a `twosided`
+//! material flips the frame before calling). The dielectrics take both sides, the relative
+//! index inverted from the inside.
+//!
+//! Where this differs from Mitsuba, on purpose:
+//! - `sample` returns None for a draw Mitsuba returns with a zero weight (a microfacet
+//!   reflection below the horizon, a normal facing away), so that every direction it
+//!   returns has `pdf` > 0.
+//! - `roughdielectric` with plain normal sampling draws normals from a widened roughness
+//!   (Walter et al.'s trick, as Mitsuba); its weight here is eval/pdf, whereas Mitsuba's
+//!   omits the widening (its weights average a few percent off at grazing incidence).
+//! - Beckmann's visible normals are drawn with our erf and Giles' inverse erf: directions
+//!   agree with Mitsuba's within 1e-3 (what the tests ask), not bit for bit.
+//!
+//! And where Mitsuba's model is kept although it is approximate: Beckmann's Smith G1 is
+//! its rational fit (below 0.35% off, so its visible-normal density integrates to 1 within
+//! that), and `principled`'s `pdf` takes the lobe probabilities from the Fresnel term at
+//! the half vector while `sample` chose them with the sampled normal's (exact without
+//! `spec_trans`, close with it).
 
 use crate::color::Color;
 use crate::geometry::{vec3, Vec3};
