@@ -304,11 +304,15 @@ fn reference_paths(solution: &Solution, total: f64) -> Vec<u32> {
 }
 
 /// Mitsuba 3's render tests that our path tracer passes today: each must keep passing.
-const MITSUBA_TESTS_PASSING: [&str; 9] = [
+const MITSUBA_TESTS_PASSING: [&str; 13] = [
+    "test_normalmap_identity_roughconductor_path",
     "test_roughdielectric_path",
     "test_roughplastic_linear_path",
     "test_roughplastic_nonlinear_path",
     "test_textured_diffuse_path",
+    "test_textured_roughconductor_path",
+    "test_texturedprincipled1_path",
+    "test_texturedprincipled2_path",
     "test_homo_area_light_volpath",
     "test_homo_dielectric_envmap_volpath",
     "test_homo_null_envmap_volpath",

@@ -729,9 +729,11 @@ impl Builder {
             parameter,
             texture: self.scene.textures.len(),
         });
+        // Mitsuba's checkerboard gives a number (`eval_1`) on the other squares than a
+        // colour (`eval`): `color0` where the two halves differ. Its references are made so.
         self.scene.textures.push(Texture::checkerboard(
-            Color::splat(a),
             Color::splat(b),
+            Color::splat(a),
             to_uv(&t)?,
         ));
         self.warn(
