@@ -99,11 +99,12 @@ pub struct TexturedParameter {
 }
 
 impl Scene {
-    /// The material's BSDF at `hit` with its textured parameters read there, and a
-    /// principled BSDF's textured base colour; None where nothing of it is textured.
+    /// The material's BSDF at `hit` with its textured parameters read there, and a textured
+    /// diffuse reflectance or principled base colour; None where nothing of it is textured.
     pub fn textured_bsdf(&self, hit: &SurfaceHit, bsdf: &Bsdf) -> Option<Bsdf> {
         let m = &self.materials[hit.material as usize];
-        let base_textured = matches!(bsdf, Bsdf::Principled(_)) && m.texture.is_some();
+        let base_textured =
+            matches!(bsdf, Bsdf::Principled(_) | Bsdf::Diffuse { .. }) && m.texture.is_some();
         if m.bsdf_textures.is_empty() && !base_textured {
             return None;
         }
@@ -113,8 +114,12 @@ impl Scene {
             p.parameter
                 .set(&mut textured, self.textures[p.texture].lookup(st).x);
         }
-        if let (Bsdf::Principled(p), true) = (&mut textured, base_textured) {
-            p.base_color = self.albedo(hit);
+        if base_textured {
+            match &mut textured {
+                Bsdf::Principled(p) => p.base_color = self.albedo(hit),
+                Bsdf::Diffuse { reflectance } => *reflectance = self.albedo(hit),
+                _ => {}
+            }
         }
         Some(textured)
     }

@@ -63,6 +63,10 @@ pub struct Material {
     pub two_sided: bool,
     /// `bsdf`'s parameters that textures give (default none).
     pub bsdf_textures: Vec<bsdf_texture::TexturedParameter>,
+    /// The texture whose first channel is the surface's opacity (Mitsuba's `mask`): where
+    /// it is below 1, light passes straight through the rest of the time (default none:
+    /// opaque).
+    pub opacity: Option<usize>,
     /// Line of the file where the material starts (0 for materials not from a file).
     pub line: u32,
 }
@@ -86,6 +90,7 @@ impl Default for Material {
             bsdf: None,
             two_sided: false,
             bsdf_textures: Vec::new(),
+            opacity: None,
             line: 0,
         }
     }

@@ -584,6 +584,23 @@ impl PathTracer<'_> {
             if depth >= self.max_depth {
                 break;
             }
+            // Where a mask is transparent the path goes straight on, as through Mitsuba's
+            // `mask`, whose path tracer counts it as a scattering.
+            if let Some(k) = m.opacity {
+                let alpha = self.scene.textures[k].lookup(self.scene.tex_coords(&s)).x;
+                if samples.next_1d() >= alpha {
+                    previous.bsdf_pdf = None;
+                    if !survives_roulette(depth, &mut throughput, samples) {
+                        break;
+                    }
+                    depth += 1;
+                    ray = s.spawn_ray(ray.direction);
+                    counts.secondary += 1;
+                    samples.prepare();
+                    hit = closest_surface(self.accel, self.scene, &ray);
+                    continue;
+                }
+            }
             if let Some(bsdf) = &m.bsdf {
                 let (light, scattered) = self.bsdf_vertex(
                     &s,

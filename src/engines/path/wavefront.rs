@@ -48,6 +48,7 @@ impl PathTracer<'_> {
                     && m.transmitted.max_element() <= 0.0
                     && m.bump.is_none()
                     && m.bsdf.is_none()
+                    && m.opacity.is_none()
             })
     }
 

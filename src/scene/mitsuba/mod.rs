@@ -486,16 +486,39 @@ impl Builder {
                     ..Material::default()
                 };
                 self.reflectance(p, "reflectance", 0.5, &mut m)?;
+                // One-sided, as Mitsuba's: black from behind (the course's diffuse material,
+                // which the other engines take, reflects on both sides).
+                m.bsdf = Some(Bsdf::Diffuse {
+                    reflectance: m.diffuse,
+                });
                 m
             }
             "twosided" => match inner(p) {
-                Some(b) => Material {
-                    two_sided: true,
-                    ..self.bsdf(&b)?
-                },
+                Some(b) => {
+                    let mut m = self.bsdf(&b)?;
+                    m.two_sided = true;
+                    // Two-sided Lambertian reflection is the course's diffuse material, exact
+                    // and the fastest the path tracer has.
+                    if matches!(m.bsdf, Some(Bsdf::Diffuse { .. })) {
+                        m.bsdf = None;
+                    }
+                    m
+                }
                 None => return Err(p.at.error("twosided needs a nested bsdf")),
             },
-            "mask" | "bumpmap" | "normalmap" => {
+            "mask" => {
+                let mut m = match inner(p) {
+                    Some(b) => self.bsdf(&b)?,
+                    None => return Err(p.at.error("mask needs a nested bsdf")),
+                };
+                m.opacity = Some(self.opacity(p)?);
+                self.warn(
+                    &p.at,
+                    "mask: the path tracer lets light through where it is transparent; the other engines render its nested bsdf opaque",
+                );
+                m
+            }
+            "bumpmap" | "normalmap" => {
                 for t in p.children_tagged("texture") {
                     mark_all_used(&t.plugin);
                 }
@@ -705,6 +728,47 @@ impl Builder {
                 .error(format!("alpha {au} {av}: expected finite and > 0")));
         }
         Ok(Some(Microfacet::new(kind, au, av, visible)))
+    }
+
+    /// A mask's `opacity` as one of the scene's textures: a constant, or a `bitmap` (its
+    /// luminance, decoded from sRGB unless `raw`).
+    fn opacity(&mut self, p: &Plugin) -> Result<usize, SceneError> {
+        let texture = match p.child_named("opacity").cloned() {
+            None => {
+                let alpha = p.float("opacity", 0.5)? as f32;
+                Texture::checkerboard(Color::splat(alpha), Color::splat(alpha), None)
+            }
+            Some(t) if t.kind == "bitmap" => {
+                t.mark_used();
+                let (file, at) = t
+                    .file("filename")?
+                    .ok_or_else(|| t.at.error("bitmap needs a filename"))?;
+                let raw = t.boolean("raw", false)?;
+                let loaded = if raw {
+                    Texture::load_heights(&file)
+                } else {
+                    Texture::load(&file)
+                };
+                let mut texture = loaded
+                    .map_err(|why| at.error(format!("cannot read {}: {why}", file.display())))?;
+                for c in &mut texture.texels {
+                    *c = Color::splat(c.dot(crate::geometry::vec3(0.212671, 0.715160, 0.072169)));
+                }
+                texture.to_uv = to_uv(&t)?;
+                if let Some((filter, _)) = t.string("filter_type")? {
+                    texture.nearest = filter == "nearest";
+                }
+                texture
+            }
+            Some(t) => {
+                return Err(t.at.error(format!(
+                    "a {} opacity is not supported: give a number or a bitmap",
+                    t.kind
+                )))
+            }
+        };
+        self.scene.textures.push(texture);
+        Ok(self.scene.textures.len() - 1)
     }
 
     /// A number that may be given as a `float` or as a texture: a `checkerboard`'s is taken
