@@ -304,11 +304,13 @@ fn reference_paths(solution: &Solution, total: f64) -> Vec<u32> {
 }
 
 /// Mitsuba 3's render tests that our path tracer passes today: each must keep passing.
-const MITSUBA_TESTS_PASSING: [&str; 16] = [
+const MITSUBA_TESTS_PASSING: [&str; 18] = [
     "test_arealight_path",
     "test_constant_path",
     "test_envmap_path",
     "test_normalmap_identity_roughconductor_path",
+    "test_normalmap_path",
+    "test_normalmap_roughconductor_path",
     "test_roughdielectric_path",
     "test_roughplastic_linear_path",
     "test_roughplastic_nonlinear_path",

@@ -67,6 +67,9 @@ pub struct Material {
     /// it is below 1, light passes straight through the rest of the time (default none:
     /// opaque).
     pub opacity: Option<usize>,
+    /// The texture of tangent-space normals (2·texel − 1) that tilt `bsdf`'s frame
+    /// (Mitsuba's `normalmap`; default none).
+    pub normal_map: Option<usize>,
     /// Line of the file where the material starts (0 for materials not from a file).
     pub line: u32,
 }
@@ -91,6 +94,7 @@ impl Default for Material {
             two_sided: false,
             bsdf_textures: Vec::new(),
             opacity: None,
+            normal_map: None,
             line: 0,
         }
     }

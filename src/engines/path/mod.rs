@@ -767,10 +767,18 @@ impl PathTracer<'_> {
         } else {
             n
         };
-        let local = |v: Vec3| Vec3::new(v.dot(t), v.dot(b), v.dot(n));
-        let wi = local(-incoming);
         let textured = self.scene.textured_bsdf(s, bsdf);
-        let bsdf = textured.as_ref().unwrap_or(bsdf);
+        let mut at = BsdfAt {
+            bsdf: textured.as_ref().unwrap_or(bsdf),
+            frame: (t, b, n),
+            perturbed: None,
+            wi: Vec3::ZERO,
+        };
+        let wi = at.local(-incoming);
+        if let Some(k) = self.scene.materials[s.material as usize].normal_map {
+            at.perturb(self.scene.textures[k].lookup(self.scene.tex_coords(s)), wi);
+        }
+        at.wi = wi;
         // The medium on the side a direction leaves into: a transmitted direction is in the
         // object's interior (from its front) or out in the fog (from its back).
         let fog = self.scene.fog.map(|k| &self.scene.media[k]);
@@ -788,7 +796,7 @@ impl PathTracer<'_> {
             }
         };
         let mut light = Vec3::ZERO;
-        if !bsdf.is_delta() {
+        if !at.bsdf.is_delta() {
             if let Some(k) = self.choose_light(samples) {
                 let (u, v) = samples.next_2d();
                 let emitter = &self.lights[k];
@@ -798,11 +806,10 @@ impl PathTracer<'_> {
                 {
                     let to = d.point - s.point;
                     let dir = to.normalize_or_zero();
-                    let wo = local(dir);
-                    let f = bsdf.eval(wi, wo);
+                    let f = at.eval(dir);
                     let light_pdf = self.selection_probability(k) * d.pdf;
                     if f.max_element() > 0.0 && light_pdf > 0.0 {
-                        let mis = power_heuristic(light_pdf, bsdf.pdf(wi, wo));
+                        let mis = power_heuristic(light_pdf, at.pdf(dir));
                         let origin = s.spawn_ray(dir).origin;
                         let seen = self.shadow_transmittance(
                             &shadow_ray(origin, d.point),
@@ -816,10 +823,9 @@ impl PathTracer<'_> {
             }
             if let Some((sky, (u, v))) = self.scene.sky.as_ref().zip(self.draw_sky(samples)) {
                 if let Some((dir, pdf)) = medium_sky_sample(sky, u, v) {
-                    let wo = local(dir);
-                    let f = bsdf.eval(wi, wo);
+                    let f = at.eval(dir);
                     if f.max_element() > 0.0 {
-                        let mis = power_heuristic(pdf, bsdf.pdf(wi, wo));
+                        let mis = power_heuristic(pdf, at.pdf(dir));
                         let seen = self.shadow_transmittance(
                             &s.spawn_ray(dir),
                             f32::INFINITY,
@@ -834,7 +840,7 @@ impl PathTracer<'_> {
                 let Some((dir, distance, irradiance)) = delta.towards(s.point) else {
                     continue;
                 };
-                let f = bsdf.eval(wi, local(dir));
+                let f = at.eval(dir);
                 if f.max_element() <= 0.0 {
                     continue;
                 }
@@ -851,12 +857,7 @@ impl PathTracer<'_> {
         }
         let u = samples.next_1d();
         let u2 = samples.next_2d();
-        let scattered = bsdf.sample(wi, u, u2).and_then(|bs| {
-            let dir = (t * bs.wo.x + b * bs.wo.y + n * bs.wo.z).normalize_or_zero();
-            let usable = bs.weight.is_finite() && bs.weight.max_element() > 0.0;
-            usable.then_some((dir, bs.weight, (!bs.delta).then_some(bs.pdf)))
-        });
-        (light, scattered)
+        (light, at.sample(u, u2))
     }
 
     /// What a shadow ray lets through, starting in `medium` and `distance` long in the scene
@@ -914,6 +915,101 @@ impl PathTracer<'_> {
             ray = Ray::with_range(next.origin, ray.direction, 0.0, ray.t_max - hit.t);
         }
         Vec3::ZERO
+    }
+}
+
+/// A Mitsuba BSDF at a surface point: its shading frame (tangent, bitangent, normal in the
+/// world), the frame a normal map tilts it to (within the first), and the direction towards
+/// the path's previous vertex in the BSDF's own frame.
+struct BsdfAt<'b> {
+    bsdf: &'b Bsdf,
+    frame: (Vec3, Vec3, Vec3),
+    /// A normal map's frame, in `frame`'s coordinates (Mitsuba's `normalmap`).
+    perturbed: Option<(Vec3, Vec3, Vec3)>,
+    wi: Vec3,
+}
+
+impl BsdfAt<'_> {
+    /// A world direction in the shading frame.
+    fn local(&self, v: Vec3) -> Vec3 {
+        let (t, b, n) = self.frame;
+        Vec3::new(v.dot(t), v.dot(b), v.dot(n))
+    }
+
+    /// Tilts the frame to the normal a normal map's texel `texel` encodes (2·texel − 1, in
+    /// the shading frame), mirrored to face `wi` where it would not, as Mitsuba does.
+    fn perturb(&mut self, texel: Vec3, wi: Vec3) {
+        let mut normal = texel * 2.0 - Vec3::ONE;
+        if wi.z * wi.dot(normal) <= 0.0 {
+            normal = Vec3::new(-normal.x, -normal.y, normal.z);
+        }
+        let n = normal.normalize_or_zero();
+        let s = (Vec3::X - n * n.x).normalize_or_zero();
+        if n == Vec3::ZERO || s == Vec3::ZERO {
+            return;
+        }
+        self.perturbed = Some((s, n.cross(s), n));
+    }
+
+    /// A shading-frame direction in the BSDF's frame: the normal map's where there is one.
+    fn in_bsdf_frame(&self, v: Vec3) -> Vec3 {
+        match self.perturbed {
+            None => v,
+            Some((s, t, n)) => Vec3::new(v.dot(s), v.dot(t), v.dot(n)),
+        }
+    }
+
+    /// A normal map's attenuation of light leaving along `wo` (shading frame): Estevez et
+    /// al.'s shadowing term for bump terminators, which Mitsuba's normal maps apply.
+    fn terminator(&self, wo: Vec3) -> f32 {
+        let Some((_, _, n)) = self.perturbed else {
+            return 1.0;
+        };
+        let tan2 = |v: Vec3| (1.0 - v.z * v.z).max(0.0) / (v.z * v.z);
+        let alpha2 = (0.125 * tan2(n)).min(1.0);
+        2.0 / (1.0 + (1.0 + alpha2 * tan2(wo)).sqrt())
+    }
+
+    /// The BSDF's f·|cos| towards the world direction `dir`.
+    fn eval(&self, dir: Vec3) -> Color {
+        let wo = self.local(dir);
+        let tilted = self.in_bsdf_frame(wo);
+        if self.perturbed.is_some() && wo.z * tilted.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        self.bsdf.eval(self.wi_tilted(), tilted) * self.terminator(wo)
+    }
+
+    /// The density with which `sample` picks the world direction `dir`.
+    fn pdf(&self, dir: Vec3) -> f32 {
+        let wo = self.local(dir);
+        let tilted = self.in_bsdf_frame(wo);
+        if self.perturbed.is_some() && wo.z * tilted.z <= 0.0 {
+            return 0.0;
+        }
+        self.bsdf.pdf(self.wi_tilted(), tilted)
+    }
+
+    fn wi_tilted(&self) -> Vec3 {
+        self.in_bsdf_frame(self.wi)
+    }
+
+    /// A direction (world) sampled from the BSDF, the throughput's factor, and its density
+    /// (None for a delta lobe); None where it scatters nothing.
+    fn sample(&self, u: f32, u2: (f32, f32)) -> Option<(Vec3, Color, Option<f32>)> {
+        let bs = self.bsdf.sample(self.wi_tilted(), u, u2)?;
+        let wo = match self.perturbed {
+            None => bs.wo,
+            Some((s, t, n)) => s * bs.wo.x + t * bs.wo.y + n * bs.wo.z,
+        };
+        if self.perturbed.is_some() && bs.wo.z * wo.z <= 0.0 {
+            return None;
+        }
+        let weight = bs.weight * self.terminator(wo);
+        let (t, b, n) = self.frame;
+        let dir = (t * wo.x + b * wo.y + n * wo.z).normalize_or_zero();
+        let usable = weight.is_finite() && weight.max_element() > 0.0;
+        usable.then_some((dir, weight, (!bs.delta).then_some(bs.pdf)))
     }
 }
 

@@ -518,7 +518,31 @@ impl Builder {
                 );
                 m
             }
-            "bumpmap" | "normalmap" => {
+            "normalmap" => {
+                let mut m = match inner(p) {
+                    Some(b) => self.bsdf(&b)?,
+                    None => return Err(p.at.error("normalmap needs a nested bsdf")),
+                };
+                if m.bsdf.is_none() {
+                    // The course's two-sided diffuse material as a BSDF, to be tilted.
+                    m.bsdf = Some(Bsdf::Diffuse {
+                        reflectance: m.diffuse,
+                    });
+                }
+                let t = p
+                    .child_named("normalmap")
+                    .cloned()
+                    .ok_or_else(|| p.at.error("normalmap needs a texture named normalmap"))?;
+                m.normal_map = Some(self.raw_texture(&t)?);
+                let _ = p.boolean("flip_invalid_normals", true)?;
+                let _ = p.boolean("use_shadowing_function", true)?;
+                self.warn(
+                    &p.at,
+                    "normalmap: the path tracer tilts the shading frame; the other engines render its nested bsdf untilted",
+                );
+                m
+            }
+            "bumpmap" => {
                 for t in p.children_tagged("texture") {
                     mark_all_used(&t.plugin);
                 }
@@ -728,6 +752,40 @@ impl Builder {
                 .error(format!("alpha {au} {av}: expected finite and > 0")));
         }
         Ok(Some(Microfacet::new(kind, au, av, visible)))
+    }
+
+    /// A texture of raw values (a normal map's): a `bitmap` decoded without sRGB's curve
+    /// whatever its `raw` says, or a `rawconstant`; pushed to the scene's textures.
+    fn raw_texture(&mut self, t: &Plugin) -> Result<usize, SceneError> {
+        t.mark_used();
+        let texture = match t.kind.as_str() {
+            "bitmap" => {
+                let (file, at) = t
+                    .file("filename")?
+                    .ok_or_else(|| t.at.error("bitmap needs a filename"))?;
+                if !t.boolean("raw", false)? {
+                    self.warn(&t.at, "a normal map is read raw (no sRGB curve)");
+                }
+                let mut texture = Texture::load_heights(&file)
+                    .map_err(|why| at.error(format!("cannot read {}: {why}", file.display())))?;
+                texture.to_uv = to_uv(t)?;
+                if let Some((filter, _)) = t.string("filter_type")? {
+                    texture.nearest = filter == "nearest";
+                }
+                texture
+            }
+            "rawconstant" => {
+                let v = t.point("value", DVec3::new(0.5, 0.5, 1.0))?.as_vec3();
+                Texture::checkerboard(v, v, None)
+            }
+            other => {
+                return Err(t.at.error(format!(
+                    "a {other} normal map is not supported: give a bitmap or a rawconstant"
+                )))
+            }
+        };
+        self.scene.textures.push(texture);
+        Ok(self.scene.textures.len() - 1)
     }
 
     /// A mask's `opacity` as one of the scene's textures: a constant, or a `bitmap` (its
