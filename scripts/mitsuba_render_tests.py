@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Mitsuba 3's render-test scenes rendered by Mitsuba 3 and by trilux, side by side.
 
-Usage: scripts/mitsuba_render_tests.py [RENDER] [--spp N] [--size S] [--repeats R]
+Usage: scripts/mitsuba_render_tests.py [RENDER] [--spp N] [--size S] [--repeats R] [--only TEXT]
 
 For each scene of ../shared/mitsuba-tests (both renderers reading the same XML), at equal
 samples per pixel: the wall time of each (median of R runs, the two interleaved), the relMSE
@@ -33,6 +33,7 @@ def main():
     parser.add_argument("--spp", type=int, default=256)
     parser.add_argument("--size", type=int, default=None)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--only", default="", help="only the scenes whose path contains TEXT")
     args = parser.parse_args()
 
     if not os.environ.get("DRJIT_LIBLLVM_PATH"):
@@ -52,7 +53,7 @@ def main():
     print(f"# host: {cpu}, {width}; Mitsuba {mi.__version__} {variant}; {args.spp} spp" + (f", {args.size}x{args.size}" if args.size else ", the scenes' own film"))
 
     root = os.path.join(here, "..", "..", "shared", "mitsuba-tests", "tests", "scenes")
-    scenes = sorted(glob.glob(os.path.join(root, "*", "test_*.xml")))
+    scenes = [s for s in sorted(glob.glob(os.path.join(root, "*", "test_*.xml"))) if args.only in s]
     out = tempfile.mkdtemp()
     print(f"{'scene':44} {'ours s':>8} {'Mitsuba s':>9} {'time x':>7} {'ours relMSE':>11} {'Mitsuba':>9} {'t*relMSE x':>10}")
     ratios = []
@@ -64,13 +65,10 @@ def main():
         if args.size:
             ours_cmd += ["-size", str(args.size), str(args.size)]
         try:
-            params = {"res": args.size} if args.size else {}
-            mi_scene = mi.load_file(scene, **{k: v for k, v in params.items()})
+            mi_scene = mi.load_file(scene)
         except Exception as e:
             print(f"{name:44} Mitsuba cannot load it: {str(e)[:60]}")
             continue
-        if args.size:
-            film = mi.traverse(mi_scene)
         ours_times, theirs_times = [], []
         theirs_img = None
         ok = True
@@ -84,9 +82,13 @@ def main():
                 break
             sensor = mi_scene.sensors()[0]
             if args.size:
-                sensor = mi.load_dict({"type": "perspective", "to_world": sensor.world_transform(),
-                                       "fov": float(mi.traverse(sensor)["x_fov"][0]) if "x_fov" in mi.traverse(sensor) else 40.0,
-                                       "film": {"type": "hdrfilm", "width": args.size, "height": args.size, "rfilter": {"type": "box"}}})
+                # The scene's camera with a film of the size asked (its own is fixed in the XML).
+                fov = mi.traverse(sensor)["x_fov"]
+                fov = float(fov[0]) if hasattr(fov, "__len__") else float(fov)
+                matrix = np.array(sensor.world_transform().matrix).reshape(4, 4).tolist()
+                sensor = mi.load_dict({"type": "perspective", "to_world": mi.ScalarTransform4f(matrix), "fov": fov,
+                                       "film": {"type": "hdrfilm", "width": args.size, "height": args.size,
+                                                "rfilter": {"type": "box"}}})
             start = time.perf_counter()
             image = mi.render(mi_scene, sensor=sensor, spp=args.spp)
             theirs_img = np.array(image)[..., :3]
