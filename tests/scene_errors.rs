@@ -433,3 +433,49 @@ fn bad_procedural_textures_and_bumps() {
     .expect("parses");
     assert!(scene.materials[0].procedural.is_some() && scene.materials[0].bump.is_some());
 }
+
+/// Runs the built `render` with `args`, in `dir`.
+fn run_render(dir: &Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("render runs")
+}
+
+/// A scene with nothing that emits and no sky (a component file, such as the hospital's desk):
+/// every engine writes a black image (the ray tracer's ambient term set to 0), says so in one
+/// warning and exits 0. SPPM picked its photons' light from the empty list of lights and
+/// panicked.
+#[test]
+fn scene_without_light_renders_black_with_one_warning() {
+    let dir = common::temp_dir("no-light");
+    std::fs::write(
+        dir.join("dark.obj"),
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+    )
+    .expect("scene written");
+    for engine in ["raytrace", "path", "radiosity", "photon", "sppm"] {
+        let image = format!("dark-{engine}.pfm");
+        let mut args = vec![
+            "--input", "dark.obj", "--engine", engine, "--size", "8", "8", "--quiet", "-o", &image,
+        ];
+        if engine == "raytrace" {
+            args.extend(["--ambient-light", "0", "0", "0"]);
+        }
+        let out = run_render(&dir, &args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{engine}: {stderr}");
+        let warnings: Vec<&str> = stderr
+            .lines()
+            .filter(|l| l.starts_with("warning:"))
+            .collect();
+        assert_eq!(warnings.len(), 1, "{engine}: one warning in: {stderr}");
+        assert!(warnings[0].contains("emits light"), "{engine}: {stderr}");
+        let film = trilux::film::read_pfm(&dir.join(&image)).expect("image read");
+        assert!(
+            film.pixels.iter().all(|p| *p == trilux::scene::Color::ZERO),
+            "{engine}: the image is not black"
+        );
+    }
+}

@@ -194,6 +194,14 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
         ));
     }
     refuse_unrendered_media(args, input, engine, &scene)?;
+    // Not an error: a component file (a chair, a desk) is a scene worth looking at, but
+    // every engine's image of it is black or the background, which a user should be told once.
+    if !scene.emits_light() {
+        eprintln!(
+            "warning: {}: nothing in the scene emits light (no emitting surface, no sky): the image shows only the background (and the ray tracer's --ambient-light)",
+            input.display()
+        );
+    }
     Ok(scene)
 }
 

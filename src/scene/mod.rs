@@ -350,6 +350,17 @@ impl Scene {
         }
     }
 
+    /// Whether anything lights the scene: a primitive whose material emits, or a sky.
+    pub fn emits_light(&self) -> bool {
+        let used = self.used_materials();
+        self.sky.is_some()
+            || self
+                .materials
+                .iter()
+                .zip(used)
+                .any(|(m, used)| used && m.is_emissive())
+    }
+
     /// Whether light travels through a medium anywhere: fog, or a material's interior.
     pub fn has_media(&self) -> bool {
         self.fog.is_some() || self.materials.iter().any(|m| m.interior_medium.is_some())

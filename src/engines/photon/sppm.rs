@@ -357,11 +357,16 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> Sp
     let camera = CameraSampler::new(scene, &image);
     let lights = DirectLight::new(scene);
     let emitters = Emitters::new(scene);
-    let photons = settings
-        .photon
-        .sppm_photons
-        .unwrap_or(w as u64 * h as u64)
-        .max(1);
+    // Nothing emits: no photon to trace, and the image is the direct light (none) alone.
+    let photons = if emitters.any() {
+        settings
+            .photon
+            .sppm_photons
+            .unwrap_or(w as u64 * h as u64)
+            .max(1)
+    } else {
+        0
+    };
     let initial_radius =
         settings.photon.sppm_radius as f64 * scene.bounds().extent().length() as f64;
     let pixels = window.pixels();
