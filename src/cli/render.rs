@@ -184,7 +184,9 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
         eprintln!("warning: {w}");
     }
     if args.camera.overrides() {
-        scene.camera = Some(args.camera(scene.camera())?);
+        let camera = args.camera(scene.camera())?;
+        crate::scene::range::check_camera(&camera).map_err(|e| format!("the camera flags: {e}"))?;
+        scene.camera = Some(camera);
     }
     scene.filter_textures_for(args.common.size[0], args.common.size[1]);
     if scene.primitive_count() == 0 {

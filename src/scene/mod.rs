@@ -8,6 +8,7 @@ pub mod medium;
 mod mgf;
 mod obj;
 pub mod procedural;
+pub mod range;
 pub mod sky;
 mod surface;
 pub mod texture;
@@ -221,6 +222,8 @@ impl Scene {
         } else {
             obj::load(path)?
         };
+        // Before any work: a value out of range makes rays of inf or NaN later.
+        range::check_scene(&scene)?;
         scene.check_energy();
         scene.decode_used_textures()?;
         scene.decode_sky()?;
