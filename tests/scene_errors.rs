@@ -593,3 +593,49 @@ fn mgf_values_out_of_range_are_refused_at_their_line() {
         &["transformed", "is out of range", "±1e8"],
     );
 }
+
+/// A ray of inf or NaN misses in both Accels (in release builds; debug builds assert that none
+/// arrives), single and batched, and the BVH's walk ends: such a ray's slab test entered the
+/// empty child slots, whose index is the root's, and the walk grew its stack without end
+/// (12 GiB allocations), where Embree aborted the process.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "debug builds assert that no such ray arrives"
+)]
+fn non_finite_rays_miss_in_both_accels() {
+    use trilux::accel::{self, AccelOptions};
+    use trilux::geometry::{vec3, Ray};
+    let scene = common::own_scene("cornell_box_diffuse_sphere.obj");
+    let centre = scene.bounds().centre();
+    let (inf, nan) = (f32::INFINITY, f32::NAN);
+    let rays = [
+        Ray::new(vec3(0.0, 0.0, inf), vec3(0.0, 0.0, -1.0)),
+        Ray::new(vec3(nan, 0.0, 0.0), vec3(0.0, 0.0, -1.0)),
+        Ray::new(centre, vec3(nan, nan, nan)),
+        Ray::new(centre, vec3(0.0, -inf, 0.0)),
+        Ray::with_range(centre, vec3(0.0, -1.0, 0.0), 0.0, nan),
+    ];
+    for kind in common::backends() {
+        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+        for ray in &rays {
+            assert!(accel.intersect(ray).is_none(), "{kind}: {ray:?} hit");
+            assert!(!accel.occluded(ray), "{kind}: {ray:?} occluded");
+        }
+        let mut hits = vec![None; rays.len()];
+        accel.intersect_batch(&rays, &mut hits);
+        assert!(
+            hits.iter().all(Option::is_none),
+            "{kind}: a batched ray hit"
+        );
+        // A finite ray among them is still answered.
+        let mut mixed = rays.to_vec();
+        mixed.push(Ray::new(centre, vec3(0.0, -1.0, 0.0)));
+        let mut occluded = vec![false; mixed.len()];
+        accel.occluded_batch(&mixed, &mut occluded);
+        assert!(
+            occluded.last() == Some(&true),
+            "{kind}: the floor is not below the centre"
+        );
+    }
+}
