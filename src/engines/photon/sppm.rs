@@ -47,6 +47,12 @@ const PHOTON_BLOCK: u64 = 4096;
 /// Bytes per pixel: its state, visible point, grid entries and a pass's contributions.
 const PIXEL_BYTES: u64 = 256;
 
+/// Bytes a pass holds for each of its photons, at least: what each gave which visible point
+/// (a `(u32, Color)`), listed by block until the pass adds them up. It grows with
+/// `--sppm-photons`, so `--max-memory` must see it (a pass of 2^64 photons asked for 2^57
+/// bytes at once).
+const PASS_PHOTON_BYTES: u64 = 16;
+
 /// Where a pixel's camera path met its first diffuse surface in this pass.
 #[derive(Clone, Copy, Debug)]
 struct VisiblePoint {
@@ -578,7 +584,13 @@ impl Engine for SppmEngine {
                     settings.num_antialias_samples.max(1)
                 ),
             )],
-            memory: vec![("visible points", pixels.saturating_mul(PIXEL_BYTES))],
+            memory: vec![
+                ("visible points", pixels.saturating_mul(PIXEL_BYTES)),
+                (
+                    "a pass's photons",
+                    photons.saturating_mul(PASS_PHOTON_BYTES),
+                ),
+            ],
         }
     }
 
