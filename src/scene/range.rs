@@ -94,7 +94,7 @@ pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
     for (i, s) in scene.shapes.iter().enumerate() {
         // A shape's centre and size each within the range: its extent within twice that.
         let m = s.shape.magnitude();
-        if !(m <= 2.0 * MAX_COORDINATE) {
+        if m.is_nan() || m > 2.0 * MAX_COORDINATE {
             return Err(fail(format!(
                 "shape {i} ({}) reaches {m} from the origin: its centre and size are scene values, and {RANGE}",
                 s.shape.name()
