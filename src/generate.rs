@@ -23,6 +23,24 @@ fn terrain_height(x: f32, z: f32) -> f32 {
 
 /// A height-field terrain over [-1,1]² of at least `triangles` triangles (two per grid cell),
 /// with a camera looking down on it at 45°.
+/// The most primitives `gen-terrain` and `gen-room` write: what the MGF reader takes at most,
+/// a file of several GiB (a room of 10^12 quads ran for days, writing).
+pub const MAX_PRIMITIVES: usize = 50_000_000;
+
+/// The largest side of `gen-texture`'s image (768 MiB of RGB).
+pub const MAX_TEXTURE_SIDE: usize = 16_384;
+
+/// A generator's size checked against its limit, before any work: the error names the
+/// command, what `value` counts, and the limit.
+pub fn check_size(command: &str, what: &str, value: usize, max: usize) -> Result<(), String> {
+    if (1..=max).contains(&value) {
+        return Ok(());
+    }
+    Err(format!(
+        "{command} {value}: expected from 1 to {max} {what}"
+    ))
+}
+
 pub fn terrain(triangles: usize) -> Scene {
     let cells = ((triangles.max(2) as f64 / 2.0).sqrt().ceil() as usize).max(1);
     let n = cells + 1;

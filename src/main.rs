@@ -21,16 +21,33 @@ fn main() -> ExitCode {
         Some(Command::View { words }) => trilux::viewer::run(words),
         Some(Command::Merge { parts, output }) => cli::tools::merge(parts, output),
         Some(Command::Man { output }) => cli::tools::man(output.as_deref()),
-        Some(Command::GenTerrain { triangles, output }) => {
+        Some(Command::GenTerrain { triangles, output }) => generate::check_size(
+            "gen-terrain",
+            "triangles",
+            *triangles,
+            generate::MAX_PRIMITIVES,
+        )
+        .and_then(|_| {
             generate::write_obj(&generate::terrain(*triangles), output).map_err(|e| e.to_string())
-        }
+        }),
         Some(Command::GenRoom { patches, output }) => {
-            generate::write_dialect(&generate::room(*patches), output).map_err(|e| e.to_string())
+            generate::check_size("gen-room", "quads", *patches, generate::MAX_PRIMITIVES).and_then(
+                |_| {
+                    generate::write_dialect(&generate::room(*patches), output)
+                        .map_err(|e| e.to_string())
+                },
+            )
         }
-        Some(Command::GenTexture { kind, size, output }) => {
+        Some(Command::GenTexture { kind, size, output }) => generate::check_size(
+            "gen-texture --size",
+            "pixels a side",
+            *size as usize,
+            generate::MAX_TEXTURE_SIDE,
+        )
+        .and_then(|_| {
             let rgb = generate::texture(*kind, *size);
             generate::write_ppm(&rgb, *size, output).map_err(|e| e.to_string())
-        }
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

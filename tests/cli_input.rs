@@ -313,3 +313,136 @@ fn camera_flags_override_the_scenes_camera() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The command failed with status 1 within a second, naming each of `words`, with no panic
+/// and no path of the machine that built the program in its message.
+fn refused_at_once(args: &[&str], hide_display: bool, words: &[&str]) {
+    let dir = common::temp_dir("last-bad-inputs");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_render"));
+    command.args(args).current_dir(&dir);
+    if hide_display {
+        for v in ["DISPLAY", "WAYLAND_DISPLAY", "WAYLAND_SOCKET"] {
+            command.env_remove(v);
+        }
+    }
+    let start = Instant::now();
+    let out = command.output().expect("render runs");
+    let took = start.elapsed();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+    assert!(took < Duration::from_secs(1), "{args:?} took {took:?}");
+    assert!(!err.contains("panicked"), "{args:?}: {err}");
+    assert!(
+        !err.contains(".cargo") && !err.contains("/registry/") && !err.contains(".rs:"),
+        "{args:?}: a path of the build machine in: {err}"
+    );
+    for w in words {
+        assert!(err.contains(w), "{args:?}: `{w}` missing from: {err}");
+    }
+}
+
+/// The last bad inputs that got through: each is refused up front, with status 1, within a
+/// second. `--time-limit 1e30` panicked making its `Duration`, an OBJ vertex `nan` was
+/// rendered, `gen-room 1000000000000` wrote without end, `view` without a display printed a
+/// path inside the cargo registry, and an MGF sphere of radius 1e38 was "no geometry".
+#[test]
+fn last_bad_inputs_are_refused_at_once() {
+    let dir = common::temp_dir("last-bad-inputs");
+    let nan = dir.join("nan.obj");
+    std::fs::write(&nan, "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").expect("write");
+    let sphere = dir.join("sphere.mgf");
+    std::fs::write(
+        &sphere,
+        "v c =\n\tp 0 0 0\nm m =\n\tc\n\trd .5\nsph c 1e38\n",
+    )
+    .expect("write");
+    let cornell = scene("cornell_box.obj");
+    refused_at_once(
+        &["-input", &cornell, "--time-limit", "1e30", "-o", "x.png"],
+        false,
+        &["--time-limit", "at most 1e9"],
+    );
+    refused_at_once(
+        &["-input", &nan.to_string_lossy(), "-o", "x.png"],
+        false,
+        &["nan.obj:1:3:", "out of range"],
+    );
+    refused_at_once(
+        &["gen-room", "1000000000000", "-o", "room.obj"],
+        false,
+        &["gen-room 1000000000000", "50000000"],
+    );
+    refused_at_once(&["view", &cornell], true, &["render view: no display"]);
+    refused_at_once(
+        &["-input", &sphere.to_string_lossy(), "-o", "x.png"],
+        false,
+        &["sphere.mgf:6:7:", "`1e38` is out of range"],
+    );
+}
+
+use proptest::prelude::*;
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 40,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    /// Numeric flags at their types' extremes, and beyond: each is refused (status 1, or 2
+    /// where the command-line parser refuses the text), or renders a 4×4 image to its end,
+    /// or is still rendering when the test stops it — never a panic or an abort. The render
+    /// runs under a 4 GiB address-space limit, so a runaway allocation aborts it and shows.
+    #[test]
+    fn numeric_flags_at_extremes_never_panic(
+        flag in prop::sample::select(vec![
+            "--time-limit", "--max-memory", "--size", "--radiosity-iterations",
+            "--num-photons-to-shoot", "--sppm-photons", "--threads", "--num-antialias-samples",
+            "--tiles",
+        ]),
+        value in prop_oneof![
+            prop::sample::select(vec![
+                "0", "1", "-1", "4294967295", "4294967296", "18446744073709551615",
+                "18446744073709551616", "1e30", "-1e30", "1e-30", "nan", "inf", "-inf", "1e9",
+            ]).prop_map(String::from),
+            any::<u64>().prop_map(|v| v.to_string()),
+        ],
+    ) {
+        let dir = common::temp_dir("extreme-flags");
+        let cornell = scene("cornell_box.obj");
+        let mut args: Vec<String> = vec!["timeout".into(), "-s".into(), "KILL".into(), "3".into(),
+            "prlimit".into(), "--as=4294967296".into(), env!("CARGO_BIN_EXE_render").into()];
+        let values: Vec<String> = match flag {
+            "--size" => vec![value.clone(), "4".into()],
+            _ => vec![value.clone()],
+        };
+        if flag == "--tiles" {
+            args.extend(["farm".into(), cornell.clone(), "--size".into(), "4".into(), "4".into(),
+                "--dir".into(), dir.join("farm").to_string_lossy().into_owned()]);
+        } else {
+            args.extend(["-input".into(), cornell.clone(), "-o".into(), "x.pfm".into(), "--quiet".into()]);
+            if flag != "--size" {
+                args.extend(["--size".into(), "4".into(), "4".into()]);
+            }
+        }
+        args.push(flag.into());
+        args.extend(values);
+        let out = Command::new(&args[0]).args(&args[1..]).current_dir(&dir).output().expect("runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        let code = out.status.code();
+        prop_assert!(!err.contains("panicked"), "{flag} {value}: {err}");
+        prop_assert!(
+            matches!(code, Some(0 | 1 | 2 | 137)),
+            "{flag} {value}: status {code:?}: {err}"
+        );
+        if code == Some(1) {
+            prop_assert!(!err.contains(".cargo"), "{flag} {value}: {err}");
+            // The flag is named (in the course's style, `-size`, or as `--size`), or the memory
+            // it would take is refused by --max-memory.
+            prop_assert!(
+                err.contains(&flag[1..]) || err.contains("--max-memory"),
+                "{flag} {value}: the flag is not named in: {err}"
+            );
+        }
+    }
+}

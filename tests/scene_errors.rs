@@ -433,3 +433,209 @@ fn bad_procedural_textures_and_bumps() {
     .expect("parses");
     assert!(scene.materials[0].procedural.is_some() && scene.materials[0].bump.is_some());
 }
+
+/// Runs the built `render` with `args`, in `dir`.
+fn run_render(dir: &Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("render runs")
+}
+
+/// A scene with nothing that emits and no sky (a component file, such as the hospital's desk):
+/// every engine writes a black image (the ray tracer's ambient term set to 0), says so in one
+/// warning and exits 0. SPPM picked its photons' light from the empty list of lights and
+/// panicked.
+#[test]
+fn scene_without_light_renders_black_with_one_warning() {
+    let dir = common::temp_dir("no-light");
+    std::fs::write(
+        dir.join("dark.obj"),
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+    )
+    .expect("scene written");
+    for engine in ["raytrace", "path", "radiosity", "photon", "sppm"] {
+        let image = format!("dark-{engine}.pfm");
+        let mut args = vec![
+            "--input", "dark.obj", "--engine", engine, "--size", "8", "8", "--quiet", "-o", &image,
+        ];
+        if engine == "raytrace" {
+            args.extend(["--ambient-light", "0", "0", "0"]);
+        }
+        let out = run_render(&dir, &args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{engine}: {stderr}");
+        let warnings: Vec<&str> = stderr
+            .lines()
+            .filter(|l| l.starts_with("warning:"))
+            .collect();
+        assert_eq!(warnings.len(), 1, "{engine}: one warning in: {stderr}");
+        assert!(warnings[0].contains("emits light"), "{engine}: {stderr}");
+        let film = trilux::film::read_pfm(&dir.join(&image)).expect("image read");
+        assert!(
+            film.pixels.iter().all(|p| *p == trilux::scene::Color::ZERO),
+            "{engine}: the image is not black"
+        );
+    }
+}
+
+const CAMERA: &str =
+    "PerspectiveCamera {\ncamera_position 0 0 5\npoint_of_interest 0 0 0\nup 0 1 0\nangle 0.5\n}\n";
+
+/// A value outside the range of scene values (finite, within ±1e8) in a vertex, a sphere's
+/// centre or radius, a camera's position or point of interest is refused at its line, the
+/// range named: such values made rays of inf and NaN, which Embree aborts on and the BVH
+/// followed without end.
+#[test]
+fn coordinates_out_of_range_are_refused_at_their_line() {
+    for huge in ["1e38", "18446744073709551616", "inf", "-1e9"] {
+        fails_at(
+            &format!("{MATERIAL}m 0\nv 0 0 0\nv {huge} 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"),
+            7,
+            &[&format!("`{huge}` is out of range"), "±1e8"],
+        );
+        fails_at(
+            &format!("{MATERIAL}m 0\ns 0 0 {huge} 1\n"),
+            6,
+            &["out of range", "±1e8"],
+        );
+        fails_at(
+            &format!("{MATERIAL}m 0\ns 0 0 0 {huge}\n"),
+            6,
+            &["out of range", "±1e8"],
+        );
+        for (line, key) in [
+            (12, "camera_position 0 0 5"),
+            (13, "point_of_interest 0 0 0"),
+        ] {
+            let camera = CAMERA.replace(key, &format!("{} {huge}", &key[..key.len() - 2]));
+            fails_at(
+                &format!("{MATERIAL}m 0\n{QUAD}f 1 2 3 4\n{camera}"),
+                line,
+                &["out of range"],
+            );
+        }
+    }
+    // The stiff cases of the stability tests stay inside the range.
+    let stiff = format!(
+        "{MATERIAL}m 0\nv 10000 0 0\nv 10001 0 0\nv 10001 1 0\nv 10000 1 0\nf 1 2 3 4\n\
+         v 0 0 0\nv 1e-4 0 0\nv 1e-4 1e-4 0\nv 0 1e-4 0\nf 5 6 7 8\ns 1e4 1e4 1e4 1e-4\n"
+    );
+    if let Err(e) = parse(&stiff) {
+        panic!("the stiff cases are refused: {e}");
+    }
+}
+
+/// The scene `text` written to `name` in a fresh folder, loaded.
+fn load_text(name: &str, text: &str) -> Result<Scene, SceneError> {
+    let dir = common::temp_dir(&format!("range-{}", name.replace('.', "-")));
+    let path = dir.join(name);
+    std::fs::write(&path, text).expect("write");
+    Scene::load(&path)
+}
+
+/// Asserts `text`, written to `name`, fails to load at `line` with each of `words`.
+fn file_fails_at(name: &str, text: &str, line: u32, words: &[&str]) {
+    let err = load_text(name, text).expect_err("refused");
+    let message = err.to_string();
+    assert_eq!(err.line(), Some(line), "wrong line in: {message}");
+    assert!(
+        message.contains(&format!("{name}:{line}:")),
+        "no file:line in: {message}"
+    );
+    for w in words {
+        assert!(message.contains(w), "`{w}` missing from: {message}");
+    }
+}
+
+/// A standard OBJ vertex of `nan`, `inf` or 1e38 is refused at its line (tobj reads them as
+/// numbers), as the course dialect and MGF refuse them.
+#[test]
+fn obj_vertex_out_of_range_is_refused_at_its_line() {
+    for bad in ["nan", "inf", "1e38", "18446744073709551616"] {
+        file_fails_at(
+            "mesh.obj",
+            &format!("# a triangle\nv 0 0 0\nv {bad} 0 0\nv 0 1 0\nf 1 2 3\n"),
+            3,
+            &[&format!("`{bad}` is out of range"), "±1e8"],
+        );
+    }
+    file_fails_at(
+        "normals.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 nan\nf 1//1 2//1 3//1\n",
+        4,
+        &["`nan` is out of range"],
+    );
+}
+
+/// An MGF sphere of radius 1e38 is refused at its line (it was reported as a scene with no
+/// geometry); so is an `xf -t` of 1e38, and a vertex that a transform takes out of the range.
+#[test]
+fn mgf_values_out_of_range_are_refused_at_their_line() {
+    let head = "v c =\n\tp 0 0 0\nm m =\n\tc\n\trd .5\n";
+    file_fails_at(
+        "sphere.mgf",
+        &format!("{head}sph c 1e38\n"),
+        6,
+        &["`1e38` is out of range", "±1e8"],
+    );
+    file_fails_at(
+        "move.mgf",
+        &format!("{head}xf -t 0 0 1e38\nsph c 1\nxf\n"),
+        6,
+        &["`1e38` is out of range"],
+    );
+    file_fails_at(
+        "scaled.mgf",
+        &format!("{head}xf -s 1e7\nsph c 100\nxf\n"),
+        7,
+        &["transformed", "is out of range", "±1e8"],
+    );
+}
+
+/// A ray of inf or NaN misses in both Accels (in release builds; debug builds assert that none
+/// arrives), single and batched, and the BVH's walk ends: such a ray's slab test entered the
+/// empty child slots, whose index is the root's, and the walk grew its stack without end
+/// (12 GiB allocations), where Embree aborted the process.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "debug builds assert that no such ray arrives"
+)]
+fn non_finite_rays_miss_in_both_accels() {
+    use trilux::accel::{self, AccelOptions};
+    use trilux::geometry::{vec3, Ray};
+    let scene = common::own_scene("cornell_box_diffuse_sphere.obj");
+    let centre = scene.bounds().centre();
+    let (inf, nan) = (f32::INFINITY, f32::NAN);
+    let rays = [
+        Ray::new(vec3(0.0, 0.0, inf), vec3(0.0, 0.0, -1.0)),
+        Ray::new(vec3(nan, 0.0, 0.0), vec3(0.0, 0.0, -1.0)),
+        Ray::new(centre, vec3(nan, nan, nan)),
+        Ray::new(centre, vec3(0.0, -inf, 0.0)),
+        Ray::with_range(centre, vec3(0.0, -1.0, 0.0), 0.0, nan),
+    ];
+    for kind in common::backends() {
+        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+        for ray in &rays {
+            assert!(accel.intersect(ray).is_none(), "{kind}: {ray:?} hit");
+            assert!(!accel.occluded(ray), "{kind}: {ray:?} occluded");
+        }
+        let mut hits = vec![None; rays.len()];
+        accel.intersect_batch(&rays, &mut hits);
+        assert!(
+            hits.iter().all(Option::is_none),
+            "{kind}: a batched ray hit"
+        );
+        // A finite ray among them is still answered.
+        let mut mixed = rays.to_vec();
+        mixed.push(Ray::new(centre, vec3(0.0, -1.0, 0.0)));
+        let mut occluded = vec![false; mixed.len()];
+        accel.occluded_batch(&mixed, &mut occluded);
+        assert!(
+            occluded.last() == Some(&true),
+            "{kind}: the floor is not below the centre"
+        );
+    }
+}

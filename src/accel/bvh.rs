@@ -585,7 +585,15 @@ impl Bvh {
         t_max: &mut f32,
         visit: &mut impl LeafVisit,
     ) {
-        if self.items.is_empty() {
+        debug_assert!(
+            ray.is_traceable(),
+            "a ray of inf or NaN reached the BVH: {ray:?}"
+        );
+        // A ray of inf or NaN misses: its slab test can enter empty slots (whose child index
+        // is the root's), and the walk would never end, its stack growing with every lap.
+        // Finite rays never enter an empty slot, so the stack holds at most
+        // `MAX_DEPTH` × (`WIDTH` − 1) entries.
+        if self.items.is_empty() || !ray.is_traceable() {
             return;
         }
         // Boxes are kept up to `BOX_REACH` beyond the current hit: see there.
@@ -818,6 +826,12 @@ impl Bvh {
         let one = |i: usize| packet.one(rays, i);
         // Rays not yet found blocked.
         let mut open: u32 = (1 << rays.len()) - 1;
+        // The packet walk takes only occupied slots, so it ends whatever the rays; each ray
+        // alone below `PACKET_SWITCH` goes through `traverse`, which misses untraceable rays.
+        debug_assert!(
+            rays.iter().all(Ray::is_traceable),
+            "a ray of inf or NaN reached the BVH"
+        );
         if !self.items.is_empty() {
             stack.clear();
             stack.push((ROOT, open));

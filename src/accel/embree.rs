@@ -393,6 +393,15 @@ impl Accel for EmbreeAccel {
 
     #[inline]
     fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
+        // Debian's Embree keeps its assertions: a ray of inf or NaN aborts the process there.
+        // It misses here instead (scene values in range make none).
+        debug_assert!(
+            ray.is_traceable(),
+            "a ray of inf or NaN reached Embree: {ray:?}"
+        );
+        if !ray.is_traceable() {
+            return None;
+        }
         let mut hit = sys::TxHit {
             t: 0.0,
             u: 0.0,
@@ -407,12 +416,26 @@ impl Accel for EmbreeAccel {
 
     #[inline]
     fn occluded(&self, ray: &Ray) -> bool {
+        debug_assert!(
+            ray.is_traceable(),
+            "a ray of inf or NaN reached Embree: {ray:?}"
+        );
+        if !ray.is_traceable() {
+            return false;
+        }
         // SAFETY: as in `intersect`.
         unsafe { sys::tx_occluded1(self.scene, ray as *const Ray as *const sys::TxRay) != 0 }
     }
 
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<PrimHit>]) {
         assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        if !rays.iter().all(Ray::is_traceable) {
+            // Ray by ray, so that the untraceable ones miss (see `intersect`).
+            for (ray, hit) in rays.iter().zip(hits) {
+                *hit = self.intersect(ray);
+            }
+            return;
+        }
         let empty = sys::TxHit {
             t: 0.0,
             u: 0.0,
@@ -439,6 +462,12 @@ impl Accel for EmbreeAccel {
 
     fn occluded_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
         assert_eq!(rays.len(), occluded.len(), "one answer slot per ray");
+        if !rays.iter().all(Ray::is_traceable) {
+            for (ray, o) in rays.iter().zip(occluded) {
+                *o = self.occluded(ray);
+            }
+            return;
+        }
         // SAFETY: `rays` has TxRay's layout; `occluded` has rays.len() bytes, and the shim
         // writes only 0 or 1 into each, which are valid `bool`s.
         unsafe {

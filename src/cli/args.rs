@@ -812,6 +812,10 @@ fn parse_define(text: &str) -> Result<(String, String), String> {
 }
 
 /// `value` must be finite and at least `min` (`open`: greater than `min`).
+/// The longest `--time-limit`, in seconds: a deadline beyond it does not fit the clock's
+/// `Instant` on every platform (1e30 panicked making the `Duration`).
+pub const MAX_TIME_LIMIT: f64 = 1e9;
+
 fn check_number(id: &str, value: f32, min: f32, open: bool) -> Result<(), String> {
     let ok = value.is_finite() && if open { value > min } else { value >= min };
     if ok {
@@ -872,9 +876,9 @@ impl RenderArgs {
         }
         check_count("threads", c.threads, 0..=MAX_THREADS)?;
         if let Some(t) = c.time_limit {
-            if !(t.is_finite() && t > 0.0) {
+            if !(t.is_finite() && t > 0.0 && t <= MAX_TIME_LIMIT) {
                 return Err(format!(
-                    "--time-limit {t}: expected a finite number of seconds > 0"
+                    "--time-limit {t}: expected a number of seconds > 0 and at most {MAX_TIME_LIMIT:e} (about 31 years)"
                 ));
             }
             let part = self.part.crop_window.is_some() || self.part.pixel_samples.is_some();

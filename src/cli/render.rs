@@ -212,7 +212,9 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
         eprintln!("warning: {w}");
     }
     if args.camera.overrides() {
-        scene.camera = Some(args.camera(scene.camera())?);
+        let camera = args.camera(scene.camera())?;
+        crate::scene::range::check_camera(&camera).map_err(|e| format!("the camera flags: {e}"))?;
+        scene.camera = Some(camera);
     }
     scene.filter_textures_for(args.common.size[0], args.common.size[1]);
     if scene.primitive_count() == 0 {
@@ -222,6 +224,14 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
         ));
     }
     refuse_unrendered_media(args, input, engine, &scene)?;
+    // Not an error: a component file (a chair, a desk) is a scene worth looking at, but
+    // every engine's image of it is black or the background, which a user should be told once.
+    if !scene.emits_light() {
+        eprintln!(
+            "warning: {}: nothing in the scene emits light (no emitting surface, no sky): the image shows only the background (and the ray tracer's --ambient-light)",
+            input.display()
+        );
+    }
     Ok(scene)
 }
 

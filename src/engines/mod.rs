@@ -44,5 +44,16 @@ pub fn render(
     accel: &dyn Accel,
     settings: &RenderSettings,
 ) -> Result<Rendered, String> {
+    // Where the rays are made: a camera whose rays would hold inf or NaN is an error, not a
+    // render of misses (the scene's range check makes none; this is the backstop).
+    let camera = scene.camera();
+    if !camera.view().is_finite() {
+        return Err(format!(
+            "{}: the camera (at {}, looking at {}) makes rays of inf or NaN",
+            scene.path.display(),
+            camera.position,
+            camera.point_of_interest
+        ));
+    }
     engine(kind).render(scene, accel, settings)
 }

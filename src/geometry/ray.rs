@@ -33,6 +33,19 @@ impl Ray {
         }
     }
 
+    /// Whether an Accel can follow the ray: origin and direction finite, and its range not
+    /// NaN (t_max may be ∞). Scene values in range make every ray so; the Accels check it
+    /// anyway (an assertion in debug builds, a miss in release), since a ray of inf or NaN
+    /// made Embree abort the process and the BVH's walk take the empty child slots that such
+    /// a ray's slab test does not cull, back to the root, without end.
+    #[inline(always)]
+    pub fn is_traceable(&self) -> bool {
+        self.origin.is_finite()
+            && self.direction.is_finite()
+            && !self.t_min.is_nan()
+            && !self.t_max.is_nan()
+    }
+
     #[inline]
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + self.direction * t

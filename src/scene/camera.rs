@@ -98,6 +98,16 @@ pub struct View {
 }
 
 impl View {
+    /// Whether every ray it makes is finite: its position, frame and screen are. Checked once
+    /// an image, where the rays are made (a camera of values in range always is).
+    pub fn is_finite(&self) -> bool {
+        self.position.is_finite()
+            && self.forward.is_finite()
+            && self.horizontal.is_finite()
+            && self.up.is_finite()
+            && self.side.is_finite()
+    }
+
     /// The ray through screen point (x, y) in \[0,1\]², (0,0) bottom left.
     #[inline]
     pub fn ray(&self, x: f32, y: f32) -> Ray {

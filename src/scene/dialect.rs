@@ -312,8 +312,12 @@ impl<'a> Parser<'a> {
 
     fn real(&mut self, what: &str) -> Result<f32, SceneError> {
         let t = self.next();
-        match t.map(|t| t.text.parse::<f32>()) {
-            Some(Ok(x)) if x.is_finite() => Ok(x),
+        match (t, t.map(|t| t.text.parse::<f32>())) {
+            (_, Some(Ok(x))) if super::range::in_range(x) => Ok(x),
+            (Some(tok), Some(Ok(x))) if !x.is_nan() => Err(self.invalid(
+                tok,
+                format!("`{}` is out of range: {}", tok.text, super::range::RANGE),
+            )),
             _ => Err(self.syntax(t, what)),
         }
     }

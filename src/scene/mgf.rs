@@ -426,7 +426,12 @@ fn missing(e: &Entity, expected: &str) -> SceneError {
 fn number(e: &Entity, k: usize, what: &str) -> Result<f32, SceneError> {
     let w = e.words.get(k).ok_or_else(|| missing(e, what))?;
     match w.text.parse::<f32>() {
-        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) if super::range::in_range(v) => Ok(v),
+        Ok(v) if !v.is_nan() => Err(invalid(
+            e,
+            w,
+            format!("`{}` is out of range: {}", w.text, super::range::RANGE),
+        )),
         _ => Err(syntax(e, w, what)),
     }
 }
@@ -841,6 +846,12 @@ impl Reader {
     /// area, and the slivers of no area its triangulation leaves, are skipped (counted), as
     /// RenderPark does.
     fn polygon(&mut self, e: &Entity, points: &[Vec3], material: u32) -> Result<(), SceneError> {
+        // Values in range can leave it once transformed (`xf -s`, `-t`) or made into a
+        // primitive's polygons (a sphere's centre plus its radius).
+        for p in points {
+            super::range::check_coordinate(*p, "a vertex (transformed)")
+                .map_err(|m| invalid(e, &e.words[0], m))?;
+        }
         let size = points
             .iter()
             .map(|p| (*p - points[0]).length())

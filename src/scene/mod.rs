@@ -11,6 +11,7 @@ mod mgf;
 mod mitsuba;
 mod obj;
 pub mod procedural;
+pub mod range;
 pub mod sky;
 mod surface;
 pub mod texture;
@@ -367,6 +368,8 @@ impl Scene {
         } else {
             obj::load(path)?
         };
+        // Before any work: a value out of range makes rays of inf or NaN later.
+        range::check_scene(&scene)?;
         scene.check_energy();
         scene.decode_used_textures()?;
         scene.decode_sky()?;
@@ -494,6 +497,17 @@ impl Scene {
             Some(sky) => sky.radiance(direction.normalize_or_zero()),
             None => self.background,
         }
+    }
+
+    /// Whether anything lights the scene: a primitive whose material emits, or a sky.
+    pub fn emits_light(&self) -> bool {
+        let used = self.used_materials();
+        self.sky.is_some()
+            || self
+                .materials
+                .iter()
+                .zip(used)
+                .any(|(m, used)| used && m.is_emissive())
     }
 
     /// Whether light travels through a medium anywhere: fog, or a material's interior.

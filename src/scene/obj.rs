@@ -11,6 +11,7 @@ use crate::geometry::{vec2, vec3, Vec3};
 const DEFAULT_ALBEDO: f32 = 0.8;
 
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    check_values(path)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -79,6 +80,38 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     }
     scene.triangles = mesh;
     Ok(scene)
+}
+
+/// The numbers of the file's vertex lines (`v`, `vn`, `vt`) checked against the range of scene
+/// values, each refused with its line and column: `tobj` takes `nan`, `inf` and 1e38 as
+/// numbers and does not say where a value came from.
+fn check_values(path: &Path) -> Result<(), SceneError> {
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    let text = String::from_utf8_lossy(&bytes);
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split('#').next().unwrap_or("").split_whitespace();
+        if !matches!(words.next(), Some("v" | "vn" | "vt")) {
+            continue;
+        }
+        for word in words {
+            let Ok(x) = word.parse::<f32>() else {
+                continue; // tobj says what it cannot read
+            };
+            if !super::range::in_range(x) {
+                let column = word.as_ptr() as usize - line.as_ptr() as usize + 1;
+                return Err(SceneError::Invalid {
+                    file: path.to_path_buf(),
+                    line: n as u32 + 1,
+                    column: column as u32,
+                    message: format!("`{word}` is out of range: {}", super::range::RANGE),
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 fn rgb(v: Option<[f32; 3]>) -> Vec3 {

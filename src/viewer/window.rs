@@ -49,15 +49,43 @@ mouse:
   middle drag  pan
   a camera move cancels a render in flight and shows the current view from the new camera";
 
+/// A windowing library's error without the place in its source it names: winit's OS errors
+/// read `os error at /…/cargo/registry/…/mod.rs:765: what`, a path of the machine that built
+/// the program, which means nothing to its user.
+fn without_source_path(e: &dyn std::fmt::Display) -> String {
+    let text = e.to_string();
+    match text.find(".rs:") {
+        Some(at) => match text[at..].find(": ") {
+            Some(end) => text[at + end + 2..].to_string(),
+            None => text,
+        },
+        None => text,
+    }
+}
+
 /// Opens the window and runs until 'q' or the window is closed.
 pub fn run(
     session: Session,
     world: Arc<RwLock<World>>,
     worker_start: impl FnOnce(WakeUp) -> Worker,
 ) -> Result<(), String> {
+    if ["DISPLAY", "WAYLAND_DISPLAY", "WAYLAND_SOCKET"]
+        .iter()
+        .all(|v| std::env::var_os(v).is_none())
+    {
+        return Err(
+            "render view: no display to open a window on (DISPLAY and WAYLAND_DISPLAY are not set); render without `view` to write the image instead"
+                .into(),
+        );
+    }
     let event_loop = EventLoop::<Report>::with_user_event()
         .build()
-        .map_err(|e| format!("render view: cannot open a window: {e}"))?;
+        .map_err(|e| {
+            format!(
+                "render view: cannot open a window: {}",
+                without_source_path(&e)
+            )
+        })?;
     let proxy = event_loop.create_proxy();
     let worker = worker_start(Box::new(move |report| {
         // The loop is gone only once the window has closed: nobody is left to show it.
@@ -161,11 +189,12 @@ impl App {
             .with_title(self.title())
             .with_inner_size(PhysicalSize::new(w, h))
             .with_resizable(false);
-        let window = Rc::new(
-            event_loop
-                .create_window(attributes)
-                .map_err(|e| format!("render view: cannot open a window: {e}"))?,
-        );
+        let window = Rc::new(event_loop.create_window(attributes).map_err(|e| {
+            format!(
+                "render view: cannot open a window: {}",
+                without_source_path(&e)
+            )
+        })?);
         let context = softbuffer::Context::new(window.clone())
             .map_err(|e| format!("render view: no framebuffer for the window: {e}"))?;
         let surface = softbuffer::Surface::new(&context, window.clone())

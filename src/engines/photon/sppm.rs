@@ -47,6 +47,12 @@ const PHOTON_BLOCK: u64 = 4096;
 /// Bytes per pixel: its state, visible point, grid entries and a pass's contributions.
 const PIXEL_BYTES: u64 = 256;
 
+/// Bytes a pass holds for each of its photons, at least: what each gave which visible point
+/// (a `(u32, Color)`), listed by block until the pass adds them up. It grows with
+/// `--sppm-photons`, so `--max-memory` must see it (a pass of 2^64 photons asked for 2^57
+/// bytes at once).
+const PASS_PHOTON_BYTES: u64 = 16;
+
 /// Where a pixel's camera path met its first diffuse surface in this pass.
 #[derive(Clone, Copy, Debug)]
 struct VisiblePoint {
@@ -357,11 +363,16 @@ pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> Sp
     let camera = CameraSampler::new(scene, &image);
     let lights = DirectLight::new(scene);
     let emitters = Emitters::new(scene);
-    let photons = settings
-        .photon
-        .sppm_photons
-        .unwrap_or(w as u64 * h as u64)
-        .max(1);
+    // Nothing emits: no photon to trace, and the image is the direct light (none) alone.
+    let photons = if emitters.any() {
+        settings
+            .photon
+            .sppm_photons
+            .unwrap_or(w as u64 * h as u64)
+            .max(1)
+    } else {
+        0
+    };
     let initial_radius =
         settings.photon.sppm_radius as f64 * scene.bounds().extent().length() as f64;
     let pixels = window.pixels();
@@ -573,7 +584,13 @@ impl Engine for SppmEngine {
                     settings.num_antialias_samples.max(1)
                 ),
             )],
-            memory: vec![("visible points", pixels.saturating_mul(PIXEL_BYTES))],
+            memory: vec![
+                ("visible points", pixels.saturating_mul(PIXEL_BYTES)),
+                (
+                    "a pass's photons",
+                    photons.saturating_mul(PASS_PHOTON_BYTES),
+                ),
+            ],
         }
     }
 

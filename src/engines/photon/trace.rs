@@ -184,12 +184,13 @@ impl Emitters {
         rng: &mut Rng,
         visit: &mut dyn FnMut(&Hit),
     ) -> (u64, bool) {
+        // A scene with nothing that emits has no source to pick: no photon, rather than an
+        // index into an empty list.
+        let Some(last) = self.flux.len().checked_sub(1) else {
+            return (0, false);
+        };
         let pick = rng.next_f32() as f64;
-        let l = self
-            .cdf
-            .iter()
-            .position(|&c| pick < c)
-            .unwrap_or(self.flux.len() - 1);
+        let l = self.cdf.iter().position(|&c| pick < c).unwrap_or(last);
         let chosen = (self.probability[l] * count as f32).recip();
         let emitted = match (self.lights.get(l), &self.sky) {
             (Some(light), _) => emit_from_light(light, aim, rng)
