@@ -39,8 +39,15 @@ impl Mesh {
                 return Err(format!("{what}: {len} {name} for {n} vertices"));
             }
         }
-        if let Some(p) = self.positions.iter().find(|p| !p.is_finite()) {
-            return Err(format!("{what}: a vertex is not finite ({p})"));
+        let in_range = |v: &Vec3| v.to_array().into_iter().all(crate::scene::range::in_range);
+        if let Some(p) = self.positions.iter().find(|p| !in_range(p)) {
+            return Err(format!(
+                "{what}: a vertex at {p}: {}",
+                crate::scene::range::RANGE
+            ));
+        }
+        if let Some(n) = self.normals.iter().find(|n| !n.is_finite()) {
+            return Err(format!("{what}: a normal is not finite ({n})"));
         }
         Ok(self)
     }

@@ -11,6 +11,7 @@ use std::rc::Rc;
 use glam::{DMat4, DVec3};
 
 use super::spectrum::Spectrum;
+use crate::scene::range::{in_range, RANGE};
 use crate::scene::SceneError;
 
 /// The largest file `<include>` or the scene itself may be: a scene description, not a mesh.
@@ -507,6 +508,9 @@ impl Reader {
                 let value = match tag {
                     "point" | "vector" => {
                         let v = self.vector(node, &at, 0.0)?;
+                        if let Some(bad) = v.to_array().into_iter().find(|c| !in_range(*c as f32)) {
+                            return Err(at.error(format!("a coordinate of {bad}: {RANGE}")));
+                        }
                         if tag == "point" {
                             Value::Point(v)
                         } else {
@@ -638,8 +642,8 @@ impl Reader {
             )))
             }
         };
-        if !m.is_finite() {
-            return Err(at.error("the transform is not finite"));
+        if let Some(bad) = m.to_cols_array().into_iter().find(|v| !in_range(*v as f32)) {
+            return Err(at.error(format!("a transform entry of {bad}: {RANGE}")));
         }
         Ok(m)
     }
