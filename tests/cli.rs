@@ -1313,7 +1313,7 @@ fn time_limit_renders_until_the_time_is_spent() {
     for (extra, expected) in [
         (
             &["--time-limit", "0"][..],
-            "expected a finite number of seconds > 0",
+            "expected a number of seconds > 0",
         ),
         (
             &["--time-limit", "1", "--crop-window", "0", "0.5", "0", "1"],
