@@ -437,10 +437,11 @@ proptest! {
         );
         if code == Some(1) {
             prop_assert!(!err.contains(".cargo"), "{flag} {value}: {err}");
-            // The flag is named (in the course's style, `-size`, or as `--size`), or the memory
-            // it would take is refused by --max-memory.
+            // The flag is named (as `--size`, or in the course's style, `-size`,
+            // `-num_antialias_samples`), or the memory it would take is refused by --max-memory.
+            let course = format!("-{}", flag[2..].replace('-', "_"));
             prop_assert!(
-                err.contains(&flag[1..]) || err.contains("--max-memory"),
+                err.contains(&flag[1..]) || err.contains(&course) || err.contains("--max-memory"),
                 "{flag} {value}: the flag is not named in: {err}"
             );
         }
