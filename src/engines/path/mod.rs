@@ -601,6 +601,7 @@ impl PathTracer<'_> {
                     continue;
                 }
             }
+            let dir;
             if let Some(bsdf) = &m.bsdf {
                 let (light, scattered) = self.bsdf_vertex(
                     &s,
@@ -612,7 +613,7 @@ impl PathTracer<'_> {
                     counts,
                 );
                 radiance += throughput * light;
-                let Some((dir, weight, pdf)) = scattered else {
+                let Some((sampled, weight, pdf)) = scattered else {
                     break;
                 };
                 throughput *= weight;
@@ -623,96 +624,96 @@ impl PathTracer<'_> {
                     in_medium: true,
                 };
                 diffuse_bounce = true;
-                if dir.dot(s.geometric_normal) * ray.direction.dot(s.geometric_normal) > 0.0 {
+                if sampled.dot(s.geometric_normal) * ray.direction.dot(s.geometric_normal) > 0.0 {
                     medium = if front {
                         self.scene.interior_medium(m)
                     } else {
                         fog
                     };
-                }
-                if !survives_roulette(depth, &mut throughput, samples) {
-                    break;
-                }
-                depth += 1;
-                ray = s.spawn_ray(dir);
-                counts.secondary += 1;
-                samples.prepare();
-                hit = closest_surface(self.accel, self.scene, &ray);
-                continue;
-            }
-            let Some((lobe, weight)) = self.choose_lobe(&s, samples) else {
-                break;
-            };
-            throughput *= weight;
-            // A path this bounce turns black ends here (see `survives_roulette`), before it
-            // spends a shadow ray on a sample it would weigh by zero.
-            if throughput.max_element() == 0.0 {
-                break;
-            }
-            let dir;
-            if lobe == Lobe::Diffuse {
-                // The light sample's numbers come first in the path's sequence, but the next
-                // direction is computed before the light sample: its long chain (a division,
-                // sincos) then runs while the shadow ray is traced, not after it (0.95× the
-                // time on the Cornell box; the same numbers, so the same image).
-                let light_draw = self.draw_light(s.prim, samples);
-                let sky_draw = self.draw_sky(samples);
-                let (u, v) = samples.next_2d();
-                let (sampled, pdf) = diffuse_sample(n, u, v);
-                radiance += throughput
-                    * (self.unblocked(self.light_sample(&s, n, None, medium, light_draw), counts)
-                        + self.sample_sky(&s, n, None, medium, sky_draw, counts)
-                        + self.delta_lights(&s, n, None, medium, counts));
-                if m.bump.is_some() && !s.leaves_on_side_of(n, sampled) {
-                    break;
                 }
                 dir = sampled;
-                diffuse_bounce = true;
-                previous = Previous {
-                    point: s.point,
-                    normal: n,
-                    bsdf_pdf: Some(pdf),
-                    in_medium: false,
+            } else {
+                let Some((lobe, weight)) = self.choose_lobe(&s, samples) else {
+                    break;
                 };
-            } else if lobe == Lobe::Reflective {
-                match GlossyLobe::new(ray.direction, n, m.roughness) {
-                    // A mirror: a delta no light sample finds.
-                    None => {
-                        dir = reflect(ray.direction, n);
-                        previous.bsdf_pdf = None;
+                throughput *= weight;
+                // A path this bounce turns black ends here (see `survives_roulette`), before it
+                // spends a shadow ray on a sample it would weigh by zero.
+                if throughput.max_element() == 0.0 {
+                    break;
+                }
+                if lobe == Lobe::Diffuse {
+                    // The light sample's numbers come first in the path's sequence, but the next
+                    // direction is computed before the light sample: its long chain (a division,
+                    // sincos) then runs while the shadow ray is traced, not after it (0.95× the
+                    // time on the Cornell box; the same numbers, so the same image).
+                    let light_draw = self.draw_light(s.prim, samples);
+                    let sky_draw = self.draw_sky(samples);
+                    let (u, v) = samples.next_2d();
+                    let (sampled, pdf) = diffuse_sample(n, u, v);
+                    radiance += throughput
+                        * (self
+                            .unblocked(self.light_sample(&s, n, None, medium, light_draw), counts)
+                            + self.sample_sky(&s, n, None, medium, sky_draw, counts)
+                            + self.delta_lights(&s, n, None, medium, counts));
+                    if m.bump.is_some() && !s.leaves_on_side_of(n, sampled) {
+                        break;
                     }
-                    Some(glossy) => {
-                        let light_draw = self.draw_light(s.prim, samples);
-                        let sky_draw = self.draw_sky(samples);
-                        radiance += throughput
-                            * (self.unblocked(
-                                self.light_sample(&s, n, Some(&glossy), medium, light_draw),
-                                counts,
-                            ) + self.sample_sky(&s, n, Some(&glossy), medium, sky_draw, counts)
-                                + self.delta_lights(&s, n, Some(&glossy), medium, counts));
-                        let (u, v) = samples.next_2d();
-                        let (sampled, pdf) = glossy.sample(u, v);
-                        dir = sampled;
-                        previous = Previous {
-                            point: s.point,
-                            normal: n,
-                            bsdf_pdf: pdf,
-                            in_medium: false,
+                    dir = sampled;
+                    diffuse_bounce = true;
+                    previous = Previous {
+                        point: s.point,
+                        normal: n,
+                        bsdf_pdf: Some(pdf),
+                        in_medium: false,
+                    };
+                } else if lobe == Lobe::Reflective {
+                    match GlossyLobe::new(ray.direction, n, m.roughness) {
+                        // A mirror: a delta no light sample finds.
+                        None => {
+                            dir = reflect(ray.direction, n);
+                            previous.bsdf_pdf = None;
+                        }
+                        Some(glossy) => {
+                            let light_draw = self.draw_light(s.prim, samples);
+                            let sky_draw = self.draw_sky(samples);
+                            radiance += throughput
+                                * (self.unblocked(
+                                    self.light_sample(&s, n, Some(&glossy), medium, light_draw),
+                                    counts,
+                                ) + self.sample_sky(
+                                    &s,
+                                    n,
+                                    Some(&glossy),
+                                    medium,
+                                    sky_draw,
+                                    counts,
+                                ) + self.delta_lights(&s, n, Some(&glossy), medium, counts));
+                            let (u, v) = samples.next_2d();
+                            let (sampled, pdf) = glossy.sample(u, v);
+                            dir = sampled;
+                            previous = Previous {
+                                point: s.point,
+                                normal: n,
+                                bsdf_pdf: pdf,
+                                in_medium: false,
+                            };
+                        }
+                    }
+                } else {
+                    dir =
+                        Dielectric::at(m, front, ray.direction, n)
+                            .sample(ray.direction, n, || samples.next_1d());
+                    previous.bsdf_pdf = None;
+                    // Through the boundary (n faces the side the ray came from): into a closed
+                    // object from its front, out of it from its back.
+                    if dir.dot(n) < 0.0 {
+                        medium = if front {
+                            self.scene.interior_medium(m)
+                        } else {
+                            fog
                         };
                     }
-                }
-            } else {
-                dir = Dielectric::at(m, front, ray.direction, n)
-                    .sample(ray.direction, n, || samples.next_1d());
-                previous.bsdf_pdf = None;
-                // Through the boundary (n faces the side the ray came from): into a closed
-                // object from its front, out of it from its back.
-                if dir.dot(n) < 0.0 {
-                    medium = if front {
-                        self.scene.interior_medium(m)
-                    } else {
-                        fog
-                    };
                 }
             }
             if !survives_roulette(depth, &mut throughput, samples) {

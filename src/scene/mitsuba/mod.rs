@@ -766,13 +766,7 @@ impl Builder {
                 if !t.boolean("raw", false)? {
                     self.warn(&t.at, "a normal map is read raw (no sRGB curve)");
                 }
-                let mut texture = Texture::load_heights(&file)
-                    .map_err(|why| at.error(format!("cannot read {}: {why}", file.display())))?;
-                texture.to_uv = to_uv(t)?;
-                if let Some((filter, _)) = t.string("filter_type")? {
-                    texture.nearest = filter == "nearest";
-                }
-                texture
+                bitmap(t, &file, at, true)?
             }
             "rawconstant" => {
                 let v = t.point("value", DVec3::new(0.5, 0.5, 1.0))?.as_vec3();
@@ -802,19 +796,9 @@ impl Builder {
                     .file("filename")?
                     .ok_or_else(|| t.at.error("bitmap needs a filename"))?;
                 let raw = t.boolean("raw", false)?;
-                let loaded = if raw {
-                    Texture::load_heights(&file)
-                } else {
-                    Texture::load(&file)
-                };
-                let mut texture = loaded
-                    .map_err(|why| at.error(format!("cannot read {}: {why}", file.display())))?;
+                let mut texture = bitmap(&t, &file, at, raw)?;
                 for c in &mut texture.texels {
                     *c = Color::splat(c.dot(crate::geometry::vec3(0.212671, 0.715160, 0.072169)));
-                }
-                texture.to_uv = to_uv(&t)?;
-                if let Some((filter, _)) = t.string("filter_type")? {
-                    texture.nearest = filter == "nearest";
                 }
                 texture
             }
@@ -1134,6 +1118,23 @@ impl Builder {
         };
         Ok(DeltaLight { kind, intensity })
     }
+}
+
+/// A `bitmap` plugin's image `file` (named at `at`), decoded raw or from sRGB, with its
+/// `to_uv` and `filter_type`.
+fn bitmap(t: &Plugin, file: &Path, at: &xml::Location, raw: bool) -> Result<Texture, SceneError> {
+    let loaded = if raw {
+        Texture::load_heights(file)
+    } else {
+        Texture::load(file)
+    };
+    let mut texture =
+        loaded.map_err(|why| at.error(format!("cannot read {}: {why}", file.display())))?;
+    texture.to_uv = to_uv(t)?;
+    if let Some((filter, _)) = t.string("filter_type")? {
+        texture.nearest = filter == "nearest";
+    }
+    Ok(texture)
 }
 
 /// A texture's `to_uv` as trilux's textures take it: Mitsuba's 2D affine map (the upper
