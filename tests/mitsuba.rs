@@ -112,6 +112,78 @@ fn a_diffuse_sphere_under_a_uniform_sky_reflects_rho_times_the_sky() {
     }
 }
 
+/// The mean of the first channel of `file` rendered by the path tracer at 24×16 and `spp`,
+/// with each Accel.
+fn path_means(file: &Path, spp: u32) -> Vec<f64> {
+    let scene = Scene::load(file).expect("loads");
+    backends()
+        .into_iter()
+        .map(|kind| {
+            let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+            let settings = RenderSettings {
+                width: 24,
+                height: 16,
+                num_antialias_samples: spp,
+                quiet: true,
+                ..RenderSettings::default()
+            };
+            let (film, _) = path::render(&scene, accel.as_ref(), &settings);
+            film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64
+        })
+        .collect()
+}
+
+/// A `thindielectric` pane of bk7 (η = 1.5046) seen face on against a uniform environment of
+/// radiance 2, with its transmission halved and its reflection off: what comes through is
+/// 2 × 0.5 × (1 − R′), R′ = 2R/(1 + R), R = ((η − 1)/(η + 1))², whatever the engine does with
+/// the pane's other lobe. Then a lossless pane (both factors 1) closed around a white
+/// diffuse sphere: a furnace, L everywhere, which holds only if shadow rays through the pane
+/// carry its transmission (1 − R′) and paths reflected by it the rest.
+#[test]
+fn a_thin_dielectric_lets_through_what_it_does_not_reflect() {
+    let sphere = &SPHERE[SPHERE.find("    <shape").unwrap()..SPHERE.find("</scene>").unwrap()];
+    let pane = SPHERE
+        .replace(
+            sphere,
+            r#"<shape type="rectangle">
+        <bsdf type="thindielectric">
+            <rgb name="specular_transmittance" value="0.5"/>
+            <rgb name="specular_reflectance" value="0"/>
+        </bsdf>
+    </shape>
+"#,
+        )
+        .replace(
+            r#"<lookat origin="3, 0, 7" target="3, 0, 0" up="0, 1, 0"/>"#,
+            r#"<lookat origin="0, 0, 7" target="0, 0, 0" up="0, 1, 0"/>"#,
+        )
+        .replace(r#"<default name="rho" value="0.25"/>"#, "");
+    let r = (0.5046f64 / 2.5046).powi(2);
+    let expected = 2.0 * 0.5 * (1.0 - 2.0 * r / (1.0 + r));
+    let file = write("pane", &[("pane.xml", pane.as_bytes())]);
+    for mean in path_means(&file, 256) {
+        // The lens's 10° spans cos θ ≥ 0.996 at the pane, where R changes by under 1e-4; a
+        // sample passes or not, so the mean of 98,304 has a standard deviation of 9e-4.
+        assert!(
+            (mean - expected).abs() < 4e-3,
+            "mean {mean}, expected {expected}"
+        );
+    }
+
+    let furnace = SPHERE.replace(r#"value="0.25""#, r#"value="1""#).replace(
+        r#"<shape type="sphere">"#,
+        r#"<shape type="sphere">
+        <transform name="to_world"><scale value="4"/><translate x="3"/></transform>
+        <bsdf type="thindielectric"/>
+    </shape>
+    <shape type="sphere">"#,
+    );
+    let file = write("sheet-furnace", &[("furnace.xml", furnace.as_bytes())]);
+    for mean in path_means(&file, 256) {
+        assert!((mean - 2.0).abs() < 0.02, "mean {mean}, expected L = 2");
+    }
+}
+
 /// A mesh read through `<include>` and `<path>`, placed by a 4×4 matrix, with its own
 /// shading normals; a `rectangle` emitter with a spectrum converted as Mitsuba converts it.
 #[test]

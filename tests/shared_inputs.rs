@@ -304,7 +304,7 @@ fn reference_paths(solution: &Solution, total: f64) -> Vec<u32> {
 }
 
 /// Mitsuba 3's render tests that our path tracer passes today: each must keep passing.
-const MITSUBA_TESTS_PASSING: [&str; 18] = [
+const MITSUBA_TESTS_PASSING: [&str; 19] = [
     "test_arealight_path",
     "test_constant_path",
     "test_envmap_path",
@@ -320,6 +320,7 @@ const MITSUBA_TESTS_PASSING: [&str; 18] = [
     "test_texturedprincipled2_path",
     "test_homo_area_light_volpath",
     "test_homo_dielectric_envmap_volpath",
+    "test_homo_emitter_inside_medium_volpath",
     "test_homo_null_envmap_volpath",
     "test_homo_roughdielectric_spot_volpath",
     "test_surf_area_light_volpath",

@@ -1062,6 +1062,21 @@ impl Bsdf {
         )
     }
 
+    /// The lobe that lets light through undeviated, as a thin sheet does (Mitsuba's `Null`
+    /// component of `thindielectric`), for light meeting the surface at `cos_theta` to its
+    /// normal: the probability of passing and the colour on what passes. Mitsuba's volumetric
+    /// path tracer crosses it as it crosses `null`: without counting a scattering, and shadow
+    /// rays through it carry both factors (its `eval_null_transmission`). None for the
+    /// BSDFs without such a lobe.
+    pub fn null_lobe(&self, cos_theta: f32) -> Option<(f32, Color)> {
+        match self {
+            Bsdf::ThinDielectric {
+                eta, transmittance, ..
+            } => Some((1.0 - thin_reflectance(cos_theta, *eta), *transmittance)),
+            _ => None,
+        }
+    }
+
     /// Whether some light passes through the surface (the dielectrics).
     pub fn has_transmission(&self) -> bool {
         match self {

@@ -106,15 +106,30 @@ impl Material {
         self.emitted.max_element() > 0.0
     }
     /// Whether the surface changes nothing that crosses it: clear glass of index 1, which
-    /// neither reflects nor bends (Mitsuba's `null`, a medium's boundary).
+    /// neither reflects nor bends (Mitsuba's `null`, a medium's boundary). A thin sheet of
+    /// glass (`thindielectric`) bends nothing either but reflects: its BSDF says so.
     pub fn is_index_matched(&self) -> bool {
-        self.transmitted == Vec3::ONE
+        self.bsdf.is_none()
+            && self.transmitted == Vec3::ONE
             && self.ior == 1.0
             && self.diffuse == Vec3::ZERO
             && self.reflective == Vec3::ZERO
             && self.emitted == Vec3::ZERO
             && self.texture.is_none()
             && self.procedural.is_none()
+    }
+
+    /// The part of the light meeting the surface at `cos_theta` that goes straight through
+    /// it, as a shadow ray sees it: all of it for an index-matched boundary, a thin sheet's
+    /// transmission (`Bsdf::null_lobe`), none for every other surface.
+    pub fn straight_transmission(&self, cos_theta: f32) -> Color {
+        if self.is_index_matched() {
+            return Color::ONE;
+        }
+        match self.bsdf.as_ref().and_then(|b| b.null_lobe(cos_theta)) {
+            Some((pass, colour)) => colour * pass,
+            None => Color::ZERO,
+        }
     }
 
     pub fn is_specular(&self) -> bool {

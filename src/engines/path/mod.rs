@@ -30,7 +30,7 @@ use crate::sampling::{LightSampling, PathSamples};
 use crate::scene::bsdf::Bsdf;
 use crate::scene::medium::{Flight, Medium};
 use crate::scene::sky::Sky;
-use crate::scene::{Color, Material, PrimRef, Scene, SurfaceHit};
+use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
 
 /// Vertices after which Russian roulette may end a path (0-based: the sixth vertex is the
 /// first it may end at). From the third, the Cornell box's relMSE at 64
@@ -142,7 +142,10 @@ impl PathTracer<'_> {
             cdf,
             max_depth: MAX_VERTICES,
             by_area: false,
-            crosses_boundaries: scene.materials.iter().any(Material::is_index_matched),
+            crosses_boundaries: scene
+                .materials
+                .iter()
+                .any(|m| m.straight_transmission(1.0) != Color::ZERO),
             arch: pulp::Arch::new(),
         }
     }
@@ -569,7 +572,20 @@ impl PathTracer<'_> {
             radiance += self.emission(&s, ray.direction, &previous, throughput);
             // An index-matched boundary changes only the medium: the path goes on as it was
             // (its previous vertex still the one whose density weighs what it meets next).
-            if m.is_index_matched() {
+            // So does what a thin sheet lets through; what it does not, it reflects.
+            let sheet = m
+                .bsdf
+                .as_ref()
+                .and_then(|b| b.null_lobe(ray.direction.normalize().dot(s.shading_normal)));
+            let passes = m.is_index_matched()
+                || match sheet {
+                    Some((pass, colour)) if samples.next_1d() < pass => {
+                        throughput *= colour;
+                        true
+                    }
+                    _ => false,
+                };
+            if passes {
                 if ray.direction.dot(s.geometric_normal) < 0.0 {
                     medium = self.scene.interior_medium(m);
                 } else {
@@ -602,7 +618,12 @@ impl PathTracer<'_> {
                 }
             }
             let dir;
-            if let Some(bsdf) = &m.bsdf {
+            if let (Some(Bsdf::ThinDielectric { reflectance, .. }), Some(_)) = (&m.bsdf, sheet) {
+                // The sheet's other lobe, chosen with the probability it has.
+                throughput *= *reflectance;
+                previous.bsdf_pdf = None;
+                dir = reflect(ray.direction, s.shading_normal);
+            } else if let Some(bsdf) = &m.bsdf {
                 let (light, scattered) = self.bsdf_vertex(
                     &s,
                     ray.direction,
@@ -903,10 +924,12 @@ impl PathTracer<'_> {
                 return transmittance * medium.map_or(Vec3::ONE, |m| m.transmittance(rest));
             };
             let m = &self.scene.materials[hit.material as usize];
-            if !m.is_index_matched() {
+            let straight = m.straight_transmission(ray.direction.dot(hit.shading_normal) / scale);
+            if straight == Color::ZERO {
                 return Vec3::ZERO;
             }
-            transmittance *= medium.map_or(Vec3::ONE, |md| md.transmittance(hit.t * scale));
+            transmittance *=
+                straight * medium.map_or(Vec3::ONE, |md| md.transmittance(hit.t * scale));
             medium = if ray.direction.dot(hit.geometric_normal) < 0.0 {
                 self.scene.interior_medium(m)
             } else {
