@@ -24,3 +24,9 @@ pub fn linear_to_srgb(c: f32) -> f32 {
         1.055 * c.powf(1.0 / 2.4) - 0.055
     }
 }
+
+/// The Rec. 709 luminance of a linear RGB colour, with Mitsuba's coefficients (its
+/// `luminance`): what a colour texture gives where one number is asked of it.
+pub fn luminance(c: Vec3) -> f32 {
+    0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
+}

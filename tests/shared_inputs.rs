@@ -304,8 +304,9 @@ fn reference_paths(solution: &Solution, total: f64) -> Vec<u32> {
 }
 
 /// Mitsuba 3's render tests that our path tracer passes today: each must keep passing.
-const MITSUBA_TESTS_PASSING: [&str; 19] = [
+const MITSUBA_TESTS_PASSING: [&str; 20] = [
     "test_arealight_path",
+    "test_bumpmap_path",
     "test_constant_path",
     "test_envmap_path",
     "test_normalmap_identity_roughconductor_path",

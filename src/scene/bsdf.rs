@@ -34,7 +34,7 @@
 //! the half vector while `sample` chose them with the sampled normal's (exact without
 //! `spec_trans`, close with it).
 
-use crate::color::Color;
+use crate::color::{luminance, Color};
 use crate::geometry::{vec3, Vec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -1349,11 +1349,6 @@ fn schlick_fresnel(r0: Color, cos_i: f32, eta: f32) -> Color {
         schlick_weight(cos_t)
     };
     Vec3::splat(w) * (Vec3::ONE - r0) + r0
-}
-
-/// Rec. 709 luminance, Mitsuba's `luminance` for RGB.
-fn luminance(c: Color) -> f32 {
-    0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
 }
 
 /// Berry's distribution (GTR with γ = 1), the clearcoat's: isotropic, long-tailed.

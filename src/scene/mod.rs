@@ -68,11 +68,20 @@ pub struct Material {
     /// it is below 1, light passes straight through the rest of the time (default none:
     /// opaque).
     pub opacity: Option<usize>,
-    /// The texture of tangent-space normals (2·texel − 1) that tilt `bsdf`'s frame
-    /// (Mitsuba's `normalmap`; default none).
-    pub normal_map: Option<usize>,
+    /// What tilts `bsdf`'s shading frame: a normal map or a bump map (default none).
+    pub tilt: Option<ShadingTilt>,
     /// Line of the file where the material starts (0 for materials not from a file).
     pub line: u32,
+}
+
+/// A texture that tilts a BSDF's shading frame, as Mitsuba's wrapping BSDFs do.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ShadingTilt {
+    /// Tangent-space normals, 2·texel − 1 (Mitsuba's `normalmap`): the texture's index.
+    NormalMap(usize),
+    /// Heights whose gradient, times `scale`, tilts the surface's tangents (Mitsuba's
+    /// `bumpmap`): the texture's index.
+    BumpMap { heights: usize, scale: f32 },
 }
 
 impl Default for Material {
@@ -95,7 +104,7 @@ impl Default for Material {
             two_sided: false,
             bsdf_textures: Vec::new(),
             opacity: None,
-            normal_map: None,
+            tilt: None,
             line: 0,
         }
     }

@@ -199,10 +199,11 @@ impl Scene {
         }
     }
 
-    /// The direction in which the texture's first coordinate grows at a hit, ∂p/∂u (not
-    /// unit): on triangles with texture coordinates, where they are not degenerate; None
-    /// elsewhere. What an anisotropic BSDF's frame is aligned with, as in Mitsuba.
-    pub fn tangent(&self, hit: &SurfaceHit) -> Option<Vec3> {
+    /// The directions in which the texture's coordinates (s, t) grow at a hit, ∂p/∂s and
+    /// ∂p/∂t (not unit): on triangles with texture coordinates, where they are not
+    /// degenerate; None elsewhere. An anisotropic BSDF's frame is aligned with the first,
+    /// as in Mitsuba; a bump map tilts both.
+    pub fn tangents(&self, hit: &SurfaceHit) -> Option<(Vec3, Vec3)> {
         let mesh = &self.triangles;
         if hit.prim.kind != PrimKind::Triangle || mesh.tex_coords.is_empty() {
             return None;
@@ -213,7 +214,9 @@ impl Scene {
         let (du1, du2) = (t1 - t0, t2 - t0);
         let det = du1.x * du2.y - du1.y * du2.x;
         let dpdu = ((p1 - p0) * du2.y - (p2 - p0) * du1.y) / det;
-        (det != 0.0 && dpdu.is_finite() && dpdu != Vec3::ZERO).then_some(dpdu)
+        let dpdv = ((p2 - p0) * du1.x - (p1 - p0) * du2.x) / det;
+        (det != 0.0 && dpdu.is_finite() && dpdv.is_finite() && dpdu != Vec3::ZERO)
+            .then_some((dpdu, dpdv))
     }
 
     /// The texture coordinates at a hit: interpolated from the primitive's `vt` where it has

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use crate::color::srgb_to_linear;
+use crate::color::{luminance, srgb_to_linear};
 
 use crate::geometry::{Vec2, Vec3};
 
@@ -83,18 +83,49 @@ impl Texture {
         self.texels[y * self.width as usize + x]
     }
 
-    /// Bilinear lookup with repeat; `t = 0` is the bottom row of the image, as in OBJ.
-    pub fn lookup(&self, st: Vec2) -> Vec3 {
-        if self.texels.is_empty() {
-            return Vec3::ZERO;
-        }
-        let st = match &self.to_uv {
+    /// A surface's texture coordinates in the image's, through `to_uv`.
+    fn mapped(&self, st: Vec2) -> Vec2 {
+        match &self.to_uv {
             None => st,
             Some([a, b]) => Vec2::new(
                 a[0] * st.x + a[1] * st.y + a[2],
                 b[0] * st.x + b[1] * st.y + b[2],
             ),
-        };
+        }
+    }
+
+    /// The gradient of the bilinear lookup's luminance with respect to the surface's texture
+    /// coordinates (s, t): what a height map tilts a normal by, as Mitsuba's bitmap
+    /// `eval_1_grad` gives it (zero under the nearest filter, flat almost everywhere).
+    pub fn gradient(&self, st: Vec2) -> Vec2 {
+        let mapped = self.mapped(st);
+        let x = mapped.x * self.width as f32 - 0.5;
+        let y = (1.0 - mapped.y) * self.height as f32 - 0.5;
+        if self.nearest || self.texels.is_empty() || !x.is_finite() || !y.is_finite() {
+            return Vec2::ZERO;
+        }
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (ix, iy) = (x0 as i64, y0 as i64);
+        let f = |dx, dy| luminance(self.texel(ix + dx, iy + dy));
+        let (f00, f10, f01, f11) = (f(0, 0), f(1, 0), f(0, 1), f(1, 1));
+        let dfdx = (1.0 - fy) * (f10 - f00) + fy * (f11 - f01);
+        let dfdy = (1.0 - fx) * (f01 - f00) + fx * (f11 - f10);
+        // Image coordinates against the mapped ones (rows run down, t up), then through
+        // `to_uv`'s linear part, transposed.
+        let (gx, gy) = (dfdx * self.width as f32, -dfdy * self.height as f32);
+        match &self.to_uv {
+            None => Vec2::new(gx, gy),
+            Some([a, b]) => Vec2::new(a[0] * gx + b[0] * gy, a[1] * gx + b[1] * gy),
+        }
+    }
+
+    /// Bilinear lookup with repeat; `t = 0` is the bottom row of the image, as in OBJ.
+    pub fn lookup(&self, st: Vec2) -> Vec3 {
+        if self.texels.is_empty() {
+            return Vec3::ZERO;
+        }
+        let st = self.mapped(st);
         if self.nearest {
             let x = (st.x * self.width as f32).floor();
             let y = ((1.0 - st.y) * self.height as f32).floor();
@@ -114,5 +145,38 @@ impl Texture {
         let top = self.texel(ix, iy) * (1.0 - fx) + self.texel(ix + 1, iy) * fx;
         let bottom = self.texel(ix, iy + 1) * (1.0 - fx) + self.texel(ix + 1, iy + 1) * fx;
         top * (1.0 - fy) + bottom * fy
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Heights that climb by 0.25 a texel to the right and by 0.125 a texel up (rows run
+    /// down the image): away from the wrap, the gradient in (s, t) is the climb times the
+    /// texels per unit, (0.25·8, 0.125·4); through a `to_uv` that doubles s and shifts, twice
+    /// the first.
+    #[test]
+    fn the_gradient_of_a_ramp_is_its_slope() {
+        let (width, height) = (8u32, 4u32);
+        let texels = (0..height)
+            .flat_map(|y| {
+                (0..width).map(move |x| Vec3::splat(0.25 * x as f32 + 0.125 * (3 - y) as f32))
+            })
+            .collect();
+        let mut ramp = Texture {
+            width,
+            height,
+            texels,
+            to_uv: None,
+            nearest: false,
+        };
+        let g = ramp.gradient(Vec2::new(0.4, 0.5));
+        assert!((g - Vec2::new(2.0, 0.5)).length() < 1e-5, "{g}");
+        ramp.to_uv = Some([[2.0, 0.0, -0.3], [0.0, 1.0, 0.0]]);
+        let g = ramp.gradient(Vec2::new(0.4, 0.5));
+        assert!((g - Vec2::new(4.0, 0.5)).length() < 1e-5, "{g}");
+        ramp.nearest = true;
+        assert_eq!(ramp.gradient(Vec2::new(0.4, 0.5)), Vec2::ZERO);
     }
 }

@@ -30,7 +30,7 @@ use crate::sampling::{LightSampling, PathSamples};
 use crate::scene::bsdf::Bsdf;
 use crate::scene::medium::{Flight, Medium};
 use crate::scene::sky::Sky;
-use crate::scene::{Color, PrimRef, Scene, SurfaceHit};
+use crate::scene::{Color, PrimRef, Scene, ShadingTilt, SurfaceHit};
 
 /// Vertices after which Russian roulette may end a path (0-based: the sixth vertex is the
 /// first it may end at). From the third, the Cornell box's relMSE at 64
@@ -773,8 +773,9 @@ impl PathTracer<'_> {
         // surface has texture coordinates (an anisotropic BSDF is aligned with them). A
         // two-sided BSDF seen from behind is the frame mirrored through the tangent plane.
         let n = s.shading_normal;
-        let (t, b) = match self.scene.tangent(s) {
-            Some(dpdu) => {
+        let tangents = self.scene.tangents(s);
+        let (t, b) = match tangents {
+            Some((dpdu, _)) => {
                 let t = (dpdu - n * n.dot(dpdu)).normalize_or_zero();
                 if t == Vec3::ZERO {
                     orthonormal_basis(n)
@@ -797,8 +798,27 @@ impl PathTracer<'_> {
             wi: Vec3::ZERO,
         };
         let wi = at.local(-incoming);
-        if let Some(k) = self.scene.materials[s.material as usize].normal_map {
-            at.perturb(self.scene.textures[k].lookup(self.scene.tex_coords(s)), wi);
+        match self.scene.materials[s.material as usize].tilt {
+            None => {}
+            Some(ShadingTilt::NormalMap(k)) => {
+                let texel = self.scene.textures[k].lookup(self.scene.tex_coords(s));
+                at.tilt(texel * 2.0 - Vec3::ONE, Vec3::X, wi);
+            }
+            Some(ShadingTilt::BumpMap { heights, scale }) => {
+                // Mitsuba's `bumpmap`: the tangents lifted along the normal by the heights'
+                // gradient, the normal across them turned to the surface's outside.
+                if let Some((dpdu, dpdv)) = tangents {
+                    let g = self.scene.textures[heights].gradient(self.scene.tex_coords(s)) * scale;
+                    let du = dpdu + n * (g.x - n.dot(dpdu));
+                    let dv = dpdv + n * (g.y - n.dot(dpdv));
+                    let mut bumped = du.cross(dv);
+                    if bumped.dot(s.geometric_normal) < 0.0 {
+                        bumped = -bumped;
+                    }
+                    let local = at.local(bumped);
+                    at.tilt(local * local.z.signum(), at.local(dpdu), wi);
+                }
+            }
         }
         at.wi = wi;
         // The medium on the side a direction leaves into: a transmitted direction is in the
@@ -943,12 +963,13 @@ impl PathTracer<'_> {
 }
 
 /// A Mitsuba BSDF at a surface point: its shading frame (tangent, bitangent, normal in the
-/// world), the frame a normal map tilts it to (within the first), and the direction towards
+/// world), the frame a normal or bump map tilts it to (within the first), and the direction towards
 /// the path's previous vertex in the BSDF's own frame.
 struct BsdfAt<'b> {
     bsdf: &'b Bsdf,
     frame: (Vec3, Vec3, Vec3),
-    /// A normal map's frame, in `frame`'s coordinates (Mitsuba's `normalmap`).
+    /// A normal or bump map's frame, in `frame`'s coordinates (Mitsuba's `normalmap`,
+    /// `bumpmap`).
     perturbed: Option<(Vec3, Vec3, Vec3)>,
     wi: Vec3,
 }
@@ -960,22 +981,23 @@ impl BsdfAt<'_> {
         Vec3::new(v.dot(t), v.dot(b), v.dot(n))
     }
 
-    /// Tilts the frame to the normal a normal map's texel `texel` encodes (2·texel − 1, in
-    /// the shading frame), mirrored to face `wi` where it would not, as Mitsuba does.
-    fn perturb(&mut self, texel: Vec3, wi: Vec3) {
-        let mut normal = texel * 2.0 - Vec3::ONE;
+    /// Tilts the frame to `normal` (in the shading frame, not unit), mirrored to face `wi`
+    /// where it would not, its tangent the part of `along` across it, as Mitsuba's
+    /// `normalmap` (along its first axis) and `bumpmap` (along ∂p/∂u) do.
+    fn tilt(&mut self, normal: Vec3, along: Vec3, wi: Vec3) {
+        let mut normal = normal;
         if wi.z * wi.dot(normal) <= 0.0 {
             normal = Vec3::new(-normal.x, -normal.y, normal.z);
         }
         let n = normal.normalize_or_zero();
-        let s = (Vec3::X - n * n.x).normalize_or_zero();
+        let s = (along - n * n.dot(along)).normalize_or_zero();
         if n == Vec3::ZERO || s == Vec3::ZERO {
             return;
         }
         self.perturbed = Some((s, n.cross(s), n));
     }
 
-    /// A shading-frame direction in the BSDF's frame: the normal map's where there is one.
+    /// A shading-frame direction in the BSDF's frame: the tilted one where there is one.
     fn in_bsdf_frame(&self, v: Vec3) -> Vec3 {
         match self.perturbed {
             None => v,
@@ -983,8 +1005,8 @@ impl BsdfAt<'_> {
         }
     }
 
-    /// A normal map's attenuation of light leaving along `wo` (shading frame): Estevez et
-    /// al.'s shadowing term for bump terminators, which Mitsuba's normal maps apply.
+    /// A tilted frame's attenuation of light leaving along `wo` (shading frame): Estevez et
+    /// al.'s shadowing term for bump terminators, which Mitsuba's normal and bump maps apply.
     fn terminator(&self, wo: Vec3) -> f32 {
         let Some((_, _, n)) = self.perturbed else {
             return 1.0;

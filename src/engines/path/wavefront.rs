@@ -49,7 +49,7 @@ impl PathTracer<'_> {
                     && m.bump.is_none()
                     && m.bsdf.is_none()
                     && m.opacity.is_none()
-                    && m.normal_map.is_none()
+                    && m.tilt.is_none()
             })
     }
 

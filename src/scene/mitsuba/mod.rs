@@ -34,7 +34,7 @@ use super::bsdf_texture::{BsdfParameter, TexturedParameter};
 use super::camera::{Camera, Projection};
 use super::medium::Medium;
 use super::sky::{Sky, SkyMap};
-use super::{DeltaKind, DeltaLight, Material, Scene, SceneError, ShapePrim, Texture};
+use super::{DeltaKind, DeltaLight, Material, Scene, SceneError, ShadingTilt, ShapePrim, Texture};
 use crate::color::Color;
 use crate::geometry::{SphereShape, Vec2, Vec3};
 
@@ -518,10 +518,10 @@ impl Builder {
                 );
                 m
             }
-            "normalmap" => {
+            "normalmap" | "bumpmap" => {
                 let mut m = match inner(p) {
                     Some(b) => self.bsdf(&b)?,
-                    None => return Err(p.at.error("normalmap needs a nested bsdf")),
+                    None => return Err(p.at.error(format!("{} needs a nested bsdf", p.kind))),
                 };
                 if m.bsdf.is_none() {
                     // The course's two-sided diffuse material as a BSDF, to be tilted.
@@ -529,33 +529,27 @@ impl Builder {
                         reflectance: m.diffuse,
                     });
                 }
-                let t = p
-                    .child_named("normalmap")
-                    .cloned()
-                    .ok_or_else(|| p.at.error("normalmap needs a texture named normalmap"))?;
-                m.normal_map = Some(self.raw_texture(&t)?);
+                let t = match p.kind.as_str() {
+                    "normalmap" => p.child_named("normalmap").cloned(),
+                    _ => p.children_tagged("texture").next().map(|c| c.plugin.clone()),
+                }
+                .ok_or_else(|| p.at.error(format!("{} needs a texture", p.kind)))?;
+                let texture = self.raw_texture(&t)?;
+                m.tilt = Some(if p.kind == "normalmap" {
+                    ShadingTilt::NormalMap(texture)
+                } else {
+                    ShadingTilt::BumpMap {
+                        heights: texture,
+                        scale: p.float("scale", 1.0)? as f32,
+                    }
+                });
                 let _ = p.boolean("flip_invalid_normals", true)?;
                 let _ = p.boolean("use_shadowing_function", true)?;
                 self.warn(
                     &p.at,
-                    "normalmap: the path tracer tilts the shading frame; the other engines render its nested bsdf untilted",
+                    format!("{}: the path tracer tilts the shading frame; the other engines render its nested bsdf untilted", p.kind),
                 );
                 m
-            }
-            "bumpmap" => {
-                for t in p.children_tagged("texture") {
-                    mark_all_used(&t.plugin);
-                }
-                let _ = p.float("opacity", 1.0);
-                let _ = p.float("scale", 1.0);
-                self.warn(
-                    &p.at,
-                    format!("bsdf \"{}\" is not supported: its nested bsdf is rendered without it", p.kind),
-                );
-                match inner(p) {
-                    Some(b) => self.bsdf(&b)?,
-                    None => return Err(p.at.error(format!("{} needs a nested bsdf", p.kind))),
-                }
             }
             "null" => Material {
                 // A boundary that changes nothing: glass of index 1 reflects nothing.
@@ -754,7 +748,7 @@ impl Builder {
         Ok(Some(Microfacet::new(kind, au, av, visible)))
     }
 
-    /// A texture of raw values (a normal map's): a `bitmap` decoded without sRGB's curve
+    /// A texture of raw values (a normal or bump map's): a `bitmap` decoded without sRGB's curve
     /// whatever its `raw` says, or a `rawconstant`; pushed to the scene's textures.
     fn raw_texture(&mut self, t: &Plugin) -> Result<usize, SceneError> {
         t.mark_used();
@@ -764,7 +758,7 @@ impl Builder {
                     .file("filename")?
                     .ok_or_else(|| t.at.error("bitmap needs a filename"))?;
                 if !t.boolean("raw", false)? {
-                    self.warn(&t.at, "a normal map is read raw (no sRGB curve)");
+                    self.warn(&t.at, "a normal or bump map is read raw (no sRGB curve)");
                 }
                 bitmap(t, &file, at, true)?
             }
@@ -774,7 +768,7 @@ impl Builder {
             }
             other => {
                 return Err(t.at.error(format!(
-                    "a {other} normal map is not supported: give a bitmap or a rawconstant"
+                    "a {other} normal or bump map is not supported: give a bitmap or a rawconstant"
                 )))
             }
         };
@@ -798,7 +792,7 @@ impl Builder {
                 let raw = t.boolean("raw", false)?;
                 let mut texture = bitmap(&t, &file, at, raw)?;
                 for c in &mut texture.texels {
-                    *c = Color::splat(c.dot(crate::geometry::vec3(0.212671, 0.715160, 0.072169)));
+                    *c = Color::splat(crate::color::luminance(*c));
                 }
                 texture
             }
