@@ -391,7 +391,8 @@ impl PathTracer<'_> {
     ) -> Color {
         let mut sum = Vec3::ZERO;
         for light in &self.scene.delta_lights {
-            let Some((dir, distance, irradiance)) = light.towards(s.point) else {
+            let Some((dir, distance, irradiance)) = light.towards(s.point, &self.scene.textures)
+            else {
                 continue;
             };
             let cos = n.dot(dir);
@@ -879,7 +880,9 @@ impl PathTracer<'_> {
                 }
             }
             for delta in &self.scene.delta_lights {
-                let Some((dir, distance, irradiance)) = delta.towards(s.point) else {
+                let Some((dir, distance, irradiance)) =
+                    delta.towards(s.point, &self.scene.textures)
+                else {
                     continue;
                 };
                 let f = at.eval(dir);

@@ -1079,15 +1079,34 @@ impl Builder {
                         "beam_width {beam}, cutoff_angle {cutoff}: expected 0 < beam_width ≤ cutoff_angle < 180"
                     )));
                 }
-                if let Some(t) = p.child_named("intensity") {
-                    mark_all_used(t);
-                    self.warn(&t.at, "a spot's texture is not supported: its mean colour is not known either, so the spot is white");
-                }
+                let projects = match p.child_named("texture").cloned() {
+                    None => None,
+                    Some(t) if t.kind == "bitmap" => {
+                        t.mark_used();
+                        let (file, at) = t
+                            .file("filename")?
+                            .ok_or_else(|| t.at.error("bitmap needs a filename"))?;
+                        let raw = t.boolean("raw", false)?;
+                        self.scene.textures.push(bitmap(&t, &file, at, raw)?);
+                        let linear = Mat3::from_mat4(to_world.as_mat4());
+                        if linear.determinant() == 0.0 {
+                            return Err(p.at.error("the spot's to_world is singular"));
+                        }
+                        Some((self.scene.textures.len() - 1, linear.inverse()))
+                    }
+                    Some(t) => {
+                        return Err(t.at.error(format!(
+                            "a spot's texture \"{}\" is not supported: expected bitmap",
+                            t.kind
+                        )))
+                    }
+                };
                 DeltaKind::Spot {
                     position: to_world.transform_point3(DVec3::ZERO).as_vec3(),
                     axis: unit(to_world.transform_vector3(DVec3::Z), "spot's axis")?,
                     beam: beam.to_radians() as f32,
                     cutoff: cutoff.to_radians() as f32,
+                    projects,
                 }
             }
             _ => DeltaKind::Directional {
