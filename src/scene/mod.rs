@@ -807,8 +807,7 @@ mod tests {
 
     /// A spot at the origin looking along +z (its frame the world's), cutoff 45°, projecting
     /// an image of four texels, one colour a quadrant, u along +x and v along +y (down the
-    /// image),
-    /// as Mitsuba's `spot` maps a direction d to (½ + ½·dx/(dz·tan 45°), ½ + ½·dy/dz). A
+    /// image), as Mitsuba's `spot` maps a direction d to (½ + ½·dx/(dz·tan 45°), ½ + ½·dy/dz). A
     /// point one unit ahead and 0.1 aside in each quadrant gets that quadrant's colour, times
     /// the intensity over the squared distance (inside the beam, no ramp).
     #[test]
