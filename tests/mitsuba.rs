@@ -224,6 +224,48 @@ fn meshes_includes_paths_and_spectra() {
     assert!(e.min_element() > 0.6 && e.max_element() < 1.2, "{e}");
 }
 
+/// A shapegroup of one rectangle (moved by 1 along x inside the group) instanced twice: the
+/// group alone makes nothing, and each instance places the group's shapes by its own
+/// transform after theirs (Mitsuba's order), with the group's one material.
+#[test]
+fn instances_place_their_group_after_its_own_transforms() {
+    let text = r#"<scene version="3.0.0">
+        <shape type="shapegroup" id="group">
+            <shape type="rectangle">
+                <transform name="to_world"><translate x="1"/></transform>
+                <bsdf type="diffuse"/>
+            </shape>
+        </shape>
+        <shape type="instance"><ref id="group"/></shape>
+        <shape type="instance">
+            <ref id="group"/>
+            <transform name="to_world"><scale value="2"/><translate z="5"/></transform>
+        </shape>
+    </scene>"#;
+    let file = write("instances", &[("instances.xml", text.as_bytes())]);
+    let scene = Scene::load(&file).expect("loads");
+    let t = &scene.triangles;
+    assert_eq!(t.len(), 4, "two rectangles of two triangles");
+    let centre = |k: usize| {
+        t.positions[4 * k..4 * k + 4]
+            .iter()
+            .sum::<trilux::geometry::Vec3>()
+            / 4.0
+    };
+    assert_eq!(centre(0), vec3(1.0, 0.0, 0.0));
+    assert_eq!(
+        centre(1),
+        vec3(2.0, 0.0, 5.0),
+        "translated by 1, then scaled by 2, then moved"
+    );
+    assert_eq!(
+        t.positions[4].x - t.positions[5].x,
+        2.0 * (t.positions[0].x - t.positions[1].x)
+    );
+    assert!(t.materials.iter().all(|&m| m == t.materials[0]));
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+}
+
 /// Asserts that loading `file` fails with a message naming `file_name` at `line` and
 /// containing each of `words`.
 fn fails(file: &Path, file_name: &str, line: u32, words: &[&str]) {

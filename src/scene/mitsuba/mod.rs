@@ -59,7 +59,7 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneErr
         match plugin.tag.as_str() {
             "integrator" => builder.integrator(plugin)?,
             "sensor" => builder.sensor(plugin)?,
-            "shape" => builder.shape(plugin)?,
+            "shape" => builder.shape(plugin, DMat4::IDENTITY)?,
             "emitter" => builder.emitter(plugin)?,
             // Made where a shape refers to them; reported below if none does.
             "bsdf" | "texture" | "medium" | "spectrum" => {}
@@ -273,9 +273,31 @@ impl Builder {
         Ok(())
     }
 
-    fn shape(&mut self, p: &Plugin) -> Result<(), SceneError> {
+    /// A shape, placed by its `to_world` and then by `outer` (an instance's, or the
+    /// identity).
+    fn shape(&mut self, p: &Plugin, outer: DMat4) -> Result<(), SceneError> {
         p.mark_used();
-        let to_world = p.transform("to_world")?;
+        let to_world = outer * p.transform("to_world")?;
+        match p.kind.as_str() {
+            // Made where an instance refers to it.
+            "shapegroup" if outer == DMat4::IDENTITY => return Ok(()),
+            "shapegroup" => return Err(p.at.error("a shapegroup cannot stand inside another")),
+            // Its group's shapes, each placed by the instance's transform after its own.
+            // They are copied: the triangles of each instance are stored apart.
+            "instance" => {
+                let group = p
+                    .children_tagged("shape")
+                    .find(|c| c.plugin.kind == "shapegroup")
+                    .map(|c| c.plugin.clone())
+                    .ok_or_else(|| p.at.error("an instance needs a <ref> to a shapegroup"))?;
+                group.mark_used();
+                for member in group.children_tagged("shape") {
+                    self.shape(&member.plugin, to_world)?;
+                }
+                return Ok(());
+            }
+            _ => {}
+        }
         let flip = p.boolean("flip_normals", false)?;
         let material = self.shape_material(p)?;
         if p.kind == "sphere" {
@@ -341,7 +363,7 @@ impl Builder {
             }
             other => {
                 return Err(p.at.error(format!(
-                    "shape \"{other}\" is not supported: expected obj, ply, serialized, rectangle, cube, disk, sphere or cylinder"
+                    "shape \"{other}\" is not supported: expected obj, ply, serialized, rectangle, cube, disk, sphere, cylinder, shapegroup or instance"
                 )))
             }
         };
