@@ -363,6 +363,30 @@ fn a_memory_budget_stops_the_refinement() {
     assert!(worst < 4e-6, "worst error {worst}");
 }
 
+/// The MGF corridor with nothing emitting (its walls' `ed` removed): every patch is dark, and
+/// the solver says nothing emits without refining a link or sweeping (its rule splits links
+/// whose error passes a fraction of the brightest emitter's power, 0 here: the hospital's
+/// 7,632-patch coat rack took 15.5 million links and 28 s for a black image).
+#[test]
+fn nothing_emitting_is_dark_without_refinement() {
+    let lit = furnace_corridor_mgf(0.5, 8);
+    let mut scene = lit.clone();
+    for m in &mut scene.materials {
+        m.emitted = Vec3::ZERO;
+    }
+    let solution = solve(&scene, &hierarchical(1));
+    assert_eq!(
+        solution.stop,
+        trilux::engines::radiosity::solver::Stop::NoLight
+    );
+    assert!(solution.state.radiance.iter().all(|c| *c == Vec3::ZERO));
+    assert!(
+        solution.solver_counters.iter().all(|(_, n)| *n == 0),
+        "{:?}",
+        solution.solver_counters
+    );
+}
+
 /// Two rooms sharing one wall, with `--two-sided` (every quad has a patch on each side): the
 /// left room is a furnace (every face albedo ρ, emitting 1 from both sides), the right
 /// room's other faces are black. The closed forms hold side by side: 1/(1 − ρ) on every

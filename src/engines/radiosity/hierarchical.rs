@@ -1654,6 +1654,24 @@ impl RadiositySolver for Hierarchical {
             .collect();
         let largest = emitted_power.iter().copied().fold(0.0, f32::max);
         let total_emitted: f32 = emitted_power.iter().sum();
+        if total_emitted <= 0.0 {
+            // Nothing emits (the sky's light is emission here too): every patch is dark. The
+            // rule below would split every link to the smallest elements for nothing.
+            let dark = vec![Vec3::ZERO; patches.len()];
+            return Solved {
+                light: PatchLight {
+                    radiance: dark.clone(),
+                    undistributed: dark.clone(),
+                    incident: dark.clone(),
+                    incident_direct: dark,
+                    ..PatchLight::default()
+                },
+                stop: Stop::NoLight,
+                report: "nothing emits".to_string(),
+                counters: Vec::new(),
+                warning: None,
+            };
+        }
         let scene_area: f32 = patches.iter().map(|p| p.area).sum();
         let threshold = self.link_error * largest;
         let rule = SplitRule {
