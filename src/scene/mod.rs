@@ -3,7 +3,6 @@
 
 pub mod bsdf;
 pub mod bsdf_texture;
-mod camera;
 mod dialect;
 mod error;
 pub mod medium;
@@ -18,7 +17,7 @@ pub mod texture;
 
 use std::path::{Path, PathBuf};
 
-pub use camera::{Camera, Projection, View};
+pub use crate::camera::{Camera, Projection, View};
 pub use error::SceneError;
 pub use surface::{bilinear, PrimHit, QuadNeighbours, SurfaceHit};
 pub use texture::Texture;
@@ -671,10 +670,7 @@ impl Scene {
                 file: self.path.clone(),
                 line: m.line,
                 column: 1,
-                message: format!(
-                    "material {i}: cannot read texture {}: {why}",
-                    full.display()
-                ),
+                message: format!("material {i}: cannot read texture {why}"),
             })?;
             m.texture = Some(self.textures.len());
             self.textures.push(Texture {
@@ -699,10 +695,7 @@ impl Scene {
                 file: self.path.clone(),
                 line: m.line,
                 column: 1,
-                message: format!(
-                    "material {i}: cannot read bump_file {}: {why}",
-                    full.display()
-                ),
+                message: format!("material {i}: cannot read bump_file {why}"),
             })?;
             *map = Some(self.height_maps.len());
             self.height_maps.push(heights);

@@ -31,10 +31,10 @@ use self::spectrum::{spectrum_to_rgb, SpectrumUse};
 use self::xml::{Plugin, Value};
 use super::bsdf::{Bsdf, Microfacet, MicrofacetKind, Plastic, Principled};
 use super::bsdf_texture::{BsdfParameter, TexturedParameter};
-use super::camera::{Camera, Projection};
 use super::medium::Medium;
 use super::sky::{Sky, SkyMap};
 use super::{DeltaKind, DeltaLight, Material, Scene, SceneError, ShapePrim, Texture};
+use crate::camera::{Camera, Projection};
 use crate::color::Color;
 use crate::geometry::{SphereShape, Vec2, Vec3};
 
@@ -1128,8 +1128,7 @@ fn bitmap(t: &Plugin, file: &Path, at: &xml::Location, raw: bool) -> Result<Text
     } else {
         Texture::load(file)
     };
-    let mut texture =
-        loaded.map_err(|why| at.error(format!("cannot read {}: {why}", file.display())))?;
+    let mut texture = loaded.map_err(|why| at.error(format!("cannot read {why}")))?;
     texture.to_uv = to_uv(t)?;
     if let Some((filter, _)) = t.string("filter_type")? {
         texture.nearest = filter == "nearest";
