@@ -29,6 +29,9 @@ pub struct Plan {
     pub emitters: usize,
     /// The fog the render traces through ("medium 0: σa …, σs …, g …"), None without one.
     pub fog: Option<String>,
+    /// The Mitsuba BSDF of each used material that has one and what the engine renders of
+    /// it (`material 3 "coat" twosided(roughplastic): roughplastic approximated as …`).
+    pub bsdfs: Vec<String>,
     /// The media inside glass objects ("material 6: medium 1"), one per material that has one.
     pub interiors: Vec<String>,
     /// The sky that lights the render ("uniform …", "gradient …"), None without one.
@@ -88,6 +91,7 @@ impl Plan {
             textures: scene.textures.len(),
             height_maps: scene.height_maps.len(),
             patterns: patterns(scene),
+            bsdfs: bsdfs(scene, engine),
             emitters,
             fog: scene.fog.map(|k| {
                 let m = &scene.media[k];
@@ -164,6 +168,24 @@ fn patterns(scene: &Scene) -> Vec<String> {
         }
     }
     lines
+}
+
+/// What `engine` renders of each used material made of a Mitsuba BSDF: exactly, or which
+/// plugins it approximates and by what (the record the reader's warnings come from).
+fn bsdfs(scene: &Scene, engine: EngineKind) -> Vec<String> {
+    let used = scene.used_materials();
+    scene
+        .mitsuba_bsdfs
+        .iter()
+        .filter(|(&k, _)| used[k as usize])
+        .map(|(k, b)| {
+            let id =
+                b.id.as_ref()
+                    .map_or(String::new(), |id| format!(" \"{id}\""));
+            let rendering = b.rendering(engine == EngineKind::Path);
+            format!("material {k}{id} {}: {rendering}", b.kinds())
+        })
+        .collect()
 }
 
 /// The memory every render needs, estimated before anything is allocated (so that a huge
@@ -280,6 +302,16 @@ impl fmt::Display for Plan {
                 "procedural textures and bumps: {} (filtered over each pixel's footprint)",
                 self.patterns.join("; ")
             )?;
+        }
+        if !self.bsdfs.is_empty() {
+            writeln!(
+                f,
+                "mitsuba bsdfs, as the {} engine renders them:",
+                self.engine.name()
+            )?;
+            for line in &self.bsdfs {
+                writeln!(f, "  {line}")?;
+            }
         }
         writeln!(f, "emitters: {}", self.emitters)?;
         // Nothing of media or skies is built or traced for a scene without them.

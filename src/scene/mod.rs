@@ -2,6 +2,7 @@
 //! file or a standard OBJ/MTL file. Nothing here knows about any acceleration structure.
 
 pub mod bsdf;
+pub mod bsdf_support;
 pub mod bsdf_texture;
 mod dialect;
 mod error;
@@ -247,6 +248,10 @@ pub struct Scene {
     pub render_hints: RenderHints,
     /// Problems that did not stop loading (e.g. a material that does not conserve energy).
     pub warnings: Vec<String>,
+    /// The Mitsuba BSDF each material (by index) was made of and what the engines render of
+    /// it, for the materials of a Mitsuba scene that have one. Not light transport (the
+    /// material's own fields are), so not part of `content_hash`.
+    pub mitsuba_bsdfs: std::collections::BTreeMap<u32, bsdf_support::MitsubaBsdf>,
 }
 
 /// A light without area: a point (`intensity` in W·sr⁻¹, per colour channel), a spot (the

@@ -30,6 +30,7 @@ use self::meshes::Mesh;
 use self::spectrum::{spectrum_to_rgb, SpectrumUse};
 use self::xml::{Plugin, Value};
 use super::bsdf::{Bsdf, Microfacet, MicrofacetKind, Plastic, Principled};
+use super::bsdf_support::{MitsubaBsdf, PluginSupport};
 use super::bsdf_texture::{BsdfParameter, TexturedParameter};
 use super::medium::Medium;
 use super::sky::{Sky, SkyMap};
@@ -53,6 +54,7 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneErr
         materials: HashMap::new(),
         media: HashMap::new(),
         bsdf_textures: Vec::new(),
+        bsdf_plugins: Vec::new(),
     };
     for child in &root.children {
         let plugin = &child.plugin;
@@ -88,6 +90,9 @@ struct Builder {
     /// The textured parameters of the BSDF being made (`scalar` adds to them; `bsdf` gives
     /// them to its material).
     bsdf_textures: Vec<TexturedParameter>,
+    /// The plugins of the BSDF being made, outermost first (`bsdf_alone` adds each;
+    /// `shape_material` gives them to the scene's `mitsuba_bsdfs`).
+    bsdf_plugins: Vec<PluginSupport>,
 }
 
 impl Builder {
@@ -437,6 +442,7 @@ impl Builder {
                 ..Material::default()
             },
         };
+        let plugins = std::mem::take(&mut self.bsdf_plugins);
         if let Some(e) = &emitter {
             e.mark_used();
             if e.kind != "area" {
@@ -458,6 +464,15 @@ impl Builder {
         }
         let k = self.scene.materials.len() as u32;
         self.scene.materials.push(material);
+        if let Some(b) = &bsdf {
+            self.scene.mitsuba_bsdfs.insert(
+                k,
+                MitsubaBsdf {
+                    id: b.id.clone(),
+                    plugins,
+                },
+            );
+        }
         if let (true, Some(b)) = (plain, &bsdf) {
             self.materials.insert(Rc::as_ptr(b), k);
         }
@@ -479,7 +494,10 @@ impl Builder {
         p.mark_used();
         let inner = |p: &Plugin| p.children_tagged("bsdf").next().map(|c| c.plugin.clone());
         let line = p.at.line;
-        let material = match p.kind.as_str() {
+        let first = self.bsdf_plugins.len();
+        // The material, and what the path tracer and the other engines render in the
+        // plugin's place (None: the plugin, exactly).
+        let (material, path, others) = match p.kind.as_str() {
             "diffuse" => {
                 let mut m = Material {
                     line,
@@ -491,7 +509,7 @@ impl Builder {
                 m.bsdf = Some(Bsdf::Diffuse {
                     reflectance: m.diffuse,
                 });
-                m
+                (m, None, None)
             }
             "twosided" => match inner(p) {
                 Some(b) => {
@@ -502,7 +520,7 @@ impl Builder {
                     if matches!(m.bsdf, Some(Bsdf::Diffuse { .. })) {
                         m.bsdf = None;
                     }
-                    m
+                    (m, None, None)
                 }
                 None => return Err(p.at.error("twosided needs a nested bsdf")),
             },
@@ -512,11 +530,8 @@ impl Builder {
                     None => return Err(p.at.error("mask needs a nested bsdf")),
                 };
                 m.opacity = Some(self.opacity(p)?);
-                self.warn(
-                    &p.at,
-                    "mask: the path tracer lets light through where it is transparent; the other engines render its nested bsdf opaque",
-                );
-                m
+                // The path tracer lets light through where it is transparent.
+                (m, None, Some("its nested BSDF, opaque"))
             }
             "normalmap" => {
                 let mut m = match inner(p) {
@@ -536,11 +551,8 @@ impl Builder {
                 m.normal_map = Some(self.raw_texture(&t)?);
                 let _ = p.boolean("flip_invalid_normals", true)?;
                 let _ = p.boolean("use_shadowing_function", true)?;
-                self.warn(
-                    &p.at,
-                    "normalmap: the path tracer tilts the shading frame; the other engines render its nested bsdf untilted",
-                );
-                m
+                // The path tracer tilts the shading frame.
+                (m, None, Some("its nested BSDF, untilted"))
             }
             "bumpmap" => {
                 for t in p.children_tagged("texture") {
@@ -548,22 +560,24 @@ impl Builder {
                 }
                 let _ = p.float("opacity", 1.0);
                 let _ = p.float("scale", 1.0);
-                self.warn(
-                    &p.at,
-                    format!("bsdf \"{}\" is not supported: its nested bsdf is rendered without it", p.kind),
-                );
-                match inner(p) {
+                let m = match inner(p) {
                     Some(b) => self.bsdf(&b)?,
                     None => return Err(p.at.error(format!("{} needs a nested bsdf", p.kind))),
-                }
+                };
+                let without = "its nested BSDF, without the bumps";
+                (m, Some(without), Some(without))
             }
-            "null" => Material {
-                // A boundary that changes nothing: glass of index 1 reflects nothing.
-                transmitted: Color::ONE,
-                ior: 1.0,
-                line,
-                ..Material::default()
-            },
+            "null" => (
+                Material {
+                    // A boundary that changes nothing: glass of index 1 reflects nothing.
+                    transmitted: Color::ONE,
+                    ior: 1.0,
+                    line,
+                    ..Material::default()
+                },
+                None,
+                None,
+            ),
             "dielectric" | "roughdielectric" | "thindielectric" => {
                 let eta = (self.ior(p, "int_ior", "bk7")? / self.ior(p, "ext_ior", "air")?) as f32;
                 let transmittance =
@@ -591,15 +605,21 @@ impl Builder {
                         distribution: None,
                     }),
                 };
-                self.approximated(p, bsdf.is_some(), "smooth glass");
-                Material {
+                let thin = p.kind == "thindielectric";
+                let others = match (&bsdf, thin) {
+                    (None, _) => None,
+                    (Some(_), true) => Some("a boundary light passes straight through"),
+                    (Some(_), false) => Some("smooth glass"),
+                };
+                let m = Material {
                     transmitted: transmittance,
                     // A thin sheet does not bend light: the other engines pass through it.
-                    ior: if p.kind == "thindielectric" { 1.0 } else { eta },
+                    ior: if thin { 1.0 } else { eta },
                     bsdf,
                     line,
                     ..Material::default()
-                }
+                };
+                (m, None, others)
             }
             "conductor" | "roughconductor" => {
                 let specular = self.colour(p, "specular_reflectance", 1.0, SpectrumUse::Bounded)?;
@@ -623,8 +643,7 @@ impl Builder {
                     }
                 };
                 let distribution = self.distribution(p)?;
-                self.approximated(p, true, "a mirror of the Fresnel reflectance at normal incidence, a glossy lobe if rough");
-                Material {
+                let m = Material {
                     reflective: specular * conductor_reflectance(eta, k),
                     roughness: distribution.map_or(0.0, |d| {
                         let (u, v) = d.alpha();
@@ -638,7 +657,8 @@ impl Builder {
                     }),
                     line,
                     ..Material::default()
-                }
+                };
+                (m, None, Some("a mirror of the Fresnel reflectance at normal incidence, a glossy lobe if rough"))
             }
             "plastic" | "roughplastic" => {
                 let eta = (self.ior(p, "int_ior", "polypropylene")? / self.ior(p, "ext_ior", "air")?) as f32;
@@ -659,8 +679,7 @@ impl Builder {
                 if m.texture.is_some() || m.texture_file.is_some() {
                     self.warn(&p.at, format!("{}: a textured diffuse_reflectance is taken at its mean by the path tracer", p.kind));
                 }
-                self.approximated(p, true, "a Lambertian base under a constant specular layer");
-                m
+                (m, None, Some("a Lambertian base under a constant specular layer"))
             }
             "principled" => {
                 let mut m = Material {
@@ -693,8 +712,7 @@ impl Builder {
                 m.diffuse *= 1.0 - metallic;
                 m.roughness = principled.roughness * principled.roughness;
                 m.bsdf = Some(Bsdf::Principled(principled));
-                self.approximated(p, true, "a Lambertian base and a glossy lobe");
-                m
+                (m, None, Some("a Lambertian base and a glossy lobe"))
             }
             "principledthin" => {
                 let mut m = Material {
@@ -703,11 +721,7 @@ impl Builder {
                 };
                 self.reflectance(p, "base_color", 0.5, &mut m)?;
                 mark_all_used(p);
-                self.warn(
-                    &p.at,
-                    "principledthin is approximated in every engine: a Lambertian base",
-                );
-                m
+                (m, Some("a Lambertian base"), Some("a Lambertian base"))
             }
             other => {
                 return Err(p.at.error(format!(
@@ -715,6 +729,16 @@ impl Builder {
                 )))
             }
         };
+        let support = PluginSupport {
+            kind: p.kind.clone(),
+            path,
+            others,
+        };
+        if let Some(warning) = support.warning() {
+            self.warn(&p.at, warning);
+        }
+        // A wrapper's nested BSDF recorded itself first: this plugin goes in front of it.
+        self.bsdf_plugins.insert(first, support);
         Ok(material)
     }
 
@@ -850,20 +874,6 @@ impl Builder {
             ),
         );
         Ok(0.5 * (a + b))
-    }
-
-    /// Warns that `p` is approximated: in the other engines when the path tracer has its
-    /// exact BSDF (`exact_in_path`), else everywhere.
-    fn approximated(&mut self, p: &Plugin, exact_in_path: bool, how: &str) {
-        let message = if exact_in_path {
-            format!(
-                "{}: the path tracer renders it exactly; the other engines approximate it as {how}",
-                p.kind
-            )
-        } else {
-            return;
-        };
-        self.warn(&p.at, message);
     }
 
     /// A reflectance given as a colour, or as a `bitmap` texture (read through the scene's
