@@ -10,6 +10,8 @@
 
 pub mod accel;
 pub mod bench;
+pub mod bytes;
+pub mod camera;
 pub mod cli;
 pub mod color;
 pub mod engines;
@@ -17,6 +19,7 @@ pub mod farm;
 pub mod film;
 pub mod generate;
 pub mod geometry;
+pub mod image_io;
 pub mod interrupt;
 pub mod output;
 pub mod parallel;

@@ -5,6 +5,7 @@
 use std::fmt;
 
 use crate::accel::AccelKind;
+pub use crate::bytes::{human_bytes, parse_bytes};
 use crate::engines::{self, EngineKind, RenderSettings};
 use crate::geometry::Shape;
 use crate::scene::Scene;
@@ -28,6 +29,9 @@ pub struct Plan {
     pub emitters: usize,
     /// The fog the render traces through ("medium 0: σa …, σs …, g …"), None without one.
     pub fog: Option<String>,
+    /// The Mitsuba BSDF of each used material that has one and what the engine renders of
+    /// it (`material 3 "coat" twosided(roughplastic): roughplastic approximated as …`).
+    pub bsdfs: Vec<String>,
     /// The media inside glass objects ("material 6: medium 1"), one per material that has one.
     pub interiors: Vec<String>,
     /// The sky that lights the render ("uniform …", "gradient …"), None without one.
@@ -87,6 +91,7 @@ impl Plan {
             textures: scene.textures.len(),
             height_maps: scene.height_maps.len(),
             patterns: patterns(scene),
+            bsdfs: bsdfs(scene, engine),
             emitters,
             fog: scene.fog.map(|k| {
                 let m = &scene.media[k];
@@ -165,6 +170,24 @@ fn patterns(scene: &Scene) -> Vec<String> {
     lines
 }
 
+/// What `engine` renders of each used material made of a Mitsuba BSDF: exactly, or which
+/// plugins it approximates and by what (the record the reader's warnings come from).
+fn bsdfs(scene: &Scene, engine: EngineKind) -> Vec<String> {
+    let used = scene.used_materials();
+    scene
+        .mitsuba_bsdfs
+        .iter()
+        .filter(|(&k, _)| used[k as usize])
+        .map(|(k, b)| {
+            let id =
+                b.id.as_ref()
+                    .map_or(String::new(), |id| format!(" \"{id}\""));
+            let rendering = b.rendering(engine == EngineKind::Path);
+            format!("material {k}{id} {}: {rendering}", b.kinds())
+        })
+        .collect()
+}
+
 /// The memory every render needs, estimated before anything is allocated (so that a huge
 /// request is refused, not killed): the image with the samples in flight, and the Accel.
 fn image_and_accel_memory(scene: &Scene, settings: &RenderSettings) -> Vec<(&'static str, u64)> {
@@ -190,42 +213,6 @@ impl Plan {
             .collect();
         format!("{} ({})", human_bytes(self.memory), parts.join(", "))
     }
-}
-
-/// Bytes as KiB, MiB, GiB or TiB with three significant digits.
-pub fn human_bytes(b: u64) -> String {
-    let units = ["B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    let mut v = b as f64;
-    let mut u = 0;
-    while v >= 1024.0 && u + 1 < units.len() {
-        v /= 1024.0;
-        u += 1;
-    }
-    if u == 0 {
-        format!("{b} B")
-    } else {
-        format!("{v:.3} {}", units[u])
-    }
-}
-
-/// Parses a memory size: a number with an optional K, M, G or T suffix (powers of 1024).
-pub fn parse_bytes(text: &str) -> Result<u64, String> {
-    let t = text.trim();
-    let (number, shift) = match t.chars().last().map(|c| c.to_ascii_uppercase()) {
-        Some('K') => (&t[..t.len() - 1], 10),
-        Some('M') => (&t[..t.len() - 1], 20),
-        Some('G') => (&t[..t.len() - 1], 30),
-        Some('T') => (&t[..t.len() - 1], 40),
-        _ => (t, 0),
-    };
-    let v: f64 = number
-        .trim()
-        .parse()
-        .map_err(|_| format!("expected a size such as 512M or 8G, found {text}"))?;
-    if !(v.is_finite() && v > 0.0) {
-        return Err(format!("expected a positive size, found {text}"));
-    }
-    Ok((v * (1u64 << shift) as f64) as u64)
 }
 
 /// 80% of the machine's physical memory (Linux: MemTotal of /proc/meminfo), the default of
@@ -315,6 +302,16 @@ impl fmt::Display for Plan {
                 "procedural textures and bumps: {} (filtered over each pixel's footprint)",
                 self.patterns.join("; ")
             )?;
+        }
+        if !self.bsdfs.is_empty() {
+            writeln!(
+                f,
+                "mitsuba bsdfs, as the {} engine renders them:",
+                self.engine.name()
+            )?;
+            for line in &self.bsdfs {
+                writeln!(f, "  {line}")?;
+            }
         }
         writeln!(f, "emitters: {}", self.emitters)?;
         // Nothing of media or skies is built or traced for a scene without them.

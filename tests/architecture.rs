@@ -1,6 +1,7 @@
 //! The layering of `src/` (docs/architecture.md), checked from the source text: which module
-//! refers to which, no cycles, no engine in the layers below the engines, no engine importing
-//! another, `unsafe` only in the Embree layer with a SAFETY line, and `main.rs` short.
+//! refers to which, no cycles, every import going down the layers, `film` and `scene` apart,
+//! no engine in the layers below the engines, no engine importing another, `unsafe` only in
+//! the Embree layer with a SAFETY line, and `main.rs` short.
 //!
 //! A module is a file. An edge A → B means that A names an item path (`crate::…`, `super::…`,
 //! `self::…`, in a `use` or inline) that resolves to file B: the longest prefix of the path
@@ -272,6 +273,86 @@ fn the_module_graph_has_no_cycle() {
         "{:?}",
         g["cli::render"]
     );
+    assert!(
+        g["film::ray_tree"].contains("camera"),
+        "{:?}",
+        g["film::ray_tree"]
+    );
+    assert!(
+        g["scene::sky"].contains("image_io"),
+        "{:?}",
+        g["scene::sky"]
+    );
+}
+
+/// The layers of docs/architecture.md, bottom up, by top-level module (`""` is lib.rs).
+const LAYERS: [(&str, &[&str]); 10] = [
+    (
+        "base",
+        &[
+            "geometry",
+            "sampling",
+            "color",
+            "output",
+            "interrupt",
+            "progress",
+            "camera",
+            "image_io",
+            "bytes",
+        ],
+    ),
+    ("scene", &["scene"]),
+    ("visibility", &["accel"]),
+    ("film", &["film"]),
+    ("floor", &["render", "parallel"]),
+    ("engines", &["engines"]),
+    (
+        "planning and reports",
+        &["plan", "report", "bench", "farm", "generate"],
+    ),
+    ("command line", &["cli"]),
+    ("viewer", &["viewer"]),
+    ("the crate's root", &[""]),
+];
+
+fn layer(module: &str) -> usize {
+    LAYERS
+        .iter()
+        .position(|(_, modules)| modules.contains(&top(module)))
+        .unwrap_or_else(|| {
+            panic!("module {module} is in no layer: add it to LAYERS and to docs/architecture.md")
+        })
+}
+
+#[test]
+fn every_import_goes_down_the_layers() {
+    for (module, targets) in graph() {
+        for t in &targets {
+            assert!(
+                layer(t) <= layer(&module),
+                "{module} (layer {}) imports {t} (layer {}, above it)",
+                LAYERS[layer(&module)].0,
+                LAYERS[layer(t)].0
+            );
+        }
+    }
+}
+
+#[test]
+fn film_and_scene_are_side_by_side_and_the_engines_plan_nothing() {
+    // The film and the scene share the camera and the image readers, which lie below both;
+    // neither imports the other. The engines answer the planner; they do not ask it.
+    let forbidden = [("film", "scene"), ("scene", "film"), ("engines", "plan")];
+    for (module, targets) in graph() {
+        for t in &targets {
+            for (from, to) in forbidden {
+                assert!(
+                    !(top(&module) == from && top(t) == to),
+                    "{module} imports {t}: {from} must not import {to}"
+                );
+            }
+        }
+    }
 }
 
 #[test]

@@ -236,6 +236,74 @@ fn plan_reports_what_the_scene_needs() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `--plan` on a Mitsuba scene says, material by material, what the chosen engine renders
+/// of its BSDF: the path tracer each plugin exactly but `principledthin`, the other engines
+/// the approximations of docs/scene-format.md's table; the reader's warning says the same.
+#[test]
+fn plan_says_what_the_engine_renders_of_each_mitsuba_bsdf() {
+    let dir = common::temp_dir("plan_bsdfs");
+    let sphere = |x: i32, bsdf: &str| {
+        format!(
+            "<shape type=\"sphere\"><point name=\"center\" x=\"{x}\" y=\"0\" z=\"0\"/>{bsdf}</shape>\n"
+        )
+    };
+    let scene = [
+        "<scene version=\"3.0.0\">\n<emitter type=\"constant\"/>\n".to_string(),
+        "<bsdf type=\"twosided\" id=\"coat\"><bsdf type=\"roughplastic\"/></bsdf>\n".into(),
+        sphere(-3, "<ref id=\"coat\"/>"),
+        sphere(0, "<bsdf type=\"dielectric\"/>"),
+        sphere(3, "<bsdf type=\"principledthin\"/>"),
+        sphere(6, "<bsdf type=\"thindielectric\"/>"),
+        "</scene>\n".into(),
+    ]
+    .concat();
+    std::fs::write(dir.join("bsdfs.xml"), scene).unwrap();
+    let plan = |engine: &str| {
+        let out = render(&dir, &["-input", "bsdfs.xml", "--plan", "--engine", engine]);
+        (ok(&out), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (path, warnings) = plan("path");
+    for line in [
+        "mitsuba bsdfs, as the path engine renders them:",
+        "  material 0 \"coat\" twosided(roughplastic): exact\n",
+        "  material 1 dielectric: exact\n",
+        "  material 2 principledthin: principledthin approximated as a Lambertian base\n",
+        "  material 3 thindielectric: exact\n",
+    ] {
+        assert!(path.contains(line), "{line:?} not in\n{path}");
+    }
+    let (raytrace, _) = plan("raytrace");
+    for line in [
+        "mitsuba bsdfs, as the raytrace engine renders them:",
+        "  material 0 \"coat\" twosided(roughplastic): roughplastic approximated as a Lambertian base under a constant specular layer\n",
+        "  material 1 dielectric: exact\n",
+        "  material 2 principledthin: principledthin approximated as a Lambertian base\n",
+        "  material 3 thindielectric: thindielectric approximated as a boundary light passes straight through\n",
+    ] {
+        assert!(raytrace.contains(line), "{line:?} not in\n{raytrace}");
+    }
+    assert!(
+        warnings.contains(
+            "roughplastic: the path tracer renders it exactly; the other engines approximate it as a Lambertian base under a constant specular layer"
+        ),
+        "{warnings}"
+    );
+    // A course scene has no Mitsuba BSDF: nothing is said of them.
+    let course = ok(&render(
+        &dir,
+        &[
+            "--plan",
+            "-input",
+            common::own_scene_dir()
+                .join("cornell_box.obj")
+                .to_str()
+                .unwrap(),
+        ],
+    ));
+    assert!(!course.contains("mitsuba bsdfs"), "{course}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn output_formats_are_linear_and_written_atomically() {
     let scenes = common::own_scene_dir();

@@ -96,7 +96,7 @@ pub struct CommonArgs {
     pub plan: bool,
     /// Refuse renders estimated to need more memory than this (e.g. 512M, 8G; default 80% of
     /// physical memory).
-    #[arg(long, value_name = "SIZE", value_parser = crate::plan::parse_bytes)]
+    #[arg(long, value_name = "SIZE", value_parser = crate::bytes::parse_bytes)]
     pub max_memory: Option<u64>,
     /// Print counters (rays cast, build and render time) after rendering.
     #[arg(long)]

@@ -299,7 +299,7 @@ fn memory_limit(args: &RenderArgs) -> (u64, String) {
         .unwrap_or_else(crate::plan::default_max_memory);
     let limit = format!(
         "--max-memory {}{}",
-        crate::plan::human_bytes(max_memory),
+        crate::bytes::human_bytes(max_memory),
         if args.common.max_memory.is_none() {
             " (80% of this machine's memory)"
         } else {

@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
-use super::{read_pfm, Film, ImageFormat};
-use crate::color::{srgb_to_linear, Color};
+use super::{Film, ImageFormat};
+use crate::color::Color;
 
 /// The ε of relMSE: keeps dark reference pixels from dominating.
 pub const RELMSE_EPSILON: f64 = 1e-2;
@@ -22,56 +22,15 @@ pub struct Metrics {
     pub max_error: f64,
 }
 
-/// Reads an image as linear radiance: PFM and EXR as stored, PNG decoded from sRGB.
+/// Reads an image as linear radiance: PFM and EXR as stored, PNG and JPEG decoded from sRGB.
 pub fn read_image(path: &Path) -> Result<Film, String> {
-    match ImageFormat::from_path(path) {
-        Some(ImageFormat::Pfm) => read_pfm(path),
-        Some(ImageFormat::Exr) => {
-            let img = image::open(path)
-                .map_err(|e| format!("{}: {e}", path.display()))?
-                .to_rgb32f();
-            let (width, height) = img.dimensions();
-            let pixels = img
-                .pixels()
-                .map(|p| Color {
-                    x: p[0],
-                    y: p[1],
-                    z: p[2],
-                })
-                .collect();
-            Ok(Film {
-                width,
-                height,
-                pixels,
-                samples: None,
-            })
-        }
-        Some(ImageFormat::Png | ImageFormat::Jpeg) => {
-            let img = image::open(path)
-                .map_err(|e| format!("{}: {e}", path.display()))?
-                .to_rgb8();
-            let (width, height) = img.dimensions();
-            let decode = |v: u8| srgb_to_linear(v as f32 / 255.0);
-            let pixels = img
-                .pixels()
-                .map(|p| Color {
-                    x: decode(p[0]),
-                    y: decode(p[1]),
-                    z: decode(p[2]),
-                })
-                .collect();
-            Ok(Film {
-                width,
-                height,
-                pixels,
-                samples: None,
-            })
-        }
-        None => Err(format!(
+    if ImageFormat::from_path(path).is_none() {
+        return Err(format!(
             "{}: unknown image format (use .png, .jpg, .exr or .pfm)",
             path.display()
-        )),
+        ));
     }
+    crate::image_io::read_radiance(path).map(Film::from)
 }
 
 /// The metrics of `image` against `reference`; the two must have the same size.

@@ -10,7 +10,9 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
+use crate::camera::Camera;
 use crate::color::{linear_to_srgb, Color};
+use crate::image_io::Image;
 use crate::output::{write_atomically, OutputError};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -87,11 +89,7 @@ impl Film {
     /// The pixel in column `i` and row `row` counted from the top.
     /// The pixel (index into `pixels`, rows from the top) that a world point projects to
     /// through the camera, if it lands on the film: the inverse of `Camera::screen_point`.
-    pub fn pixel_of(
-        &self,
-        camera: &crate::scene::Camera,
-        p: crate::geometry::Vec3,
-    ) -> Option<usize> {
+    pub fn pixel_of(&self, camera: &Camera, p: crate::geometry::Vec3) -> Option<usize> {
         let (x, y) = camera.project(p)?;
         let (w, h) = (self.width as f32, self.height as f32);
         let m = w.max(h);
@@ -192,67 +190,25 @@ impl Film {
 
 /// Reads a PFM file written by `Film::write` (or any little- or big-endian colour PFM).
 pub fn read_pfm(path: &Path) -> Result<Film, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut fields = Vec::new();
-    let mut pos = 0;
-    while fields.len() < 4 {
-        while pos < bytes.len() && bytes[pos].is_ascii_whitespace() {
-            pos += 1;
-        }
-        let start = pos;
-        while pos < bytes.len() && !bytes[pos].is_ascii_whitespace() {
-            pos += 1;
-        }
-        if start == pos {
-            return Err(format!("{}: truncated PFM header", path.display()));
-        }
-        fields.push(String::from_utf8_lossy(&bytes[start..pos]).into_owned());
-    }
-    pos += 1;
-    let bad = || format!("{}: bad PFM header", path.display());
-    if fields[0] != "PF" {
-        return Err(bad());
-    }
-    let width: u32 = fields[1].parse().map_err(|_| bad())?;
-    let height: u32 = fields[2].parse().map_err(|_| bad())?;
-    let scale: f32 = fields[3].parse().map_err(|_| bad())?;
-    let n = width as usize * height as usize;
-    let data = bytes
-        .get(pos..pos + 12 * n)
-        .ok_or_else(|| format!("{}: truncated PFM data", path.display()))?;
-    let value = |k: usize| {
-        let b = [
-            data[4 * k],
-            data[4 * k + 1],
-            data[4 * k + 2],
-            data[4 * k + 3],
-        ];
-        if scale < 0.0 {
-            f32::from_le_bytes(b)
-        } else {
-            f32::from_be_bytes(b)
-        }
-    };
-    let mut film = Film::new(width, height);
-    for row in 0..height as usize {
-        let src_row = height as usize - 1 - row;
-        for i in 0..width as usize {
-            let k = 3 * (src_row * width as usize + i);
-            film.pixels[row * width as usize + i] = Color {
-                x: value(k),
-                y: value(k + 1),
-                z: value(k + 2),
-            };
+    crate::image_io::read_pfm(path).map(Film::from)
+}
+
+impl From<Image> for Film {
+    fn from(image: Image) -> Film {
+        Film {
+            width: image.width,
+            height: image.height,
+            pixels: image.pixels,
+            samples: None,
         }
     }
-    Ok(film)
 }
 
 /// Draws 3D line segments, projected through the camera, over the film (one pixel wide;
 /// the parts behind the camera are left out).
 pub fn draw_lines(
     film: &mut Film,
-    camera: &crate::scene::Camera,
+    camera: &Camera,
     lines: impl Iterator<Item = (crate::geometry::Vec3, crate::geometry::Vec3, Color)>,
 ) {
     for (from, to, colour) in lines {

@@ -5,11 +5,11 @@ use std::io::Write;
 use std::path::Path;
 
 use super::Film;
+use crate::camera::Camera;
 use crate::color::Color;
 use crate::geometry::vec3;
 use crate::geometry::Vec3;
 use crate::output::{write_atomically, OutputError};
-use crate::scene::Camera;
 
 /// What a segment of a ray tree is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

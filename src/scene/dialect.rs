@@ -3,12 +3,12 @@
 
 use std::path::{Path, PathBuf};
 
-use super::camera::{Camera, Projection};
 use super::error::SceneError;
 use super::medium::Medium;
 use super::procedural::{Bump, BumpSource, Pattern, ProceduralTexture, BUMP_PATTERNS};
 use super::sky::{Sky, SkyMap};
 use super::{Material, Quad, Scene, ShapePrim};
+use crate::camera::{Camera, Projection};
 use crate::color::srgb_to_linear;
 use crate::geometry::{quad_normal, vec2, vec3, RingShape, SphereShape, Vec2, Vec3};
 use std::sync::Arc;

@@ -2,8 +2,8 @@
 //! file or a standard OBJ/MTL file. Nothing here knows about any acceleration structure.
 
 pub mod bsdf;
+pub mod bsdf_support;
 pub mod bsdf_texture;
-mod camera;
 mod dialect;
 mod error;
 pub mod medium;
@@ -18,7 +18,7 @@ pub mod texture;
 
 use std::path::{Path, PathBuf};
 
-pub use camera::{Camera, Projection, View};
+pub use crate::camera::{Camera, Projection, View};
 pub use error::SceneError;
 pub use surface::{bilinear, PrimHit, QuadNeighbours, SurfaceHit};
 pub use texture::Texture;
@@ -273,6 +273,10 @@ pub struct Scene {
     pub render_hints: RenderHints,
     /// Problems that did not stop loading (e.g. a material that does not conserve energy).
     pub warnings: Vec<String>,
+    /// The Mitsuba BSDF each material (by index) was made of and what the engines render of
+    /// it, for the materials of a Mitsuba scene that have one. Not light transport (the
+    /// material's own fields are), so not part of `content_hash`.
+    pub mitsuba_bsdfs: std::collections::BTreeMap<u32, bsdf_support::MitsubaBsdf>,
 }
 
 /// A light without area: a point (`intensity` in W·sr⁻¹, per colour channel), a spot (the
@@ -714,10 +718,7 @@ impl Scene {
                 file: self.path.clone(),
                 line: m.line,
                 column: 1,
-                message: format!(
-                    "material {i}: cannot read texture {}: {why}",
-                    full.display()
-                ),
+                message: format!("material {i}: cannot read texture {why}"),
             })?;
             m.texture = Some(self.textures.len());
             self.textures.push(Texture {
@@ -742,10 +743,7 @@ impl Scene {
                 file: self.path.clone(),
                 line: m.line,
                 column: 1,
-                message: format!(
-                    "material {i}: cannot read bump_file {}: {why}",
-                    full.display()
-                ),
+                message: format!("material {i}: cannot read bump_file {why}"),
             })?;
             *map = Some(self.height_maps.len());
             self.height_maps.push(heights);

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use crate::color::Color;
 use crate::geometry::{vec3, Vec3};
+use crate::image_io::{self, Image};
 
 /// A sky: its radiance by direction.
 #[derive(Clone, Debug, PartialEq)]
@@ -134,35 +135,14 @@ impl SkyMap {
     }
 
     /// Reads the image (relative to directory `dir`): .exr and .pfm as linear radiance, .png
-    /// and .ppm (any other format the texture reader knows) decoded from sRGB.
+    /// and .ppm (any other format `image_io::read_8bit` knows) decoded from sRGB.
     pub fn decode(&mut self, dir: &Path) -> Result<(), String> {
         let path = dir.join(&self.file);
-        let is = |ext: &str| {
-            path.extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case(ext))
-        };
-        // Every decoder is bounded: PFM by the file's own bytes, the others by the textures'
-        // allocation limit (a hostile header cannot make it allocate without bound).
-        let (width, height, texels) = if is("pfm") {
-            let film = crate::film::read_pfm(&path)?;
-            (film.width, film.height, film.pixels)
-        } else if is("exr") {
-            let mut reader =
-                image::ImageReader::open(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-            let mut limits = image::Limits::default();
-            limits.max_alloc = Some(super::texture::MAX_TEXTURE_BYTES);
-            reader.limits(limits);
-            let image = reader
-                .decode()
-                .map_err(|e| format!("{}: {e}", path.display()))?
-                .to_rgb32f();
-            let (width, height) = image.dimensions();
-            let texels = image.pixels().map(|p| vec3(p[0], p[1], p[2])).collect();
-            (width, height, texels)
-        } else {
-            let t = super::Texture::load(&path)?;
-            (t.width, t.height, t.texels)
-        };
+        let Image {
+            width,
+            height,
+            pixels: texels,
+        } = image_io::read_radiance(&path)?;
         if width == 0 || height == 0 {
             return Err(format!("{}: an empty image", path.display()));
         }

@@ -3,12 +3,8 @@
 use std::path::Path;
 
 use crate::color::{luminance, srgb_to_linear};
-
 use crate::geometry::{Vec2, Vec3};
-
-/// The largest texture trilux decodes, in bytes of decoded pixels: a bad header cannot make
-/// it allocate without bound.
-pub const MAX_TEXTURE_BYTES: u64 = 1 << 30;
+use crate::image_io::{self, Image};
 
 #[derive(Clone, Debug)]
 pub struct Texture {
@@ -24,43 +20,28 @@ pub struct Texture {
     pub nearest: bool,
 }
 
+impl From<Image> for Texture {
+    /// The image as it is: no `to_uv`, bilinear.
+    fn from(image: Image) -> Texture {
+        Texture {
+            width: image.width,
+            height: image.height,
+            texels: image.pixels,
+            to_uv: None,
+            nearest: false,
+        }
+    }
+}
+
 impl Texture {
-    /// Reads PPM (P3/P6) or PNG; 8-bit values are sRGB-encoded and converted to linear.
+    /// Reads an 8-bit image (PNG, JPEG, PPM): values are sRGB-encoded and converted to linear.
     pub fn load(path: &Path) -> Result<Texture, String> {
-        Self::load_with(path, srgb_to_linear)
+        image_io::read_8bit(path, srgb_to_linear).map(Texture::from)
     }
 
     /// Reads a height image (`bump_file`): 8-bit values v are heights v/255, not colours.
     pub fn load_heights(path: &Path) -> Result<Texture, String> {
-        Self::load_with(path, |v| v)
-    }
-
-    /// Reads an image, mapping each channel's value in [0, 1] through `decode`.
-    fn load_with(path: &Path, decode: fn(f32) -> f32) -> Result<Texture, String> {
-        let mut reader = image::ImageReader::open(path)
-            .map_err(|e| e.to_string())?
-            .with_guessed_format()
-            .map_err(|e| e.to_string())?;
-        let mut limits = image::Limits::default();
-        limits.max_alloc = Some(MAX_TEXTURE_BYTES);
-        reader.limits(limits);
-        let img = reader.decode().map_err(|e| e.to_string())?.to_rgb8();
-        let (width, height) = img.dimensions();
-        let texels = img
-            .pixels()
-            .map(|p| Vec3 {
-                x: decode(p[0] as f32 / 255.0),
-                y: decode(p[1] as f32 / 255.0),
-                z: decode(p[2] as f32 / 255.0),
-            })
-            .collect();
-        Ok(Texture {
-            width,
-            height,
-            texels,
-            to_uv: None,
-            nearest: false,
-        })
+        image_io::read_8bit(path, |v| v).map(Texture::from)
     }
 
     /// Mitsuba's `checkerboard`: `color0` where u and v (Mitsuba's, whose v runs down the

@@ -1822,7 +1822,7 @@ impl RadiositySolver for Hierarchical {
         let link_bytes = links.len() * std::mem::size_of::<Link>();
         let warning = capped.then(|| format!(
             "hierarchical refinement stopped at the memory budget ({} of --max-memory left after the rest of the render) with {} links: the solution is coarser than --link-error asks",
-            crate::plan::human_bytes(self.memory_budget),
+            crate::bytes::human_bytes(self.memory_budget),
             links.len()
         ));
         Solved {

@@ -30,11 +30,12 @@ use self::meshes::Mesh;
 use self::spectrum::{spectrum_to_rgb, SpectrumUse};
 use self::xml::{Plugin, Value};
 use super::bsdf::{Bsdf, Microfacet, MicrofacetKind, Plastic, Principled};
+use super::bsdf_support::{MitsubaBsdf, PluginSupport};
 use super::bsdf_texture::{BsdfParameter, TexturedParameter};
-use super::camera::{Camera, Projection};
 use super::medium::Medium;
 use super::sky::{Sky, SkyMap};
 use super::{DeltaKind, DeltaLight, Material, Scene, SceneError, ShadingTilt, ShapePrim, Texture};
+use crate::camera::{Camera, Projection};
 use crate::color::Color;
 use crate::geometry::{SphereShape, Vec2, Vec3};
 
@@ -53,6 +54,7 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneErr
         materials: HashMap::new(),
         media: HashMap::new(),
         bsdf_textures: Vec::new(),
+        bsdf_plugins: Vec::new(),
     };
     for child in &root.children {
         let plugin = &child.plugin;
@@ -88,6 +90,9 @@ struct Builder {
     /// The textured parameters of the BSDF being made (`scalar` adds to them; `bsdf` gives
     /// them to its material).
     bsdf_textures: Vec<TexturedParameter>,
+    /// The plugins of the BSDF being made, outermost first (`bsdf_alone` adds each;
+    /// `shape_material` gives them to the scene's `mitsuba_bsdfs`).
+    bsdf_plugins: Vec<PluginSupport>,
 }
 
 impl Builder {
@@ -459,6 +464,7 @@ impl Builder {
                 ..Material::default()
             },
         };
+        let plugins = std::mem::take(&mut self.bsdf_plugins);
         if let Some(e) = &emitter {
             e.mark_used();
             if e.kind != "area" {
@@ -480,6 +486,15 @@ impl Builder {
         }
         let k = self.scene.materials.len() as u32;
         self.scene.materials.push(material);
+        if let Some(b) = &bsdf {
+            self.scene.mitsuba_bsdfs.insert(
+                k,
+                MitsubaBsdf {
+                    id: b.id.clone(),
+                    plugins,
+                },
+            );
+        }
         if let (true, Some(b)) = (plain, &bsdf) {
             self.materials.insert(Rc::as_ptr(b), k);
         }
@@ -501,7 +516,10 @@ impl Builder {
         p.mark_used();
         let inner = |p: &Plugin| p.children_tagged("bsdf").next().map(|c| c.plugin.clone());
         let line = p.at.line;
-        let material = match p.kind.as_str() {
+        let first = self.bsdf_plugins.len();
+        // The material, and what the path tracer and the other engines render in the
+        // plugin's place (None: the plugin, exactly).
+        let (material, path, others) = match p.kind.as_str() {
             "diffuse" => {
                 let mut m = Material {
                     line,
@@ -513,7 +531,7 @@ impl Builder {
                 m.bsdf = Some(Bsdf::Diffuse {
                     reflectance: m.diffuse,
                 });
-                m
+                (m, None, None)
             }
             "twosided" => match inner(p) {
                 Some(b) => {
@@ -524,7 +542,7 @@ impl Builder {
                     if matches!(m.bsdf, Some(Bsdf::Diffuse { .. })) {
                         m.bsdf = None;
                     }
-                    m
+                    (m, None, None)
                 }
                 None => return Err(p.at.error("twosided needs a nested bsdf")),
             },
@@ -534,11 +552,8 @@ impl Builder {
                     None => return Err(p.at.error("mask needs a nested bsdf")),
                 };
                 m.opacity = Some(self.opacity(p)?);
-                self.warn(
-                    &p.at,
-                    "mask: the path tracer lets light through where it is transparent; the other engines render its nested bsdf opaque",
-                );
-                m
+                // The path tracer lets light through where it is transparent.
+                (m, None, Some("its nested BSDF, opaque"))
             }
             "normalmap" | "bumpmap" => {
                 let mut m = match inner(p) {
@@ -567,19 +582,20 @@ impl Builder {
                 });
                 let _ = p.boolean("flip_invalid_normals", true)?;
                 let _ = p.boolean("use_shadowing_function", true)?;
-                self.warn(
-                    &p.at,
-                    format!("{}: the path tracer tilts the shading frame; the other engines render its nested bsdf untilted", p.kind),
-                );
-                m
+                // The path tracer tilts the shading frame.
+                (m, None, Some("its nested BSDF, untilted"))
             }
-            "null" => Material {
-                // A boundary that changes nothing: glass of index 1 reflects nothing.
-                transmitted: Color::ONE,
-                ior: 1.0,
-                line,
-                ..Material::default()
-            },
+            "null" => (
+                Material {
+                    // A boundary that changes nothing: glass of index 1 reflects nothing.
+                    transmitted: Color::ONE,
+                    ior: 1.0,
+                    line,
+                    ..Material::default()
+                },
+                None,
+                None,
+            ),
             "dielectric" | "roughdielectric" | "thindielectric" => {
                 let eta = (self.ior(p, "int_ior", "bk7")? / self.ior(p, "ext_ior", "air")?) as f32;
                 let transmittance =
@@ -607,15 +623,21 @@ impl Builder {
                         distribution: None,
                     }),
                 };
-                self.approximated(p, bsdf.is_some(), "smooth glass");
-                Material {
+                let thin = p.kind == "thindielectric";
+                let others = match (&bsdf, thin) {
+                    (None, _) => None,
+                    (Some(_), true) => Some("a boundary light passes straight through"),
+                    (Some(_), false) => Some("smooth glass"),
+                };
+                let m = Material {
                     transmitted: transmittance,
                     // A thin sheet does not bend light: the other engines pass through it.
-                    ior: if p.kind == "thindielectric" { 1.0 } else { eta },
+                    ior: if thin { 1.0 } else { eta },
                     bsdf,
                     line,
                     ..Material::default()
-                }
+                };
+                (m, None, others)
             }
             "conductor" | "roughconductor" => {
                 let specular = self.colour(p, "specular_reflectance", 1.0, SpectrumUse::Bounded)?;
@@ -639,8 +661,7 @@ impl Builder {
                     }
                 };
                 let distribution = self.distribution(p)?;
-                self.approximated(p, true, "a mirror of the Fresnel reflectance at normal incidence, a glossy lobe if rough");
-                Material {
+                let m = Material {
                     reflective: specular * conductor_reflectance(eta, k),
                     roughness: distribution.map_or(0.0, |d| {
                         let (u, v) = d.alpha();
@@ -654,7 +675,8 @@ impl Builder {
                     }),
                     line,
                     ..Material::default()
-                }
+                };
+                (m, None, Some("a mirror of the Fresnel reflectance at normal incidence, a glossy lobe if rough"))
             }
             "plastic" | "roughplastic" => {
                 let eta = (self.ior(p, "int_ior", "polypropylene")? / self.ior(p, "ext_ior", "air")?) as f32;
@@ -675,8 +697,7 @@ impl Builder {
                 if m.texture.is_some() || m.texture_file.is_some() {
                     self.warn(&p.at, format!("{}: a textured diffuse_reflectance is taken at its mean by the path tracer", p.kind));
                 }
-                self.approximated(p, true, "a Lambertian base under a constant specular layer");
-                m
+                (m, None, Some("a Lambertian base under a constant specular layer"))
             }
             "principled" => {
                 let mut m = Material {
@@ -709,8 +730,7 @@ impl Builder {
                 m.diffuse *= 1.0 - metallic;
                 m.roughness = principled.roughness * principled.roughness;
                 m.bsdf = Some(Bsdf::Principled(principled));
-                self.approximated(p, true, "a Lambertian base and a glossy lobe");
-                m
+                (m, None, Some("a Lambertian base and a glossy lobe"))
             }
             "principledthin" => {
                 let mut m = Material {
@@ -719,11 +739,7 @@ impl Builder {
                 };
                 self.reflectance(p, "base_color", 0.5, &mut m)?;
                 mark_all_used(p);
-                self.warn(
-                    &p.at,
-                    "principledthin is approximated in every engine: a Lambertian base",
-                );
-                m
+                (m, Some("a Lambertian base"), Some("a Lambertian base"))
             }
             other => {
                 return Err(p.at.error(format!(
@@ -731,6 +747,16 @@ impl Builder {
                 )))
             }
         };
+        let support = PluginSupport {
+            kind: p.kind.clone(),
+            path,
+            others,
+        };
+        if let Some(warning) = support.warning() {
+            self.warn(&p.at, warning);
+        }
+        // A wrapper's nested BSDF recorded itself first: this plugin goes in front of it.
+        self.bsdf_plugins.insert(first, support);
         Ok(material)
     }
 
@@ -866,20 +892,6 @@ impl Builder {
             ),
         );
         Ok(0.5 * (a + b))
-    }
-
-    /// Warns that `p` is approximated: in the other engines when the path tracer has its
-    /// exact BSDF (`exact_in_path`), else everywhere.
-    fn approximated(&mut self, p: &Plugin, exact_in_path: bool, how: &str) {
-        let message = if exact_in_path {
-            format!(
-                "{}: the path tracer renders it exactly; the other engines approximate it as {how}",
-                p.kind
-            )
-        } else {
-            return;
-        };
-        self.warn(&p.at, message);
     }
 
     /// A reflectance given as a colour, or as a `bitmap` texture (read through the scene's
@@ -1163,8 +1175,7 @@ fn bitmap(t: &Plugin, file: &Path, at: &xml::Location, raw: bool) -> Result<Text
     } else {
         Texture::load(file)
     };
-    let mut texture =
-        loaded.map_err(|why| at.error(format!("cannot read {}: {why}", file.display())))?;
+    let mut texture = loaded.map_err(|why| at.error(format!("cannot read {why}")))?;
     texture.to_uv = to_uv(t)?;
     if let Some((filter, _)) = t.string("filter_type")? {
         texture.nearest = filter == "nearest";

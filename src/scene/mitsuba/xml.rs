@@ -98,6 +98,8 @@ pub struct Plugin {
     pub kind: String,
     /// The `name` it is nested under (`<texture name="reflectance">`, `<ref name="interior">`).
     pub name: Option<String>,
+    /// Its `id` attribute, which `<ref>` names it by.
+    pub id: Option<String>,
     pub properties: Vec<Property>,
     pub children: Vec<Child>,
     pub at: Location,
@@ -358,6 +360,7 @@ impl Reader {
             tag: "scene".into(),
             kind: String::new(),
             name: None,
+            id: None,
             properties: Vec::new(),
             children: Vec::new(),
             at,
@@ -531,6 +534,7 @@ impl Reader {
                     tag: t.into(),
                     kind,
                     name: self.attribute(node, "name", &at)?,
+                    id: id.clone(),
                     properties: Vec::new(),
                     children: Vec::new(),
                     at,

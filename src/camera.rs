@@ -1,5 +1,6 @@
 //! Cameras of the course dialect: perspective and orthographic, with the course's mapping of
-//! pixels to a square screen.
+//! pixels to a square screen. Every scene format gives one and the film projects through it
+//! (ray trees, wireframes), so it lies below both `scene` and `film`.
 
 use crate::geometry::{vec3, Bounds3, Ray, Vec3};
 

@@ -1,0 +1,131 @@
+//! What the engines render of each Mitsuba BSDF plugin a material is made of: the one record
+//! behind the Mitsuba reader's warnings and `--plan`'s lines on materials
+//! (docs/scene-format.md's table says the same for every plugin).
+
+/// A BSDF plugin as the engines render it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PluginSupport {
+    /// The plugin's type as the file gives it (`roughplastic`, `mask`).
+    pub kind: String,
+    /// What the path tracer renders in its place; None: the plugin, exactly.
+    pub path: Option<&'static str>,
+    /// What the other engines render in its place; None: the plugin, exactly.
+    pub others: Option<&'static str>,
+}
+
+impl PluginSupport {
+    /// What the path tracer (`path_tracer`) or the other engines render in the plugin's
+    /// place; None: the plugin, exactly.
+    pub fn approximation(&self, path_tracer: bool) -> Option<&'static str> {
+        if path_tracer {
+            self.path
+        } else {
+            self.others
+        }
+    }
+
+    /// The reader's warning about the plugin; None when every engine renders it exactly.
+    pub fn warning(&self) -> Option<String> {
+        let kind = &self.kind;
+        match (self.path, self.others) {
+            (None, None) => None,
+            (None, Some(o)) => Some(format!(
+                "{kind}: the path tracer renders it exactly; the other engines approximate it as {o}"
+            )),
+            (Some(p), Some(o)) if p == o => {
+                Some(format!("{kind} is approximated in every engine as {p}"))
+            }
+            (Some(p), o) => Some(format!(
+                "{kind}: the path tracer approximates it as {p}; the other engines {}",
+                o.map_or("render it exactly".to_string(), |o| format!(
+                    "approximate it as {o}"
+                ))
+            )),
+        }
+    }
+}
+
+/// A material made of Mitsuba BSDF plugins, as the engines render it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MitsubaBsdf {
+    /// The outermost plugin's `id`, if the file gives one.
+    pub id: Option<String>,
+    /// Its plugins, outermost first (`twosided`, then the `roughplastic` inside it).
+    pub plugins: Vec<PluginSupport>,
+}
+
+impl MitsubaBsdf {
+    /// The plugins' types nested as in the file: `mask(twosided(roughplastic))`.
+    pub fn kinds(&self) -> String {
+        let names: Vec<&str> = self.plugins.iter().map(|p| p.kind.as_str()).collect();
+        format!(
+            "{}{}",
+            names.join("("),
+            ")".repeat(names.len().saturating_sub(1))
+        )
+    }
+
+    /// What the path tracer (`path_tracer`) or the other engines render: "exact", or each
+    /// plugin they approximate and how.
+    pub fn rendering(&self, path_tracer: bool) -> String {
+        let approximated: Vec<String> = self
+            .plugins
+            .iter()
+            .filter_map(|p| {
+                p.approximation(path_tracer)
+                    .map(|how| format!("{} approximated as {how}", p.kind))
+            })
+            .collect();
+        if approximated.is_empty() {
+            "exact".into()
+        } else {
+            approximated.join("; ")
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plugin(
+        kind: &str,
+        path: Option<&'static str>,
+        others: Option<&'static str>,
+    ) -> PluginSupport {
+        PluginSupport {
+            kind: kind.into(),
+            path,
+            others,
+        }
+    }
+
+    #[test]
+    fn nested_plugins_name_each_approximation_for_each_engine() {
+        let m = MitsubaBsdf {
+            id: Some("coat".into()),
+            plugins: vec![
+                plugin("mask", None, Some("its nested BSDF, opaque")),
+                plugin("twosided", None, None),
+                plugin("roughplastic", None, Some("a Lambertian base")),
+            ],
+        };
+        assert_eq!(m.kinds(), "mask(twosided(roughplastic))");
+        assert_eq!(m.rendering(true), "exact");
+        assert_eq!(
+            m.rendering(false),
+            "mask approximated as its nested BSDF, opaque; roughplastic approximated as a Lambertian base"
+        );
+        assert_eq!(m.plugins[1].warning(), None);
+        assert_eq!(
+            plugin(
+                "principledthin",
+                Some("a Lambertian base"),
+                Some("a Lambertian base")
+            )
+            .warning()
+            .as_deref(),
+            Some("principledthin is approximated in every engine as a Lambertian base")
+        );
+    }
+}
