@@ -1,20 +1,27 @@
-//! Homogeneous participating media (`medium` blocks, `fog K`; docs/scene-format.md): the
-//! coefficients, the transmittance along a segment, free-flight distances sampled by a hero
-//! channel, and the Henyey–Greenstein phase function.
+//! Participating media (`medium` blocks, `fog K`, Mitsuba's `homogeneous` and
+//! `heterogeneous`; docs/scene-format.md): the coefficients, the transmittance along a
+//! segment, free-flight distances (sampled by a hero channel in a homogeneous medium, by
+//! delta tracking in a heterogeneous one, whose transmittance ratio tracking estimates), and
+//! the Henyey–Greenstein phase function.
 
 use crate::color::Color;
-use crate::geometry::Vec3;
-use crate::sampling::orthonormal_basis;
+use crate::geometry::{Bounds3, Vec3};
+use crate::sampling::{orthonormal_basis, PathSamples};
 
-/// A homogeneous medium. Coefficients are per scene unit.
-#[derive(Clone, Copy, Debug, PartialEq)]
+use super::volume_grid::GridVolume;
+
+/// A medium. Coefficients are per scene unit.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Medium {
-    /// Absorption coefficient σa (`sigma_a`, default 0).
+    /// Absorption coefficient σa (`sigma_a`, default 0); 0 in a heterogeneous medium.
     pub sigma_a: Color,
-    /// Scattering coefficient σs (`sigma_s`, default 0).
+    /// Scattering coefficient σs (`sigma_s`, default 0); 0 in a heterogeneous medium.
     pub sigma_s: Color,
     /// Henyey–Greenstein asymmetry in (−1, 1) (`g`, default 0: isotropic).
     pub g: f32,
+    /// The coefficients of a heterogeneous medium, which vary through space (default None:
+    /// the medium is homogeneous, of `sigma_a` and `sigma_s`).
+    pub heterogeneous: Option<Box<Heterogeneous>>,
     /// Line of the file where the block starts.
     pub line: u32,
 }
@@ -25,7 +32,155 @@ impl Default for Medium {
             sigma_a: Color::ZERO,
             sigma_s: Color::ZERO,
             g: 0.0,
+            heterogeneous: None,
             line: 0,
+        }
+    }
+}
+
+/// Mitsuba's `heterogeneous` medium: σt = `scale` × a grid, σs = σt × the albedo (a colour or
+/// a grid). Outside the σt grid's box nothing interacts (Mitsuba samples only within it);
+/// inside, the grid is clamped to its outer cells.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Heterogeneous {
+    /// The grid of σt before `scale` (`sigma_t`).
+    pub sigma_t: GridVolume,
+    /// What the σt grid is multiplied by (`scale`, default 1).
+    pub scale: f32,
+    /// The single-scattering albedo σs/σt (`albedo`, default 0.75).
+    pub albedo: Albedo,
+}
+
+/// A heterogeneous medium's albedo: one colour, or a grid of them.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Albedo {
+    Constant(Color),
+    Grid(GridVolume),
+}
+
+impl Heterogeneous {
+    /// The bound on σt that delta and ratio tracking sample against: `scale` × the grid's
+    /// largest value, in every channel (Mitsuba's majorant).
+    pub fn majorant(&self) -> f32 {
+        self.scale * self.sigma_t.grid.max()
+    }
+
+    /// Where the medium interacts: the σt grid's box in the world.
+    pub fn bounds(&self) -> Bounds3 {
+        self.sigma_t.bounds()
+    }
+
+    /// σt at the world point `x` (within `bounds`).
+    pub fn sigma_t(&self, x: Vec3) -> Color {
+        self.sigma_t.eval(x) * self.scale
+    }
+
+    /// The albedo at the world point `x`.
+    pub fn albedo(&self, x: Vec3) -> Color {
+        match &self.albedo {
+            Albedo::Constant(c) => *c,
+            Albedo::Grid(g) => g.eval(x),
+        }
+    }
+
+    /// The same medium in a world scaled by `scale` about the origin and moved by `offset`:
+    /// the grids follow, and σt keeps its optical depths.
+    pub fn transformed(&self, scale: f32, offset: Vec3) -> Heterogeneous {
+        Heterogeneous {
+            sigma_t: self.sigma_t.transformed(scale, offset),
+            scale: self.scale / scale,
+            albedo: match &self.albedo {
+                Albedo::Constant(c) => Albedo::Constant(*c),
+                Albedo::Grid(g) => Albedo::Grid(g.transformed(scale, offset)),
+            },
+        }
+    }
+
+    /// The part of the segment from `origin` along the unit `direction`, `length` long,
+    /// inside `bounds`, and the majorant; None where nothing can interact on it.
+    fn span(&self, origin: Vec3, direction: Vec3, length: f32) -> Option<(f32, f32, f32)> {
+        let majorant = self.majorant();
+        if majorant <= 0.0 {
+            return None;
+        }
+        let (near, far) = self.bounds().clip(origin, direction, length)?;
+        Some((near, far, majorant))
+    }
+
+    /// Delta tracking (Woodcock): tentative collisions at the majorant's rate; at each, a
+    /// real one with probability σt/majorant, else a null one that goes on. Each collision
+    /// takes two numbers of `samples`. Where σt differs between channels, the choice is made
+    /// with the channels mixed by the path's `throughput` (the null probability the mix of
+    /// theirs) and each channel weighed by its own over it, so the estimate is unbiased in
+    /// every channel (spectral tracking; Mitsuba mixes the channels equally); with σt grey
+    /// the weights are 1 at null collisions and the albedo where the path scatters.
+    fn sample_flight(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_surface: f32,
+        throughput: Color,
+        samples: &mut PathSamples,
+    ) -> Flight {
+        let Some((near, far, majorant)) = self.span(origin, direction, t_surface) else {
+            return Flight::Passed { weight: Color::ONE };
+        };
+        let mut weight = Color::ONE;
+        let mut t = near;
+        loop {
+            let (u, v) = samples.next_2d();
+            t -= (1.0 - u).ln() / majorant;
+            if t >= far {
+                return Flight::Passed { weight };
+            }
+            let x = origin + direction * t;
+            let sigma_t = self.sigma_t(x);
+            let sigma_n = (Color::splat(majorant) - sigma_t).max(Color::ZERO);
+            let carried = throughput * weight;
+            let total = carried.x + carried.y + carried.z;
+            let share = if total > 0.0 && total.is_finite() {
+                carried / total
+            } else {
+                Color::splat(1.0 / 3.0)
+            };
+            let null = share.dot(sigma_n) / majorant;
+            if v < null {
+                weight *= sigma_n / (majorant * null);
+            } else {
+                let real = 1.0 - null;
+                return Flight::Scattered {
+                    t,
+                    weight: weight * sigma_t * self.albedo(x) / (majorant * real),
+                };
+            }
+        }
+    }
+
+    /// Ratio tracking: the product of (1 − σt/majorant) over tentative collisions at the
+    /// majorant's rate, whose mean is the transmittance exp(−∫σt) per channel. Each
+    /// collision takes one number of `samples`.
+    fn transmittance(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        length: f32,
+        samples: &mut PathSamples,
+    ) -> Color {
+        let Some((near, far, majorant)) = self.span(origin, direction, length) else {
+            return Color::ONE;
+        };
+        let mut transmittance = Color::ONE;
+        let mut t = near;
+        loop {
+            t -= (1.0 - samples.next_1d()).ln() / majorant;
+            if t >= far {
+                return transmittance;
+            }
+            let sigma_t = self.sigma_t(origin + direction * t);
+            transmittance *= (Color::ONE - sigma_t / majorant).max(Color::ZERO);
+            if transmittance.max_element() <= 0.0 {
+                return Color::ZERO;
+            }
         }
     }
 }
@@ -123,6 +278,42 @@ impl Medium {
                     Color::ZERO
                 },
             }
+        }
+    }
+
+    /// Where a ray from `origin` along the unit `direction`, which would meet a surface at
+    /// `t_surface` (∞: none), first interacts, from the path's `samples`: a homogeneous
+    /// medium's `sample_flight` from one 2-D draw, a heterogeneous one's delta tracking.
+    pub fn free_flight(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_surface: f32,
+        throughput: Color,
+        samples: &mut PathSamples,
+    ) -> Flight {
+        match &self.heterogeneous {
+            None => {
+                let (u, v) = samples.next_2d();
+                self.sample_flight(t_surface, throughput, u, v)
+            }
+            Some(h) => h.sample_flight(origin, direction, t_surface, throughput, samples),
+        }
+    }
+
+    /// The transmittance of the segment from `origin` along the unit `direction`, `length`
+    /// long: exact in a homogeneous medium (drawing nothing), estimated without bias by ratio
+    /// tracking from `samples` in a heterogeneous one.
+    pub fn transmittance_along(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        length: f32,
+        samples: &mut PathSamples,
+    ) -> Color {
+        match &self.heterogeneous {
+            None => self.transmittance(length),
+            Some(h) => h.transmittance(origin, direction, length, samples),
         }
     }
 
