@@ -1057,7 +1057,8 @@ impl Builder {
     /// grid or a colour.
     fn heterogeneous(&mut self, p: &Plugin, scale: f32) -> Result<Heterogeneous, SceneError> {
         let Some(sigma_t) = p.child_named("sigma_t").cloned() else {
-            return Err(p.at.error(
+            let at = p.property("sigma_t").map_or(&p.at, |given| &given.at);
+            return Err(at.error(
                 "a heterogeneous medium needs its \"sigma_t\" as a gridvolume (a <volume> of type gridvolume)",
             ));
         };
