@@ -369,6 +369,7 @@ mod tests {
             sigma_s,
             g,
             line: 1,
+            ..Medium::default()
         }
     }
 
