@@ -364,6 +364,7 @@ impl PathTracer<'_> {
     /// from the numbers `draw_sky` drew: one direction by the cosine about `n` (exact for a
     /// uniform sky over a diffuse surface), weighed against sampling the lobe by the power
     /// heuristic; a medium around the point lets through only its channels without extinction.
+    #[allow(clippy::too_many_arguments)]
     fn sample_sky(
         &self,
         s: &SurfaceHit,
