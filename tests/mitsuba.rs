@@ -513,3 +513,45 @@ fn bad_heterogeneous_media_name_the_file_and_line() {
     let file = write("rgb-sigma-t", &[("rgb.xml", text.as_bytes())]);
     fails(&file, "rgb.xml", 10, &["sigma_t", "gridvolume"]);
 }
+
+/// The engines that do not render heterogeneous media refuse a scene with one, naming the
+/// scene's file and the medium's line, before any work; the path tracer renders it.
+#[test]
+fn engines_other_than_the_path_tracer_refuse_a_heterogeneous_medium() {
+    let text = medium_cube(&format!(
+        "<medium id=\"inside\" type=\"heterogeneous\">\n{}\n</medium>",
+        grid("sigma_t", "sigmat.vol")
+    ));
+    let density = vol([1, 1, 1], 1, &[1.0]);
+    let file = write(
+        "refused-medium",
+        &[("refused.xml", text.as_bytes()), ("sigmat.vol", &density)],
+    );
+    for engine in ["path", "raytrace", "photon", "radiosity", "sppm"] {
+        let image = file.with_file_name(format!("{engine}.png"));
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+            .args([
+                "-input",
+                file.to_str().unwrap(),
+                "-size",
+                "8",
+                "8",
+                "--quiet",
+            ])
+            .args(["--engine", engine, "-num_antialias_samples", "4", "-o"])
+            .arg(&image)
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if engine == "path" {
+            assert!(out.status.success(), "{engine}: {stderr}");
+            continue;
+        }
+        assert!(!out.status.success(), "{engine}: {stderr}");
+        assert!(
+            stderr.contains("refused.xml:9: the scene has a heterogeneous medium"),
+            "{engine}: {stderr}"
+        );
+        assert!(!image.exists(), "{engine}: an image was written");
+    }
+}
