@@ -373,3 +373,185 @@ fn include_cycles_missing_and_broken_meshes_name_the_file_and_line() {
     let file = write("undefined", &[("undefined.xml", undefined.as_bytes())]);
     fails(&file, "undefined.xml", 2, &["$kind", "--define"]);
 }
+
+/// The bytes of a Mitsuba `.vol` grid of `size` cells of `channels` channels (unit box).
+fn vol(size: [i32; 3], channels: i32, values: &[f32]) -> Vec<u8> {
+    let mut bytes = b"VOL\x03".to_vec();
+    for v in [1, size[0], size[1], size[2], channels] {
+        bytes.extend(v.to_le_bytes());
+    }
+    for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0].iter().chain(values) {
+        bytes.extend(v.to_le_bytes());
+    }
+    bytes
+}
+
+/// A cube [−1, 1]³ of `medium` bounded by a `null` BSDF, filling the view from z = 5, under
+/// a uniform environment of radiance 1; the grid files are `sigmat.vol` and `albedo.vol`.
+fn medium_cube(medium: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+    <integrator type="volpath"><integer name="max_depth" value="-1"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="20"/>
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="12"/></film>
+    </sensor>
+    <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+    {medium}
+    <shape type="cube">
+        <bsdf type="null"/>
+        <ref id="inside" name="interior"/>
+    </shape>
+</scene>"#
+    )
+}
+
+/// A `gridvolume` of `file` over the cube [−1, 1]³ (its unit cube scaled by 2, then moved).
+fn grid(name: &str, file: &str) -> String {
+    format!(
+        r#"<volume name="{name}" type="gridvolume">
+            <string name="filename" value="{file}"/>
+            <transform name="to_world"><scale value="2"/><translate x="-1" y="-1" z="-1"/></transform>
+        </volume>"#
+    )
+}
+
+/// The mean of each channel of a path-traced image of `scene` at `spp` paths a pixel.
+fn mean_colour(scene: &Scene, spp: u32) -> [f64; 3] {
+    let accel = accel::build(scene, backends()[0], &AccelOptions::default()).expect("builds");
+    let settings = RenderSettings {
+        width: 12,
+        height: 12,
+        num_antialias_samples: spp,
+        quiet: true,
+        ..RenderSettings::default()
+    };
+    let (film, _) = path::render(scene, accel.as_ref(), &settings);
+    let n = film.pixels.len() as f64;
+    [0, 1, 2].map(|c| film.pixels.iter().map(|p| p[c] as f64).sum::<f64>() / n)
+}
+
+/// A heterogeneous medium against closed forms: a medium that only scatters (albedo 1),
+/// under a uniform environment, is a furnace, radiance 1 everywhere whatever its density, so
+/// a coloured ramp of σt renders 1 in every channel (delta tracking, ratio tracking and
+/// next-event estimation together unbiased); and a grid of one value renders what the
+/// homogeneous medium of that σt and albedo does.
+#[test]
+fn heterogeneous_media_render_a_furnace_and_match_a_homogeneous_medium() {
+    // σt 0 at x ≤ −0.5 rising to (8, 4, 2) at x ≥ 0.5.
+    let ramp = vol([2, 1, 1], 3, &[0.0, 0.0, 0.0, 8.0, 4.0, 2.0]);
+    let albedo = vol([1, 1, 1], 3, &[1.0, 1.0, 1.0]);
+    let furnace = medium_cube(&format!(
+        r#"<medium id="inside" type="heterogeneous">{}{}</medium>"#,
+        grid("sigma_t", "sigmat.vol"),
+        grid("albedo", "albedo.vol")
+    ));
+    let file = write(
+        "furnace-medium",
+        &[
+            ("furnace.xml", furnace.as_bytes()),
+            ("sigmat.vol", &ramp),
+            ("albedo.vol", &albedo),
+        ],
+    );
+    let scene = Scene::load(&file).expect("loads");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let mean = mean_colour(&scene, 256);
+    assert!(
+        mean.iter().all(|m| (m - 1.0).abs() < 0.01),
+        "the furnace: {mean:?}, expected 1"
+    );
+
+    let constant = vol([2, 2, 2], 1, &[0.6; 8]);
+    let heterogeneous = medium_cube(&format!(
+        r#"<medium id="inside" type="heterogeneous"><float name="scale" value="2"/>{}<rgb name="albedo" value="0.9, 0.5, 0.2"/></medium>"#,
+        grid("sigma_t", "sigmat.vol")
+    ));
+    let homogeneous = medium_cube(
+        r#"<medium id="inside" type="homogeneous"><rgb name="sigma_t" value="1.2"/><rgb name="albedo" value="0.9, 0.5, 0.2"/></medium>"#,
+    );
+    let file = write(
+        "constant-medium",
+        &[
+            ("heterogeneous.xml", heterogeneous.as_bytes()),
+            ("homogeneous.xml", homogeneous.as_bytes()),
+            ("sigmat.vol", &constant),
+        ],
+    );
+    let ours = mean_colour(&Scene::load(&file).expect("loads"), 256);
+    let reference = mean_colour(
+        &Scene::load(&file.with_file_name("homogeneous.xml")).expect("loads"),
+        256,
+    );
+    for c in 0..3 {
+        assert!(
+            (ours[c] / reference[c] - 1.0).abs() < 0.015,
+            "channel {c}: {ours:?} against the homogeneous {reference:?}"
+        );
+    }
+}
+
+/// A grid file that is cut short, or a `sigma_t` that is not a grid, is refused with the
+/// scene's file and line (and the grid file's name and what it expected).
+#[test]
+fn bad_heterogeneous_media_name_the_file_and_line() {
+    let medium = |sigma_t: &str| {
+        medium_cube(&format!(
+            "<medium id=\"inside\" type=\"heterogeneous\">\n{sigma_t}\n</medium>"
+        ))
+    };
+    let cut = vol([4, 4, 4], 1, &[1.0; 60]);
+    let text = medium(&grid("sigma_t", "cut.vol"));
+    let file = write(
+        "cut-grid",
+        &[("cut.xml", text.as_bytes()), ("cut.vol", &cut)],
+    );
+    fails(&file, "cut.xml", 11, &["cut.vol", "expected 304", "4×4×4"]);
+
+    let text = medium(r#"<rgb name="sigma_t" value="1"/>"#);
+    let file = write("rgb-sigma-t", &[("rgb.xml", text.as_bytes())]);
+    fails(&file, "rgb.xml", 10, &["sigma_t", "gridvolume"]);
+}
+
+/// The engines that do not render heterogeneous media refuse a scene with one, naming the
+/// scene's file and the medium's line, before any work; the path tracer renders it.
+#[test]
+fn engines_other_than_the_path_tracer_refuse_a_heterogeneous_medium() {
+    let text = medium_cube(&format!(
+        "<medium id=\"inside\" type=\"heterogeneous\">\n{}\n</medium>",
+        grid("sigma_t", "sigmat.vol")
+    ));
+    let density = vol([1, 1, 1], 1, &[1.0]);
+    let file = write(
+        "refused-medium",
+        &[("refused.xml", text.as_bytes()), ("sigmat.vol", &density)],
+    );
+    for engine in ["path", "raytrace", "photon", "radiosity", "sppm"] {
+        let image = file.with_file_name(format!("{engine}.png"));
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+            .args([
+                "-input",
+                file.to_str().unwrap(),
+                "-size",
+                "8",
+                "8",
+                "--quiet",
+            ])
+            .args(["--engine", engine, "-num_antialias_samples", "4", "-o"])
+            .arg(&image)
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if engine == "path" {
+            assert!(out.status.success(), "{engine}: {stderr}");
+            continue;
+        }
+        assert!(!out.status.success(), "{engine}: {stderr}");
+        assert!(
+            stderr.contains("refused.xml:9: the scene has a heterogeneous medium"),
+            "{engine}: {stderr}"
+        );
+        assert!(!image.exists(), "{engine}: an image was written");
+    }
+}

@@ -304,7 +304,7 @@ fn reference_paths(solution: &Solution, total: f64) -> Vec<u32> {
 }
 
 /// Mitsuba 3's render tests that our path tracer passes today: each must keep passing.
-const MITSUBA_TESTS_PASSING: [&str; 20] = [
+const MITSUBA_TESTS_PASSING: [&str; 22] = [
     "test_arealight_path",
     "test_bumpmap_path",
     "test_constant_path",
@@ -319,6 +319,8 @@ const MITSUBA_TESTS_PASSING: [&str; 20] = [
     "test_textured_roughconductor_path",
     "test_texturedprincipled1_path",
     "test_texturedprincipled2_path",
+    "test_hetero_sigmat_albedo_volpath",
+    "test_hetero_sigmat_volpath",
     "test_homo_area_light_volpath",
     "test_homo_dielectric_envmap_volpath",
     "test_homo_emitter_inside_medium_volpath",
@@ -345,8 +347,8 @@ const MITSUBA_TEST_SPP: u32 = 256;
 /// the relMSE Mitsuba's own estimator has at 256 samples (its per-sample variance, which the
 /// suite ships, over 256) plus 2e-4, and its mean is within 2% of the reference's. The table
 /// of every scene is printed; the scenes of `MITSUBA_TESTS_PASSING` must pass. A scene that
-/// holds what trilux does not read (a heterogeneous medium) must be refused with its file and
-/// line. Both Accels must give the same image of every scene.
+/// holds what trilux does not read must be refused with its file and line. Both Accels must
+/// give the same image of every scene.
 fn mitsuba_render_tests_against_mitsubas_references(dir: &Path) {
     use trilux::accel::{self, AccelOptions};
     use trilux::engines::{path, RenderSettings};

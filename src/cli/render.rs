@@ -240,7 +240,8 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
 /// radiosity as its indirect light, whose solution leaves them out) and the photon engine's
 /// (final gathering included: its gather rays cross the media); radiosity takes a sky and a
 /// fog, not a medium inside glass (behind a specular boundary its form factors do not cross);
-/// SPPM takes a sky, not media (its visible points are on surfaces only).
+/// SPPM takes a sky, not media (its visible points are on surfaces only). A heterogeneous
+/// medium is the path tracer's alone.
 fn refuse_unrendered_media(
     args: &RenderArgs,
     input: &Path,
@@ -251,6 +252,17 @@ fn refuse_unrendered_media(
         return Err(format!(
             "{}: the scene has lights without area (Mitsuba's point, spot or directional lights), which only the path tracer renders so far (--engine path); the {engine} engine would leave them out",
             input.display()
+        ));
+    }
+    let heterogeneous = scene.media.iter().find(|m| m.heterogeneous.is_some());
+    if let (Some(m), false) = (
+        heterogeneous,
+        matches!(engine, EngineKind::Path | EngineKind::Raycast),
+    ) {
+        return Err(format!(
+            "{}:{}: the scene has a heterogeneous medium (Mitsuba's heterogeneous), which only the path tracer renders so far (--engine path); the {engine} engine would leave it out",
+            input.display(),
+            m.line
         ));
     }
     let radiosity_indirect = args.ray_trace.indirect == engines::IndirectKind::Radiosity;

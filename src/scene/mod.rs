@@ -15,6 +15,7 @@ pub mod range;
 pub mod sky;
 mod surface;
 pub mod texture;
+pub mod volume_grid;
 
 use std::path::{Path, PathBuf};
 
@@ -457,6 +458,9 @@ impl Scene {
         for m in &mut s.media {
             m.sigma_a /= scale;
             m.sigma_s /= scale;
+            if let Some(h) = &mut m.heterogeneous {
+                **h = h.transformed(scale, offset);
+            }
         }
         // Patterns are laid out in scene units from their origin: both move with the scene.
         for m in &mut s.materials {

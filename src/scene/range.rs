@@ -102,8 +102,10 @@ pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
         }
     }
     for (k, m) in scene.media.iter().enumerate() {
+        let majorant = m.heterogeneous.as_ref().map_or(0.0, |h| h.majorant());
         check_coordinate(m.sigma_a, "sigma_a")
             .and_then(|_| check_coordinate(m.sigma_s, "sigma_s"))
+            .and_then(|_| check_coordinate(Vec3::splat(majorant), "the largest sigma_t"))
             .map_err(|e| scene_line(&scene.path, m.line, format!("medium {k}: {e}")))?;
     }
     for (k, m) in scene.materials.iter().enumerate() {

@@ -76,7 +76,9 @@ pub struct PathTracer<'a> {
     by_area: bool,
     /// The scene has index-matched boundaries (Mitsuba's `null`): shadow rays cross them,
     /// taking each medium's transmittance on the way, as Mitsuba's volumetric path tracer's
-    /// do; elsewhere a surface in the way blocks a shadow ray.
+    /// do; elsewhere a surface in the way blocks a shadow ray. Set too where a medium is
+    /// heterogeneous, whose transmittance `crossing_transmittance` estimates along the ray
+    /// (the other shadow rays take a homogeneous medium's from the distance alone).
     crosses_boundaries: bool,
     /// The widest SIMD instructions this processor has (the wavefront's vertex kernel).
     arch: pulp::Arch,
@@ -145,7 +147,8 @@ impl PathTracer<'_> {
             crosses_boundaries: scene
                 .materials
                 .iter()
-                .any(|m| m.straight_transmission(1.0) != Color::ZERO),
+                .any(|m| m.straight_transmission(1.0) != Color::ZERO)
+                || scene.media.iter().any(|m| m.heterogeneous.is_some()),
             arch: pulp::Arch::new(),
         }
     }
@@ -226,8 +229,13 @@ impl PathTracer<'_> {
             return from_lights;
         };
         let phase = medium.phase(travel, dir);
-        let seen =
-            self.shadow_transmittance(&Ray::new(x, dir), f32::INFINITY, Some(medium), counts);
+        let seen = self.shadow_transmittance(
+            &Ray::new(x, dir),
+            f32::INFINITY,
+            Some(medium),
+            samples,
+            counts,
+        );
         from_lights + sky.radiance(dir) * seen * (phase / pdf * power_heuristic(pdf, phase))
     }
 
@@ -253,7 +261,13 @@ impl PathTracer<'_> {
         let phase = medium.phase(travel, to_light / distance);
         let light_pdf = self.selection_probability(k) * d.pdf;
         light.emitted
-            * self.shadow_transmittance(&shadow_ray(x, d.point), distance, Some(medium), counts)
+            * self.shadow_transmittance(
+                &shadow_ray(x, d.point),
+                distance,
+                Some(medium),
+                samples,
+                counts,
+            )
             * (phase / light_pdf * power_heuristic(light_pdf, phase))
     }
 
@@ -276,13 +290,18 @@ impl PathTracer<'_> {
 
     /// What the light sample `sample` brings where its shadow ray is not blocked (nothing
     /// without a sample).
-    fn unblocked(&self, sample: Option<ShadowedSample>, counts: &mut Counts) -> Color {
+    fn unblocked(
+        &self,
+        sample: Option<ShadowedSample>,
+        samples: &mut PathSamples,
+        counts: &mut Counts,
+    ) -> Color {
         let Some(sample) = sample else {
             return Vec3::ZERO;
         };
         if self.crosses_boundaries {
             return sample.radiance
-                * self.crossing_transmittance(&sample.shadow_ray, sample.medium, counts);
+                * self.crossing_transmittance(&sample.shadow_ray, sample.medium, samples, counts);
         }
         counts.shadow += 1;
         if self.accel.occluded(&sample.shadow_ray) {
@@ -345,6 +364,7 @@ impl PathTracer<'_> {
     /// from the numbers `draw_sky` drew: one direction by the cosine about `n` (exact for a
     /// uniform sky over a diffuse surface), weighed against sampling the lobe by the power
     /// heuristic; a medium around the point lets through only its channels without extinction.
+    #[allow(clippy::too_many_arguments)]
     fn sample_sky(
         &self,
         s: &SurfaceHit,
@@ -352,6 +372,7 @@ impl PathTracer<'_> {
         lobe: Option<&GlossyLobe>,
         medium: Option<&Medium>,
         draw: Option<(f32, f32)>,
+        samples: &mut PathSamples,
         counts: &mut Counts,
     ) -> Color {
         let (Some(sky), Some((u, v))) = (&self.scene.sky, draw) else {
@@ -374,7 +395,7 @@ impl PathTracer<'_> {
             return Vec3::ZERO;
         }
         let transmittance =
-            self.shadow_transmittance(&s.spawn_ray(dir), f32::INFINITY, medium, counts);
+            self.shadow_transmittance(&s.spawn_ray(dir), f32::INFINITY, medium, samples, counts);
         sky.radiance(dir) * transmittance * (value * power_heuristic(pdf, lobe_pdf))
     }
 
@@ -387,6 +408,7 @@ impl PathTracer<'_> {
         n: Vec3,
         lobe: Option<&GlossyLobe>,
         medium: Option<&Medium>,
+        samples: &mut PathSamples,
         counts: &mut Counts,
     ) -> Color {
         let mut sum = Vec3::ZERO;
@@ -412,7 +434,9 @@ impl PathTracer<'_> {
             } else {
                 Ray::new(origin, dir)
             };
-            sum += irradiance * value * self.shadow_transmittance(&ray, distance, medium, counts);
+            sum += irradiance
+                * value
+                * self.shadow_transmittance(&ray, distance, medium, samples, counts);
         }
         sum
     }
@@ -516,8 +540,7 @@ impl PathTracer<'_> {
                 let t_surface = hit
                     .as_ref()
                     .map_or(f32::INFINITY, |s| s.point.distance(ray.origin));
-                let (u, v) = samples.next_2d();
-                match m.sample_flight(t_surface, throughput, u, v) {
+                match m.free_flight(ray.origin, travel, t_surface, throughput, samples) {
                     // A path at its depth limit takes no more scatterings (those that pass are
                     // weighed for the ones that would not have).
                     Flight::Scattered { .. } if depth >= self.max_depth => break,
@@ -674,10 +697,12 @@ impl PathTracer<'_> {
                     let (u, v) = samples.next_2d();
                     let (sampled, pdf) = diffuse_sample(n, u, v);
                     radiance += throughput
-                        * (self
-                            .unblocked(self.light_sample(&s, n, None, medium, light_draw), counts)
-                            + self.sample_sky(&s, n, None, medium, sky_draw, counts)
-                            + self.delta_lights(&s, n, None, medium, counts));
+                        * (self.unblocked(
+                            self.light_sample(&s, n, None, medium, light_draw),
+                            samples,
+                            counts,
+                        ) + self.sample_sky(&s, n, None, medium, sky_draw, samples, counts)
+                            + self.delta_lights(&s, n, None, medium, samples, counts));
                     if m.bump.is_some() && !s.leaves_on_side_of(n, sampled) {
                         break;
                     }
@@ -702,6 +727,7 @@ impl PathTracer<'_> {
                             radiance += throughput
                                 * (self.unblocked(
                                     self.light_sample(&s, n, Some(&glossy), medium, light_draw),
+                                    samples,
                                     counts,
                                 ) + self.sample_sky(
                                     &s,
@@ -709,8 +735,16 @@ impl PathTracer<'_> {
                                     Some(&glossy),
                                     medium,
                                     sky_draw,
+                                    samples,
                                     counts,
-                                ) + self.delta_lights(&s, n, Some(&glossy), medium, counts));
+                                ) + self.delta_lights(
+                                    &s,
+                                    n,
+                                    Some(&glossy),
+                                    medium,
+                                    samples,
+                                    counts,
+                                ));
                             let (u, v) = samples.next_2d();
                             let (sampled, pdf) = glossy.sample(u, v);
                             dir = sampled;
@@ -858,6 +892,7 @@ impl PathTracer<'_> {
                             &shadow_ray(origin, d.point),
                             to.length(),
                             medium_towards(dir),
+                            samples,
                             counts,
                         );
                         light += emitter.emitted * f * seen * (mis / light_pdf);
@@ -873,6 +908,7 @@ impl PathTracer<'_> {
                             &s.spawn_ray(dir),
                             f32::INFINITY,
                             medium_towards(dir),
+                            samples,
                             counts,
                         );
                         light += sky.radiance(dir) * f * seen * (mis / pdf);
@@ -897,7 +933,13 @@ impl PathTracer<'_> {
                 };
                 light += irradiance
                     * f
-                    * self.shadow_transmittance(&ray, distance, medium_towards(dir), counts);
+                    * self.shadow_transmittance(
+                        &ray,
+                        distance,
+                        medium_towards(dir),
+                        samples,
+                        counts,
+                    );
             }
         }
         let u = samples.next_1d();
@@ -913,10 +955,11 @@ impl PathTracer<'_> {
         ray: &Ray,
         distance: f32,
         medium: Option<&Medium>,
+        samples: &mut PathSamples,
         counts: &mut Counts,
     ) -> Color {
         if self.crosses_boundaries {
-            return self.crossing_transmittance(ray, medium, counts);
+            return self.crossing_transmittance(ray, medium, samples, counts);
         }
         counts.shadow += 1;
         if self.accel.occluded(ray) {
@@ -927,32 +970,45 @@ impl PathTracer<'_> {
 
     /// The transmittance along a shadow ray that starts in `medium`, crossing index-matched
     /// boundaries (each into its material's interior medium from the front, out to the fog
-    /// from the back) and multiplying the media's transmittance over each stretch; 0 where
-    /// any other surface is in the way, or after `MAX_CROSSINGS` boundaries.
+    /// from the back) and multiplying the media's transmittance over each stretch (a
+    /// heterogeneous medium's estimated from `samples`); 0 where any other surface is in the
+    /// way, or after `MAX_CROSSINGS` boundaries.
     fn crossing_transmittance(
         &self,
         ray: &Ray,
         medium: Option<&Medium>,
+        samples: &mut PathSamples,
         counts: &mut Counts,
     ) -> Color {
         let fog = self.scene.fog.map(|k| &self.scene.media[k]);
         let mut medium = medium;
         let scale = ray.direction.length();
+        let direction = ray.direction / scale;
         let mut ray = *ray;
         let mut transmittance = Vec3::ONE;
         for _ in 0..MAX_CROSSINGS {
             counts.shadow += 1;
-            let Some(hit) = closest_surface(self.accel, self.scene, &ray) else {
-                let rest = (ray.t_max - ray.t_min) * scale;
-                return transmittance * medium.map_or(Vec3::ONE, |m| m.transmittance(rest));
-            };
-            let m = &self.scene.materials[hit.material as usize];
-            let straight = m.straight_transmission(ray.direction.dot(hit.shading_normal) / scale);
-            if straight == Color::ZERO {
+            let hit = closest_surface(self.accel, self.scene, &ray);
+            // The surface met and what it lets straight through (nothing: it blocks the ray).
+            let met = hit.as_ref().map(|hit| {
+                let m = &self.scene.materials[hit.material as usize];
+                let cos = ray.direction.dot(hit.shading_normal) / scale;
+                (m, m.straight_transmission(cos))
+            });
+            if met.is_some_and(|(_, straight)| straight == Color::ZERO) {
                 return Vec3::ZERO;
             }
-            transmittance *=
-                straight * medium.map_or(Vec3::ONE, |md| md.transmittance(hit.t * scale));
+            let length = match &hit {
+                Some(hit) => hit.t * scale,
+                None => (ray.t_max - ray.t_min) * scale,
+            };
+            let through = medium.map_or(Vec3::ONE, |md| {
+                md.transmittance_along(ray.origin, direction, length, samples)
+            });
+            let (Some(hit), Some((m, straight))) = (hit, met) else {
+                return transmittance * through;
+            };
+            transmittance *= straight * through;
             medium = if ray.direction.dot(hit.geometric_normal) < 0.0 {
                 self.scene.interior_medium(m)
             } else {

@@ -32,8 +32,9 @@ use self::xml::{Plugin, Value};
 use super::bsdf::{Bsdf, Microfacet, MicrofacetKind, Plastic, Principled};
 use super::bsdf_support::{MitsubaBsdf, PluginSupport};
 use super::bsdf_texture::{BsdfParameter, TexturedParameter};
-use super::medium::Medium;
+use super::medium::{Albedo, Heterogeneous, Medium};
 use super::sky::{Sky, SkyMap};
+use super::volume_grid::{GridVolume, VolumeGrid};
 use super::{DeltaKind, DeltaLight, Material, Scene, SceneError, ShadingTilt, ShapePrim, Texture};
 use crate::camera::{Camera, Projection};
 use crate::color::Color;
@@ -1015,15 +1016,16 @@ impl Builder {
             return Ok(k);
         }
         p.mark_used();
-        if p.kind != "homogeneous" {
-            return Err(p.at.error(format!(
-                "medium \"{}\" is not supported: expected homogeneous",
-                p.kind
-            )));
-        }
+        let heterogeneous = match p.kind.as_str() {
+            "homogeneous" => false,
+            "heterogeneous" => true,
+            other => {
+                return Err(p.at.error(format!(
+                    "medium \"{other}\" is not supported: expected homogeneous or heterogeneous"
+                )))
+            }
+        };
         let scale = p.float("scale", 1.0)? as f32;
-        let sigma_t = self.colour(p, "sigma_t", 1.0, SpectrumUse::Unbounded)? * scale;
-        let albedo = self.colour(p, "albedo", 0.75, SpectrumUse::Bounded)?;
         let _ = p.boolean("sample_emitters", true)?;
         let mut g = 0.0;
         for phase in p.children_tagged("phase") {
@@ -1039,15 +1041,63 @@ impl Builder {
                 }
             }
         }
+        let medium = if heterogeneous {
+            Medium {
+                g,
+                heterogeneous: Some(Box::new(self.heterogeneous(p, scale)?)),
+                line: p.at.line,
+                ..Medium::default()
+            }
+        } else {
+            let sigma_t = self.colour(p, "sigma_t", 1.0, SpectrumUse::Unbounded)? * scale;
+            let albedo = self.colour(p, "albedo", 0.75, SpectrumUse::Bounded)?;
+            Medium {
+                sigma_a: sigma_t * (Color::ONE - albedo),
+                sigma_s: sigma_t * albedo,
+                g,
+                heterogeneous: None,
+                line: p.at.line,
+            }
+        };
         let k = self.scene.media.len();
-        self.scene.media.push(Medium {
-            sigma_a: sigma_t * (Color::ONE - albedo),
-            sigma_s: sigma_t * albedo,
-            g,
-            line: p.at.line,
-        });
+        self.scene.media.push(medium);
         self.media.insert(Rc::as_ptr(p), k);
         Ok(k)
+    }
+
+    /// A `heterogeneous` medium's coefficients: `sigma_t` a grid (times `scale`), `albedo` a
+    /// grid or a colour.
+    fn heterogeneous(&mut self, p: &Plugin, scale: f32) -> Result<Heterogeneous, SceneError> {
+        let Some(sigma_t) = p.child_named("sigma_t").cloned() else {
+            let at = p.property("sigma_t").map_or(&p.at, |given| &given.at);
+            return Err(at.error(
+                "a heterogeneous medium needs its \"sigma_t\" as a gridvolume (a <volume> of type gridvolume)",
+            ));
+        };
+        let sigma_t = grid_volume(&sigma_t)?;
+        let albedo = match p.child_named("albedo").cloned() {
+            Some(v) => {
+                let grid = grid_volume(&v)?;
+                if grid.grid.data.iter().any(|&a| a > 1.0) {
+                    return Err(v
+                        .at
+                        .error("an albedo grid above 1: expected values in [0, 1]"));
+                }
+                Albedo::Grid(grid)
+            }
+            None => Albedo::Constant(self.colour(p, "albedo", 0.75, SpectrumUse::Bounded)?),
+        };
+        let medium = Heterogeneous {
+            sigma_t,
+            scale,
+            albedo,
+        };
+        if !(scale >= 0.0 && medium.majorant().is_finite()) {
+            return Err(p.at.error(format!(
+                "scale {scale}: expected ≥ 0, with the largest σt (scale × the grid's largest value) finite"
+            )));
+        }
+        Ok(medium)
     }
 
     fn emitter(&mut self, p: &Plugin) -> Result<(), SceneError> {
@@ -1165,6 +1215,38 @@ impl Builder {
         };
         Ok(DeltaLight { kind, intensity })
     }
+}
+
+/// A `gridvolume` plugin: its `.vol` file (`filename`) placed by `to_world` (and
+/// `use_grid_bbox`), with Mitsuba's default trilinear filter and clamped edges, the only ones
+/// read.
+fn grid_volume(v: &Plugin) -> Result<GridVolume, SceneError> {
+    v.mark_used();
+    if v.tag != "volume" || v.kind != "gridvolume" {
+        return Err(v.at.error(format!(
+            "<{} type=\"{}\"> is not supported here: expected a <volume type=\"gridvolume\">",
+            v.tag, v.kind
+        )));
+    }
+    for (name, only) in [("filter_type", "trilinear"), ("wrap_mode", "clamp")] {
+        if let Some((value, at)) = v.string(name)? {
+            if value != only {
+                return Err(at.error(format!(
+                    "{name} \"{value}\" is not supported: expected {only}"
+                )));
+            }
+        }
+    }
+    let Some((file, at)) = v.file("filename")? else {
+        return Err(v.at.error("a gridvolume needs its \"filename\""));
+    };
+    let grid =
+        VolumeGrid::load(&file).map_err(|why| at.error(format!("cannot read the grid: {why}")))?;
+    let to_world = v.transform("to_world")?;
+    let use_grid_bbox = v.boolean("use_grid_bbox", false)?;
+    GridVolume::new(grid, to_world, use_grid_bbox).ok_or_else(|| {
+        v.at.error("the grid's to_world (or, with use_grid_bbox, its file's box) is degenerate")
+    })
 }
 
 /// A `bitmap` plugin's image `file` (named at `at`), decoded raw or from sRGB, with its
