@@ -8,6 +8,7 @@ use trilux::geometry::{vec3, Vec3};
 use trilux::sampling::Rng;
 use trilux::scene::bsdf::{
     fresnel_dielectric, Bsdf, BsdfSample, Microfacet, MicrofacetKind, Plastic, Principled,
+    PrincipledThin,
 };
 
 use MicrofacetKind::{Beckmann, Ggx};
@@ -162,6 +163,32 @@ fn named(name: &str) -> Bsdf {
             metallic: 0.1,
             ..Principled::default()
         }),
+        // {'type': 'principledthin', 'base_color': [.8, .5, .3], 'roughness': 0.4,
+        //  'anisotropic': 0.5, 'spec_trans': 0.6, 'eta': 1.4, 'spec_tint': 0.4,
+        //  'sheen': 0.5, 'sheen_tint': 0.3, 'flatness': 0.4, 'diff_trans': 0.8}
+        "thin_glossy" => Bsdf::PrincipledThin(PrincipledThin {
+            base_color: vec3(0.8, 0.5, 0.3),
+            roughness: 0.4,
+            anisotropic: 0.5,
+            spec_trans: 0.6,
+            eta: 1.4,
+            spec_tint: 0.4,
+            sheen: 0.5,
+            sheen_tint: 0.3,
+            flatness: 0.4,
+            diff_trans: 0.8,
+            ..PrincipledThin::default()
+        }),
+        // {'type': 'principledthin', 'base_color': [.3, .6, .9], 'roughness': 0.7,
+        //  'diff_trans': 1.3, 'sheen': 0.3, 'diffuse_transmittance_sampling_rate': 2.0}
+        "thin_diffuse" => Bsdf::PrincipledThin(PrincipledThin {
+            base_color: vec3(0.3, 0.6, 0.9),
+            roughness: 0.7,
+            diff_trans: 1.3,
+            sheen: 0.3,
+            diffuse_transmittance_sampling_rate: 2.0,
+            ..PrincipledThin::default()
+        }),
         _ => panic!("no BSDF named {name}"),
     }
 }
@@ -257,6 +284,24 @@ const EVAL_CASES: &[EvalCase] = &[
     EvalCase { bsdf: "principled_glass", wi: [0.22792116, 0.34188172, -0.91168463], wo: [-0.51214755, -0.38411063, 0.76822126], eval: [0.23605517, 0.2081811, 0.17594513], pdf: 0.21946831 },
     EvalCase { bsdf: "principled_glass", wi: [0.22792116, 0.34188172, -0.91168463], wo: [-0.38100037, -0.25400025, -0.8890009], eval: [0.047106456, 0.047106456, 0.047106456], pdf: 0.08728101 },
     EvalCase { bsdf: "principled_glass", wi: [0.97618705, 0.0, 0.21693046], wo: [-0.94345635, 0.104828484, 0.31448546], eval: [0.37778354, 0.35318077, 0.3285779], pdf: 0.54279786 },
+    EvalCase { bsdf: "thin_glossy", wi: [0.3487429, 0.11624764, 0.9299811], wo: [-0.48154342, 0.24077171, 0.84270096], eval: [0.049952947, 0.03209021, 0.020181723], pdf: 0.13280745 },
+    EvalCase { bsdf: "thin_glossy", wi: [0.3487429, 0.11624764, 0.9299811], wo: [-0.21566555, -0.107832775, -0.970495], eval: [3.7216265, 2.3260167, 1.39561], pdf: 2.416948 },
+    EvalCase { bsdf: "thin_glossy", wi: [0.7442084, -0.24806947, 0.6201737], wo: [-0.48154342, 0.24077171, 0.84270096], eval: [0.08902887, 0.06421304, 0.04766915], pdf: 0.61311746 },
+    EvalCase { bsdf: "thin_glossy", wi: [0.7442084, -0.24806947, 0.6201737], wo: [-0.38100037, -0.25400025, -0.8890009], eval: [0.039912652, 0.024945408, 0.014967244], pdf: 0.04765671 },
+    EvalCase { bsdf: "thin_glossy", wi: [0.22792116, 0.34188172, -0.91168463], wo: [-0.51214755, -0.38411063, 0.76822126], eval: [0.31896153, 0.19935094, 0.11961057], pdf: 0.22446509 },
+    EvalCase { bsdf: "thin_glossy", wi: [0.22792116, 0.34188172, -0.91168463], wo: [-0.38100037, -0.25400025, -0.8890009], eval: [0.087017305, 0.0619483, 0.045235626], pdf: 0.6615808 },
+    EvalCase { bsdf: "thin_glossy", wi: [0.22792116, 0.34188172, -0.91168463], wo: [-0.21566555, -0.107832775, -0.970495], eval: [0.06708706, 0.04493342, 0.030164331], pdf: 0.3132423 },
+    EvalCase { bsdf: "thin_glossy", wi: [0.97618705, 0.0, 0.21693046], wo: [-0.48154342, 0.24077171, 0.84270096], eval: [0.058201943, 0.038348112, 0.02511223], pdf: 0.1306155 },
+    EvalCase { bsdf: "thin_glossy", wi: [0.97618705, 0.0, 0.21693046], wo: [-0.21566555, -0.107832775, -0.970495], eval: [0.053755663, 0.03359729, 0.020158375], pdf: 0.058648597 },
+    EvalCase { bsdf: "thin_diffuse", wi: [0.3487429, 0.11624764, 0.9299811], wo: [-0.48154342, 0.24077171, 0.84270096], eval: [0.028167631, 0.056334633, 0.08450163], pdf: 0.056899406 },
+    EvalCase { bsdf: "thin_diffuse", wi: [0.3487429, 0.11624764, 0.9299811], wo: [-0.21566555, -0.107832775, -0.970495], eval: [0.06023904, 0.12047808, 0.18071711], pdf: 0.24339007 },
+    EvalCase { bsdf: "thin_diffuse", wi: [0.7442084, -0.24806947, 0.6201737], wo: [-0.48154342, 0.24077171, 0.84270096], eval: [0.028325697, 0.05655247, 0.08477923], pdf: 0.056899406 },
+    EvalCase { bsdf: "thin_diffuse", wi: [0.7442084, -0.24806947, 0.6201737], wo: [-0.38100037, -0.25400025, -0.8890009], eval: [0.05518067, 0.11036134, 0.16554199], pdf: 0.22295219 },
+    EvalCase { bsdf: "thin_diffuse", wi: [0.22792116, 0.34188172, -0.91168463], wo: [-0.51214755, -0.38411063, 0.76822126], eval: [0.047683824, 0.09536765, 0.14305146], pdf: 0.1926619 },
+    EvalCase { bsdf: "thin_diffuse", wi: [0.22792116, 0.34188172, -0.91168463], wo: [-0.38100037, -0.25400025, -0.8890009], eval: [0.029713832, 0.059426926, 0.08914003], pdf: 0.06002559 },
+    EvalCase { bsdf: "thin_diffuse", wi: [0.22792116, 0.34188172, -0.91168463], wo: [-0.21566555, -0.107832775, -0.970495], eval: [0.032436576, 0.064873114, 0.09730965], pdf: 0.0655281 },
+    EvalCase { bsdf: "thin_diffuse", wi: [0.97618705, 0.0, 0.21693046], wo: [-0.48154342, 0.24077171, 0.84270096], eval: [0.029097166, 0.057253342, 0.085409515], pdf: 0.056899406 },
+    EvalCase { bsdf: "thin_diffuse", wi: [0.97618705, 0.0, 0.21693046], wo: [-0.21566555, -0.107832775, -0.970495], eval: [0.06023904, 0.12047808, 0.18071711], pdf: 0.24339007 },
 ];
 #[rustfmt::skip]
 const SAMPLE_CASES: &[SampleCase] = &[
@@ -418,6 +463,30 @@ const SAMPLE_CASES: &[SampleCase] = &[
     SampleCase { bsdf: "thin", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.9, u2: (0.55, 0.1), wo: [-0.22792116, -0.34188172, 0.91168463], pdf: 0.92196184, weight: [1.0, 1.0, 1.0] },
     SampleCase { bsdf: "thin", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.05, u2: (0.8, 0.45), wo: [-0.22792116, -0.34188172, -0.91168463], pdf: 0.078038156, weight: [1.0, 1.0, 1.0] },
     SampleCase { bsdf: "thin", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.6, u2: (0.33, 0.91), wo: [-0.22792116, -0.34188172, 0.91168463], pdf: 0.92196184, weight: [1.0, 1.0, 1.0] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.3487429, 0.11624764, 0.9299811], u: 0.3, u2: (0.2, 0.7), wo: [-0.40557906, -0.077162944, -0.91079736], pdf: 4.391783, weight: [1.5466013, 0.9666258, 0.5799755] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.3487429, 0.11624764, 0.9299811], u: 0.9, u2: (0.55, 0.1), wo: [-0.07841378, 0.79614776, -0.6], pdf: 0.03083771, weight: [0.80684114, 0.5042757, 0.30256543] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.3487429, 0.11624764, 0.9299811], u: 0.05, u2: (0.8, 0.45), wo: [-0.22301395, -0.27281445, 0.9358617], pdf: 0.4728305, weight: [0.16093713, 0.1112739, 0.07816509] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.3487429, 0.11624764, 0.9299811], u: 0.6, u2: (0.33, 0.91), wo: [-0.2623405, 0.77690256, 0.5723635], pdf: 0.04641535, weight: [0.707011, 0.44264042, 0.26639342] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.7442084, -0.24806947, 0.6201737], u: 0.3, u2: (0.2, 0.7), wo: [-0.7578207, 0.27839598, -0.5900877], pdf: 6.9989033, weight: [1.516403, 0.9477519, 0.5686511] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.7442084, -0.24806947, 0.6201737], u: 0.9, u2: (0.55, 0.1), wo: [-0.07841378, 0.79614776, -0.6], pdf: 0.031323172, weight: [0.81820637, 0.511379, 0.30682737] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.7442084, -0.24806947, 0.6201737], u: 0.05, u2: (0.8, 0.45), wo: [-0.6855624, 0.115501, 0.7187934], pdf: 0.5562556, weight: [0.15125532, 0.11160276, 0.08516773] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.7442084, -0.24806947, 0.6201737], u: 0.6, u2: (0.33, 0.91), wo: [-0.2623405, 0.77690256, 0.5723635], pdf: 0.05173681, weight: [0.7022497, 0.44253716, 0.26939547] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.3, u2: (0.2, 0.7), wo: [-0.3110149, -0.32346424, 0.893667], pdf: 4.461902, weight: [1.5466056, 0.96662855, 0.57997715] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.9, u2: (0.55, 0.1), wo: [0.07841378, -0.79614776, 0.6], pdf: 0.032912593, weight: [0.8536305, 0.5335191, 0.32011142] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.05, u2: (0.8, 0.45), wo: [0.008778921, -0.44318107, -0.89638925], pdf: 0.48854524, weight: [0.1552303, 0.1079458, 0.07642279] },
+    SampleCase { bsdf: "thin_glossy", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.6, u2: (0.33, 0.91), wo: [0.2623405, -0.77690256, -0.5723635], pdf: 0.060072966, weight: [0.56416935, 0.35641617, 0.2179141] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.3487429, 0.11624764, 0.9299811], u: 0.3, u2: (0.2, 0.7), wo: [0.5196153, -0.29999998, -0.8], pdf: 0.2006317, weight: [0.24749999, 0.49499997, 0.74249995] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.3487429, 0.11624764, 0.9299811], u: 0.9, u2: (0.55, 0.1), wo: [-0.07841378, 0.79614776, -0.6], pdf: 0.15047377, weight: [0.2475, 0.495, 0.74249995] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.3487429, 0.11624764, 0.9299811], u: 0.05, u2: (0.8, 0.45), wo: [0.59486693, -0.07831574, 0.8], pdf: 0.05401623, weight: [0.4951369, 0.9902738, 1.4854106] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.3487429, 0.11624764, 0.9299811], u: 0.6, u2: (0.33, 0.91), wo: [0.2623405, -0.77690256, -0.5723635], pdf: 0.14354283, weight: [0.24749999, 0.49499997, 0.7424999] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.7442084, -0.24806947, 0.6201737], u: 0.3, u2: (0.2, 0.7), wo: [0.5196153, -0.29999998, -0.8], pdf: 0.2006317, weight: [0.24749999, 0.49499997, 0.74249995] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.7442084, -0.24806947, 0.6201737], u: 0.9, u2: (0.55, 0.1), wo: [-0.07841378, 0.79614776, -0.6], pdf: 0.15047377, weight: [0.2475, 0.495, 0.74249995] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.7442084, -0.24806947, 0.6201737], u: 0.05, u2: (0.8, 0.45), wo: [0.59486693, -0.07831574, 0.8], pdf: 0.05401623, weight: [0.49854648, 0.99709296, 1.4956392] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.7442084, -0.24806947, 0.6201737], u: 0.6, u2: (0.33, 0.91), wo: [0.2623405, -0.77690256, -0.5723635], pdf: 0.14354283, weight: [0.24749999, 0.49499997, 0.7424999] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.3, u2: (0.2, 0.7), wo: [-0.5196153, 0.29999998, 0.8], pdf: 0.2006317, weight: [0.24749999, 0.49499997, 0.74249995] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.9, u2: (0.55, 0.1), wo: [0.07841378, -0.79614776, 0.6], pdf: 0.15047377, weight: [0.2475, 0.495, 0.74249995] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.05, u2: (0.8, 0.45), wo: [-0.59486693, 0.07831574, -0.8], pdf: 0.05401623, weight: [0.49511763, 0.99021983, 1.4853219] },
+    SampleCase { bsdf: "thin_diffuse", wi: [0.22792116, 0.34188172, -0.91168463], u: 0.6, u2: (0.33, 0.91), wo: [-0.2623405, 0.77690256, 0.5723635], pdf: 0.14354283, weight: [0.24749999, 0.49499997, 0.7424999] },
 ];
 
 fn v(a: [f32; 3]) -> Vec3 {
@@ -712,6 +781,20 @@ fn furnaces() -> Vec<Furnace> {
         ),
         f("principled opaque", named("principled_opaque"), None, false),
         f("principled glass", named("principled_glass"), None, true),
+        f("principledthin glossy", named("thin_glossy"), None, true),
+        f("principledthin diffuse", named("thin_diffuse"), None, true),
+        // White, smooth-diffuse and fully transmitting or reflecting, it loses nothing.
+        f(
+            "principledthin white diffuse transmitter",
+            Bsdf::PrincipledThin(PrincipledThin {
+                base_color: Vec3::ONE,
+                roughness: 0.0,
+                diff_trans: 2.0,
+                ..PrincipledThin::default()
+            }),
+            Some(90.0),
+            true,
+        ),
     ]
 }
 
@@ -782,6 +865,8 @@ fn weight_is_eval_over_pdf() {
         "diffuse",
         "principled_opaque",
         "principled_glass",
+        "thin_glossy",
+        "thin_diffuse",
     ];
     let mut bad = Vec::new();
     let mut checked = 0;
@@ -1087,6 +1172,18 @@ fn sampling_matches_pdf_chi2() {
         ("diffuse", named("diffuse")),
         ("principled opaque", named("principled_opaque")),
         ("principled glass", named("principled_glass")),
+        ("principledthin glossy", named("thin_glossy")),
+        ("principledthin diffuse", named("thin_diffuse")),
+        (
+            "principledthin glass-like",
+            Bsdf::PrincipledThin(PrincipledThin {
+                roughness: 0.3,
+                spec_trans: 0.9,
+                eta: 1.6,
+                anisotropic: 0.7,
+                ..PrincipledThin::default()
+            }),
+        ),
     ];
     let thetas: [f32; 3] = [10.0, 50.0, 80.0];
     let mut runs = Vec::new();
@@ -1184,6 +1281,8 @@ fn values_are_finite_and_non_negative_at_degenerate_directions() {
         "plastic_rough_ggx",
         "principled_opaque",
         "principled_glass",
+        "thin_glossy",
+        "thin_diffuse",
     ];
     let z = vec3(0.0, 0.0, 1.0);
     let grazing = vec3(1.0, 0.0, 0.0);

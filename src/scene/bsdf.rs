@@ -1,10 +1,10 @@
 //! Mitsuba 3's BSDFs, so that scenes read from Mitsuba XML render like Mitsuba's reference
 //! images: `diffuse`, `conductor`/`roughconductor`, `dielectric`/`roughdielectric`,
-//! `thindielectric`, `plastic`/`roughplastic` and `principled`, with the GGX and Beckmann
-//! microfacet distributions (Smith's separable shadowing, visible-normal or plain normal
-//! sampling). The models, their Fresnel terms, their choice probabilities between lobes
-//! and their sample weights follow Mitsuba 3's RGB variants in radiance transport; the
-//! course's lobes stay in `scattering`.
+//! `thindielectric`, `plastic`/`roughplastic`, `principled` and `principledthin`, with the
+//! GGX and Beckmann microfacet distributions (Smith's separable shadowing, visible-normal
+//! or plain normal sampling). The models, their Fresnel terms, their choice probabilities
+//! between lobes and their sample weights follow Mitsuba 3's RGB variants in radiance
+//! transport; the course's lobes stay in `scattering`.
 //!
 //! Everything here lives in the local shading frame: z is the shading normal, `wi` points
 //! towards where the light goes (the viewer, the previous vertex of a camera path) and `wo`
@@ -13,10 +13,10 @@
 //! `eval` returns f(wi, wo)·|cos θo| (the cosine included, as Mitsuba does), `pdf` the
 //! solid-angle density with which `sample` picks `wo` among its non-delta lobes.
 //!
-//! Sides: every BSDF but the dielectrics (and `principled` with `spec_trans`) is
-//! one-sided, black when wi.z ≤ 0 or wo.z ≤ 0 (Mitsuba's convention; a `twosided`
-//! material flips the frame before calling). The dielectrics take both sides, the relative
-//! index inverted from the inside.
+//! Sides: every BSDF but the dielectrics, `principledthin` (and `principled` with
+//! `spec_trans`) is one-sided, black when wi.z ≤ 0 or wo.z ≤ 0 (Mitsuba's convention; a
+//! `twosided` material flips the frame before calling). The dielectrics take both sides,
+//! the relative index inverted from the inside; `principledthin` is the same from both.
 //!
 //! Where this differs from Mitsuba, on purpose:
 //! - `sample` returns None for a draw Mitsuba returns with a zero weight (a microfacet
@@ -491,6 +491,8 @@ pub enum Bsdf {
     Plastic(Plastic),
     /// `principled`: Disney's principled BSDF as Mitsuba has it.
     Principled(Principled),
+    /// `principledthin`: its thin-sheet variant, alike from both sides.
+    PrincipledThin(PrincipledThin),
 }
 
 /// The number of entries in `roughplastic`'s table of the coat's transmittance against
@@ -883,6 +885,7 @@ impl Bsdf {
             } => rough_dielectric_eval(d, *eta, *reflectance, *transmittance, wi, wo),
             Bsdf::Plastic(p) => p.eval(wi, wo),
             Bsdf::Principled(p) => p.eval(wi, wo),
+            Bsdf::PrincipledThin(p) => p.eval(wi, wo),
             Bsdf::Conductor { .. } | Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => {
                 Vec3::ZERO
             }
@@ -920,6 +923,7 @@ impl Bsdf {
             } => rough_dielectric_pdf(d, *eta, wi, wo),
             Bsdf::Plastic(p) => p.pdf(wi, wo),
             Bsdf::Principled(p) => p.pdf(wi, wo),
+            Bsdf::PrincipledThin(p) => p.pdf(wi, wo),
             Bsdf::Conductor { .. } | Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => 0.0,
         }
     }
@@ -1043,6 +1047,7 @@ impl Bsdf {
             }
             Bsdf::Plastic(p) => p.sample(wi, u, u2),
             Bsdf::Principled(p) => p.sample(wi, u, u2),
+            Bsdf::PrincipledThin(p) => p.sample(wi, u, u2),
         }
     }
 
@@ -1077,11 +1082,13 @@ impl Bsdf {
         }
     }
 
-    /// Whether some light passes through the surface (the dielectrics).
+    /// Whether some light passes through the surface (the dielectrics, the principled
+    /// BSDFs with a transmitting lobe).
     pub fn has_transmission(&self) -> bool {
         match self {
             Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => true,
             Bsdf::Principled(p) => p.spec_trans != 0.0,
+            Bsdf::PrincipledThin(p) => p.spec_trans != 0.0 || p.diff_trans != 0.0,
             _ => false,
         }
     }
@@ -1094,6 +1101,7 @@ impl Bsdf {
             Bsdf::Diffuse { reflectance } => *reflectance,
             Bsdf::Plastic(p) => p.diffuse,
             Bsdf::Principled(p) => p.base_color,
+            Bsdf::PrincipledThin(p) => p.base_color,
             _ => Vec3::ZERO,
         }
     }
@@ -1385,6 +1393,67 @@ fn smith_ggx1(v: Vec3, m: Vec3, alpha: f32) -> f32 {
     2.0 / (1.0 + (1.0 + alpha * alpha * t2).sqrt())
 }
 
+/// The principled BSDFs' GGX distribution (visible normals) for `roughness` and
+/// `anisotropic` (Disney's course notes): α = roughness², stretched along x and shrunk
+/// along y by the aspect √(1 − 0.9·anisotropic), each at least 0.001.
+fn principled_ggx(roughness: f32, anisotropic: f32) -> Microfacet {
+    let r2 = roughness * roughness;
+    let (ax, ay) = if anisotropic == 0.0 {
+        let a = r2.max(0.001);
+        (a, a)
+    } else {
+        let aspect = (1.0 - 0.9 * anisotropic).sqrt();
+        ((r2 / aspect).max(0.001), (r2 * aspect).max(0.001))
+    };
+    Microfacet::new(MicrofacetKind::Ggx, ax, ay, true)
+}
+
+/// The base colour normalized to unit luminance (white where it is black): the hue that
+/// `spec_tint` and `sheen_tint` blend towards.
+fn tint_colour(base_color: Color) -> Color {
+    let lum = luminance(base_color);
+    if lum > 0.0 {
+        base_color / lum
+    } else {
+        Vec3::ONE
+    }
+}
+
+/// Schlick's reflectance at normal incidence, ((η − 1)/(η + 1))².
+fn schlick_r0(eta: f32) -> f32 {
+    ((eta - 1.0) / (eta + 1.0)).powi(2)
+}
+
+/// The principled BSDFs' diffuse lobe without its albedo, weight and cos θo/π: Burley's
+/// diffuse with retro-reflection, blended by `flatness` towards Hanrahan–Krueger's fake
+/// subsurface; `cos_i`, `cos_o` the cosines' magnitudes, `cos_d` = wh·wo.
+fn principled_diffuse(roughness: f32, flatness: f32, cos_i: f32, cos_o: f32, cos_d: f32) -> f32 {
+    let fo = schlick_weight(cos_o);
+    let fi = schlick_weight(cos_i);
+    let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
+    let rr = 2.0 * roughness * cos_d * cos_d;
+    let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
+    if flatness != 0.0 {
+        let fss90 = rr / 2.0;
+        let fss = ((1.0 - fo) + fss90 * fo) * ((1.0 - fi) + fss90 * fi);
+        let f_ss = 1.25 * (fss * (1.0 / (cos_o + cos_i) - 0.5) + 0.5);
+        (f_diff + f_retro) * (1.0 - flatness) + f_ss * flatness
+    } else {
+        f_diff + f_retro
+    }
+}
+
+/// The principled BSDFs' sheen without its weight and |cos θo|: Schlick's weight at the
+/// half angle (`cos_d` = wh·wo), white blended by `sheen_tint` towards the base's hue.
+fn principled_sheen(base_color: Color, sheen_tint: f32, cos_d: f32) -> Color {
+    let colour = if sheen_tint != 0.0 {
+        Vec3::ONE * (1.0 - sheen_tint) + tint_colour(base_color) * sheen_tint
+    } else {
+        Vec3::ONE
+    };
+    colour * schlick_weight(cos_d.abs())
+}
+
 /// Whether a microfacet normal `m` is seen by both `wi` and `wo` from the sides a
 /// reflection (or a refraction) needs, `m` turned to wi's side of the surface.
 fn mac_mic_compatible(m: Vec3, wi: Vec3, wo: Vec3, cos_i: f32, reflection: bool) -> bool {
@@ -1425,21 +1494,8 @@ impl Principled {
         }
     }
 
-    /// GGX's roughness along x and y.
-    fn alphas(&self) -> (f32, f32) {
-        let r2 = self.roughness * self.roughness;
-        if self.anisotropic == 0.0 {
-            let a = r2.max(0.001);
-            (a, a)
-        } else {
-            let aspect = (1.0 - 0.9 * self.anisotropic).sqrt();
-            ((r2 / aspect).max(0.001), (r2 * aspect).max(0.001))
-        }
-    }
-
     fn distribution(&self) -> Microfacet {
-        let (ax, ay) = self.alphas();
-        Microfacet::new(MicrofacetKind::Ggx, ax, ay, true)
+        principled_ggx(self.roughness, self.anisotropic)
     }
 
     fn weights(&self) -> (f32, f32) {
@@ -1515,7 +1571,6 @@ impl Principled {
         let g = d.g(wi, wo, wh);
         let mut value = Vec3::ZERO;
         if reflect && refl_ok && f_d > 0.0 {
-            let lum = luminance(self.base_color);
             let cos_h = wi.dot(wh);
             let f = if front {
                 let mut schlick = Vec3::ZERO;
@@ -1523,13 +1578,8 @@ impl Principled {
                     schlick += self.metallic * schlick_fresnel(self.base_color, cos_h, eta);
                 }
                 if self.spec_tint != 0.0 {
-                    let tint = if lum > 0.0 {
-                        self.base_color / lum
-                    } else {
-                        Vec3::ONE
-                    };
                     let eta_it = if cos_h >= 0.0 { eta } else { 1.0 / eta };
-                    let r0 = tint * ((eta_it - 1.0) / (eta_it + 1.0)).powi(2);
+                    let r0 = tint_colour(self.base_color) * schlick_r0(eta_it);
                     schlick +=
                         (1.0 - self.metallic) * self.spec_tint * schlick_fresnel(r0, cos_h, eta);
                 }
@@ -1554,35 +1604,18 @@ impl Principled {
             value += Vec3::splat(self.clearcoat * 0.25 * fcc * dcc * gcc * cos_o.abs());
         }
         if brdf > 0.0 && reflect && front {
-            let fo = schlick_weight(cos_o.abs());
-            let fi = schlick_weight(cos_i.abs());
-            let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
             let cos_d = wh.dot(wo);
-            let rr = 2.0 * self.roughness * cos_d * cos_d;
-            let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
-            let lobe = if self.flatness != 0.0 {
-                let fss90 = rr / 2.0;
-                let fss = ((1.0 - fo) + fss90 * fo) * ((1.0 - fi) + fss90 * fi);
-                let f_ss = 1.25 * (fss * (1.0 / (cos_o.abs() + cos_i.abs()) - 0.5) + 0.5);
-                (f_diff + f_retro) * (1.0 - self.flatness) + f_ss * self.flatness
-            } else {
-                f_diff + f_retro
-            };
+            let lobe = principled_diffuse(
+                self.roughness,
+                self.flatness,
+                cos_i.abs(),
+                cos_o.abs(),
+                cos_d,
+            );
             value += self.base_color * (brdf * cos_o.abs() * FRAC_1_PI * lobe);
             if self.sheen != 0.0 && 1.0 - self.metallic > 0.0 {
-                let fd = schlick_weight(cos_d.abs());
-                let c_sheen = if self.sheen_tint != 0.0 {
-                    let lum = luminance(self.base_color);
-                    let tint = if lum > 0.0 {
-                        self.base_color / lum
-                    } else {
-                        Vec3::ONE
-                    };
-                    Vec3::ONE * (1.0 - self.sheen_tint) + tint * self.sheen_tint
-                } else {
-                    Vec3::ONE
-                };
-                value += c_sheen * (self.sheen * (1.0 - self.metallic) * fd * cos_o.abs());
+                value += principled_sheen(self.base_color, self.sheen_tint, cos_d)
+                    * (self.sheen * (1.0 - self.metallic) * cos_o.abs());
             }
         }
         value
@@ -1689,6 +1722,244 @@ impl Principled {
             pdf,
             delta: false,
             eta: rel_eta,
+        })
+    }
+}
+
+/// Mitsuba's `principledthin`: the principled BSDF of a thin sheet (a leaf, paper, a
+/// curtain) with no interior, alike from both sides: the diffuse base with
+/// retro-reflection, fake subsurface flattening and sheen, a diffuse transmission, and with
+/// `spec_trans` a GGX reflection and a glossy transmission straight through (the reflected
+/// lobe turned to the far side, its roughness scaled by η as in Burley 2015, figure 15).
+/// Plain values stand for Mitsuba's textures; a parameter at 0 is a lobe Mitsuba leaves
+/// out, as it does when the parameter is not given. `PrincipledThin::default()` holds
+/// Mitsuba's defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrincipledThin {
+    /// The base colour (default 0.5): the diffuse albedo of both the reflection and the
+    /// transmissions.
+    pub base_color: Color,
+    /// The roughness in [0, 1] (default 0.5); GGX's α is its square (at least 0.001).
+    pub roughness: f32,
+    /// The anisotropy in [0, 1] (default 0), as `Principled`'s.
+    pub anisotropic: f32,
+    /// The blend of the sheet towards glossy reflection and transmission (default 0).
+    pub spec_trans: f32,
+    /// The sheet's relative index (default 1.5): its Fresnel reflection, and the
+    /// transmission's roughness scaled by 0.65·η − 0.35.
+    pub eta: f32,
+    /// The tint of the glossy reflection towards the base colour (default 0).
+    pub spec_tint: f32,
+    /// The sheen at grazing angles (default 0).
+    pub sheen: f32,
+    /// The sheen's tint towards the base colour (default 0).
+    pub sheen_tint: f32,
+    /// The blend of the diffuse towards Hanrahan–Krueger's flatter fake subsurface
+    /// (default 0).
+    pub flatness: f32,
+    /// The diffuse transmission in [0, 2] (default 0): 1 splits the diffuse part evenly
+    /// between reflection and transmission, 2 transmits all of it.
+    pub diff_trans: f32,
+    /// The relative rate at which `sample` picks the glossy reflection (default 1).
+    pub specular_reflectance_sampling_rate: f32,
+    /// The relative rate at which `sample` picks the glossy transmission (default 1).
+    pub specular_transmittance_sampling_rate: f32,
+    /// The relative rate at which `sample` picks the diffuse reflection (default 1).
+    pub diffuse_reflectance_sampling_rate: f32,
+    /// The relative rate at which `sample` picks the diffuse transmission (default 1).
+    pub diffuse_transmittance_sampling_rate: f32,
+}
+
+impl Default for PrincipledThin {
+    fn default() -> Self {
+        PrincipledThin {
+            base_color: Vec3::splat(0.5),
+            roughness: 0.5,
+            anisotropic: 0.0,
+            spec_trans: 0.0,
+            eta: 1.5,
+            spec_tint: 0.0,
+            sheen: 0.0,
+            sheen_tint: 0.0,
+            flatness: 0.0,
+            diff_trans: 0.0,
+            specular_reflectance_sampling_rate: 1.0,
+            specular_transmittance_sampling_rate: 1.0,
+            diffuse_reflectance_sampling_rate: 1.0,
+            diffuse_transmittance_sampling_rate: 1.0,
+        }
+    }
+}
+
+/// The lobe probabilities of `PrincipledThin::sample`, normalized.
+struct ThinProbs {
+    spec_reflect: f32,
+    spec_trans: f32,
+    diffuse_reflect: f32,
+    diffuse_trans: f32,
+}
+
+impl PrincipledThin {
+    /// `diff_trans` brought to [0, 1]: the share of the diffuse part transmitted.
+    fn diffuse_transmitted(&self) -> f32 {
+        self.diff_trans / 2.0
+    }
+
+    fn probs(&self) -> ThinProbs {
+        let dt = self.diffuse_transmitted();
+        let st = self.spec_trans;
+        let r = st * self.specular_reflectance_sampling_rate / 2.0;
+        let t = st * self.specular_transmittance_sampling_rate / 2.0;
+        let dr = self.diffuse_reflectance_sampling_rate * (1.0 - st) * (1.0 - dt);
+        let dtr = self.diffuse_transmittance_sampling_rate * (1.0 - st) * dt;
+        let inv = 1.0 / (r + t + dr + dtr);
+        ThinProbs {
+            spec_reflect: r * inv,
+            spec_trans: t * inv,
+            diffuse_reflect: dr * inv,
+            diffuse_trans: dtr * inv,
+        }
+    }
+
+    /// The glossy reflection's distribution, and the transmission's, whose roughness is
+    /// scaled by 0.65·η − 0.35 (Burley 2015, figure 15).
+    fn distributions(&self) -> (Microfacet, Microfacet) {
+        let scaled = (0.65 * self.eta - 0.35) * self.roughness;
+        (
+            principled_ggx(self.roughness, self.anisotropic),
+            principled_ggx(scaled, self.anisotropic),
+        )
+    }
+
+    /// The sheet has no inside: (wi, wo) seen from behind is the configuration mirrored
+    /// through the origin, wi above the surface. Returns them, and wo mirrored above the
+    /// surface (the direction whose half vector with wi is the transmission's normal).
+    fn to_front(wi: Vec3, wo: Vec3) -> (Vec3, Vec3, Vec3) {
+        let (wi, wo) = if wi.z < 0.0 { (-wi, -wo) } else { (wi, wo) };
+        let wo_r = vec3(wo.x, wo.y, wo.z.abs());
+        (wi, wo, wo_r)
+    }
+
+    fn eval(&self, wi: Vec3, wo: Vec3) -> Color {
+        if wi.z == 0.0 {
+            return Vec3::ZERO;
+        }
+        let (wi, wo, wo_r) = Self::to_front(wi, wo);
+        let (cos_i, cos_o) = (wi.z, wo.z);
+        let (reflect, refract) = (cos_o > 0.0, cos_o < 0.0);
+        let wh = (wi + wo_r).normalize();
+        let st = self.spec_trans;
+        let dt = self.diffuse_transmitted();
+        let mut value = Vec3::ZERO;
+        if st != 0.0 {
+            let f_d = fresnel_dielectric(wi.dot(wh), self.eta).0;
+            let (d_reflect, d_trans) = self.distributions();
+            if st > 0.0 && reflect && mac_mic_compatible(wh, wi, wo, cos_i, true) {
+                let f = if self.spec_tint != 0.0 {
+                    let r0 = tint_colour(self.base_color) * schlick_r0(self.eta);
+                    let schlick = schlick_fresnel(r0, wi.dot(wh), self.eta);
+                    Vec3::splat(f_d * (1.0 - self.spec_tint)) + schlick * self.spec_tint
+                } else {
+                    Vec3::splat(f_d)
+                };
+                value += f * (st * d_reflect.d(wh) * d_reflect.g(wi, wo, wh) / (4.0 * cos_i));
+            }
+            if st > 0.0 && refract && mac_mic_compatible(wh, wi, wo, cos_i, false) {
+                value += self.base_color
+                    * (st * (1.0 - f_d) * d_trans.d(wh) * d_trans.g(wi, wo, wh) / (4.0 * cos_i));
+            }
+        }
+        if reflect && st < 1.0 && dt < 1.0 {
+            let cos_d = wh.dot(wo);
+            let weight = (1.0 - st) * (1.0 - dt);
+            let lobe = principled_diffuse(self.roughness, self.flatness, cos_i, cos_o, cos_d);
+            value += self.base_color * (weight * cos_o * FRAC_1_PI * lobe);
+            if self.sheen > 0.0 {
+                value += principled_sheen(self.base_color, self.sheen_tint, cos_d)
+                    * (self.sheen * weight * cos_o);
+            }
+        }
+        if refract && st < 1.0 && dt > 0.0 {
+            value += self.base_color * ((1.0 - st) * dt * FRAC_1_PI * cos_o.abs());
+        }
+        value
+    }
+
+    fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+        if wi.z == 0.0 {
+            return 0.0;
+        }
+        let (wi, wo, wo_r) = Self::to_front(wi, wo);
+        let cos_o = wo.z;
+        let (reflect, refract) = (cos_o > 0.0, cos_o < 0.0);
+        let p = self.probs();
+        let mut pdf = 0.0;
+        if self.spec_trans != 0.0 {
+            let wh = (wi + wo_r).normalize();
+            let dwh_dwo = (1.0 / (4.0 * wo_r.dot(wh))).abs();
+            let (d_reflect, d_trans) = self.distributions();
+            if reflect && mac_mic_compatible(wh, wi, wo, wi.z, true) {
+                pdf += p.spec_reflect * d_reflect.pdf(wi, wh) * dwh_dwo;
+            }
+            if refract && mac_mic_compatible(wh, wi, wo, wi.z, false) {
+                pdf += p.spec_trans * d_trans.pdf(wi, wh) * dwh_dwo;
+            }
+        }
+        if reflect {
+            pdf += p.diffuse_reflect * cos_o * FRAC_1_PI;
+        }
+        if refract {
+            pdf += p.diffuse_trans * -cos_o * FRAC_1_PI;
+        }
+        if pdf.is_finite() {
+            pdf
+        } else {
+            0.0
+        }
+    }
+
+    fn sample(&self, wi: Vec3, u: f32, u2: (f32, f32)) -> Option<BsdfSample> {
+        if wi.z == 0.0 {
+            return None;
+        }
+        let side = wi.z.signum();
+        let front_wi = wi * side;
+        let p = self.probs();
+        let (d_reflect, d_trans) = self.distributions();
+        let wo = if u < p.spec_reflect {
+            let m = d_reflect.sample(front_wi, u2).0;
+            let wo = reflect(front_wi, m);
+            if !(mac_mic_compatible(m, front_wi, wo, front_wi.z, true) && wo.z > 0.0) {
+                return None;
+            }
+            wo
+        } else if u < p.spec_reflect + p.spec_trans {
+            // No bending through a sheet: the reflection, turned to the far side.
+            let m = d_trans.sample(front_wi, u2).0;
+            let r = reflect(front_wi, m);
+            let wo = vec3(r.x, r.y, -r.z);
+            if !(mac_mic_compatible(m, front_wi, wo, front_wi.z, false) && wo.z < 0.0) {
+                return None;
+            }
+            wo
+        } else if u < p.spec_reflect + p.spec_trans + p.diffuse_reflect {
+            cosine_hemisphere(u2)
+        } else if p.diffuse_trans > 0.0 {
+            -cosine_hemisphere(u2)
+        } else {
+            return None;
+        };
+        let wo = wo * side;
+        let pdf = self.pdf(wi, wo);
+        if pdf.is_nan() || pdf <= 0.0 {
+            return None;
+        }
+        Some(BsdfSample {
+            wo,
+            weight: self.eval(wi, wo) / pdf,
+            pdf,
+            delta: false,
+            eta: 1.0,
         })
     }
 }

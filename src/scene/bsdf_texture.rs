@@ -25,6 +25,10 @@ pub enum BsdfParameter {
     Clearcoat,
     ClearcoatGloss,
     Flatness,
+    /// `principledthin`'s relative index (`eta`).
+    Eta,
+    /// `principledthin`'s diffuse transmission (`diff_trans`).
+    DiffTrans,
 }
 
 impl BsdfParameter {
@@ -45,6 +49,8 @@ impl BsdfParameter {
             "clearcoat" => BsdfParameter::Clearcoat,
             "clearcoat_gloss" => BsdfParameter::ClearcoatGloss,
             "flatness" => BsdfParameter::Flatness,
+            "eta" => BsdfParameter::Eta,
+            "diff_trans" => BsdfParameter::DiffTrans,
             _ => return None,
         })
     }
@@ -82,7 +88,24 @@ impl BsdfParameter {
                     Clearcoat => &mut p.clearcoat,
                     ClearcoatGloss => &mut p.clearcoat_gloss,
                     Flatness => &mut p.flatness,
-                    AlphaU | AlphaV | Alpha => return,
+                    AlphaU | AlphaV | Alpha | Eta | DiffTrans => return,
+                };
+                *field = value;
+            }
+            Bsdf::PrincipledThin(p) => {
+                let field = match self {
+                    Roughness => &mut p.roughness,
+                    Anisotropic => &mut p.anisotropic,
+                    SpecTint => &mut p.spec_tint,
+                    SpecTrans => &mut p.spec_trans,
+                    Sheen => &mut p.sheen,
+                    SheenTint => &mut p.sheen_tint,
+                    Flatness => &mut p.flatness,
+                    Eta => &mut p.eta,
+                    DiffTrans => &mut p.diff_trans,
+                    AlphaU | AlphaV | Alpha | Metallic | Specular | Clearcoat | ClearcoatGloss => {
+                        return
+                    }
                 };
                 *field = value;
             }
@@ -103,8 +126,10 @@ impl Scene {
     /// diffuse reflectance or principled base colour; None where nothing of it is textured.
     pub fn textured_bsdf(&self, hit: &SurfaceHit, bsdf: &Bsdf) -> Option<Bsdf> {
         let m = &self.materials[hit.material as usize];
-        let base_textured =
-            matches!(bsdf, Bsdf::Principled(_) | Bsdf::Diffuse { .. }) && m.texture.is_some();
+        let base_textured = matches!(
+            bsdf,
+            Bsdf::Principled(_) | Bsdf::PrincipledThin(_) | Bsdf::Diffuse { .. }
+        ) && m.texture.is_some();
         if m.bsdf_textures.is_empty() && !base_textured {
             return None;
         }
@@ -117,6 +142,7 @@ impl Scene {
         if base_textured {
             match &mut textured {
                 Bsdf::Principled(p) => p.base_color = self.albedo(hit),
+                Bsdf::PrincipledThin(p) => p.base_color = self.albedo(hit),
                 Bsdf::Diffuse { reflectance } => *reflectance = self.albedo(hit),
                 _ => {}
             }

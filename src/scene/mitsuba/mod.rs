@@ -29,7 +29,7 @@ use glam::{DMat4, DVec3, Mat3};
 use self::meshes::Mesh;
 use self::spectrum::{spectrum_to_rgb, SpectrumUse};
 use self::xml::{Plugin, Value};
-use super::bsdf::{Bsdf, Microfacet, MicrofacetKind, Plastic, Principled};
+use super::bsdf::{Bsdf, Microfacet, MicrofacetKind, Plastic, Principled, PrincipledThin};
 use super::bsdf_support::{MitsubaBsdf, PluginSupport};
 use super::bsdf_texture::{BsdfParameter, TexturedParameter};
 use super::medium::{Albedo, Heterogeneous, Medium};
@@ -739,8 +739,28 @@ impl Builder {
                     ..Material::default()
                 };
                 self.reflectance(p, "base_color", 0.5, &mut m)?;
-                mark_all_used(p);
-                (m, Some("a Lambertian base"), Some("a Lambertian base"))
+                let scalar = |this: &mut Self, name: &str, default: f64| this.scalar(p, name, default);
+                let rate = |name: &str| -> Result<f32, SceneError> { Ok(p.float(name, 1.0)? as f32) };
+                let thin = PrincipledThin {
+                    base_color: m.diffuse,
+                    roughness: scalar(self, "roughness", 0.5)?,
+                    anisotropic: scalar(self, "anisotropic", 0.0)?,
+                    spec_trans: scalar(self, "spec_trans", 0.0)?,
+                    eta: scalar(self, "eta", 1.5)?,
+                    spec_tint: scalar(self, "spec_tint", 0.0)?,
+                    sheen: scalar(self, "sheen", 0.0)?,
+                    sheen_tint: scalar(self, "sheen_tint", 0.0)?,
+                    flatness: scalar(self, "flatness", 0.0)?,
+                    diff_trans: scalar(self, "diff_trans", 0.0)?,
+                    specular_reflectance_sampling_rate: rate("specular_reflectance_sampling_rate")?,
+                    specular_transmittance_sampling_rate: rate("specular_transmittance_sampling_rate")?,
+                    diffuse_reflectance_sampling_rate: rate("diffuse_reflectance_sampling_rate")?,
+                    diffuse_transmittance_sampling_rate: rate("diffuse_transmittance_sampling_rate")?,
+                };
+                // The other engines see the diffuse part that is reflected.
+                m.diffuse *= (1.0 - thin.spec_trans) * (1.0 - thin.diff_trans / 2.0);
+                m.bsdf = Some(Bsdf::PrincipledThin(thin));
+                (m, None, Some("a Lambertian base"))
             }
             other => {
                 return Err(p.at.error(format!(
@@ -1278,18 +1298,6 @@ fn to_uv(t: &Plugin) -> Result<Option<[[f32; 3]; 2]>, SceneError> {
         [a(0, 0), -a(0, 1), a(0, 1) + a(0, 2)],
         [-a(1, 0), a(1, 1), 1.0 - a(1, 1) - a(1, 2)],
     ]))
-}
-
-/// Marks a plugin and everything in it as read: for what a warning has already named as
-/// left out, so that its parameters are not named again one by one.
-fn mark_all_used(p: &Plugin) {
-    p.mark_used();
-    for prop in &p.properties {
-        p.property(&prop.name);
-    }
-    for c in &p.children {
-        mark_all_used(&c.plugin);
-    }
 }
 
 /// A positive integer property (a film's size, a sample count).
