@@ -237,7 +237,7 @@ fn plan_reports_what_the_scene_needs() {
 }
 
 /// `--plan` on a Mitsuba scene says, material by material, what the chosen engine renders
-/// of its BSDF: the path tracer each plugin exactly but `principledthin`, the other engines
+/// of its BSDF: the path tracer each plugin exactly, the other engines
 /// the approximations of docs/scene-format.md's table; the reader's warning says the same.
 #[test]
 fn plan_says_what_the_engine_renders_of_each_mitsuba_bsdf() {
@@ -267,7 +267,7 @@ fn plan_says_what_the_engine_renders_of_each_mitsuba_bsdf() {
         "mitsuba bsdfs, as the path engine renders them:",
         "  material 0 \"coat\" twosided(roughplastic): exact\n",
         "  material 1 dielectric: exact\n",
-        "  material 2 principledthin: principledthin approximated as a Lambertian base\n",
+        "  material 2 principledthin: exact\n",
         "  material 3 thindielectric: exact\n",
     ] {
         assert!(path.contains(line), "{line:?} not in\n{path}");

@@ -304,7 +304,7 @@ fn reference_paths(solution: &Solution, total: f64) -> Vec<u32> {
 }
 
 /// Mitsuba 3's render tests that our path tracer passes today: each must keep passing.
-const MITSUBA_TESTS_PASSING: [&str; 22] = [
+const MITSUBA_TESTS_PASSING: [&str; 23] = [
     "test_arealight_path",
     "test_bumpmap_path",
     "test_constant_path",
@@ -319,6 +319,7 @@ const MITSUBA_TESTS_PASSING: [&str; 22] = [
     "test_textured_roughconductor_path",
     "test_texturedprincipled1_path",
     "test_texturedprincipled2_path",
+    "test_texturedprincipledthin_path",
     "test_hetero_sigmat_albedo_volpath",
     "test_hetero_sigmat_volpath",
     "test_homo_area_light_volpath",

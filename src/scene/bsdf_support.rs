@@ -119,13 +119,13 @@ mod tests {
         assert_eq!(m.plugins[1].warning(), None);
         assert_eq!(
             plugin(
-                "principledthin",
+                "someplugin",
                 Some("a Lambertian base"),
                 Some("a Lambertian base")
             )
             .warning()
             .as_deref(),
-            Some("principledthin is approximated in every engine as a Lambertian base")
+            Some("someplugin is approximated in every engine as a Lambertian base")
         );
     }
 }
