@@ -969,10 +969,11 @@ impl PathTracer<'_> {
     }
 
     /// The transmittance along a shadow ray that starts in `medium`, crossing index-matched
-    /// boundaries (each into its material's interior medium from the front, out to the fog
-    /// from the back) and multiplying the media's transmittance over each stretch (a
-    /// heterogeneous medium's estimated from `samples`); 0 where any other surface is in the
-    /// way, or after `MAX_CROSSINGS` boundaries.
+    /// boundaries and thin sheets (each into its material's interior medium from the front,
+    /// out to the fog from the back; a sheet lets through what `straight_transmission` says)
+    /// and multiplying the media's transmittance over each stretch (a heterogeneous medium's
+    /// estimated from `samples`); 0 where any other surface is in the way, or after
+    /// `MAX_CROSSINGS` boundaries.
     fn crossing_transmittance(
         &self,
         ray: &Ray,
