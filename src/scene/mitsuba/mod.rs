@@ -133,9 +133,7 @@ impl Builder {
                         let _ = p.integer(name, 1)?;
                     }
                 }
-                if p.boolean("hide_emitters", false)? {
-                    self.warn(&p.at, "hide_emitters is not supported: emitters are seen");
-                }
+                self.scene.hide_emitters = p.boolean("hide_emitters", false)?;
             }
             other => {
                 return Err(p.at.error(format!(
