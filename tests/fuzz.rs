@@ -536,6 +536,11 @@ const RADIOSITY_PRIMITIVES: usize = 2_000;
 fn render(mutant: &Path, engine: &str, accel: &str) -> Result<(), String> {
     let output = mutant.with_extension(format!("{engine}-{accel}.pfm"));
     let mut args: Vec<&std::ffi::OsStr> = vec!["--input".as_ref(), mutant.as_os_str()];
+    // The photon engine's own count at 8×8 is its floor of 100,000 (and as many aimed at
+    // mirrors): a few thousand trace the mutant as surely, in a CI run's time.
+    if engine == "photon" {
+        args.extend(["-num_photons_to_shoot", "4000"].map(std::ffi::OsStr::new));
+    }
     for a in [
         "--engine",
         engine,
@@ -550,11 +555,6 @@ fn render(mutant: &Path, engine: &str, accel: &str) -> Result<(), String> {
         "-o",
     ] {
         args.push(a.as_ref());
-    }
-    // The photon engine's own count at 8×8 is its floor of 100,000 (and as many aimed at
-    // mirrors): a few thousand trace the mutant as surely, in a CI run's time.
-    if engine == "photon" {
-        args.extend(["-num_photons_to_shoot", "4000"].map(std::ffi::OsStr::new));
     }
     args.push(output.as_os_str());
     let result = run_limited(&args);

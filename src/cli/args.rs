@@ -499,13 +499,13 @@ pub struct PhotonArgs {
     /// that reach a mirror make a blotchy caustic].
     #[arg(long, value_name = "N")]
     pub caustic_photons: Option<u64>,
-    /// Photons per density estimate: fewer is noisier, more blurs light across edges (100:
-    /// Jensen's choice for final images).
+    /// Photons per density estimate (100: fewer is noisier, more blurs light across
+    /// edges).
     #[arg(long, default_value_t = photon_defaults().num_photons_to_collect)]
     pub num_photons_to_collect: u32,
     /// Final gathering for indirect light; `=false` to keep it off under --time-limit
-    /// [default: off (on under --time-limit): the map's own estimate is ten times faster, and
-    /// the course's images use it].
+    /// [default: off (on under --time-limit): the map's own estimate costs no rays, and the
+    /// course's images use it].
     #[arg(long, value_name = "BOOL", num_args = 0..=1, require_equals = true,
           default_missing_value = "true")]
     pub gather_indirect: Option<bool>,
@@ -519,20 +519,20 @@ pub struct PhotonArgs {
     pub photon_max_radius: f32,
     /// Points per camera or mirror ray in the fog at which the volume photon map is looked
     /// up (jittered, evenly spaced over the part of the ray among the volume photons; 16:
-    /// the fog's noise below the surfaces' at the course's sample counts).
+    /// more points are less noise in the fog and more time a ray).
     #[arg(long, default_value_t = photon_defaults().volume_steps)]
     pub volume_steps: u32,
-    /// Hemisphere rays per final gather (-gather_indirect; 128: a record's noise below the
-    /// cache's interpolation error).
+    /// Hemisphere rays per final gather (-gather_indirect; 128: more rays are less noise in
+    /// each cache record and more time a record).
     #[arg(long, default_value_t = photon_defaults().final_gather_rays)]
     pub final_gather_rays: u32,
     /// Ward's irradiance-cache error a: records are used where their weight exceeds 1/a
-    /// (0.15: no visible seams between records on the Cornell box).
+    /// (0.15: smaller makes more records, less interpolation error and more time).
     #[arg(long, default_value_t = photon_defaults().irradiance_cache_error, allow_negative_numbers = true)]
     pub irradiance_cache_error: f32,
     /// The irradiance cache's first pass visits every n-th pixel centre in x and y (its finest
-    /// level): a record is gathered where a visited point is not covered (1: no small
-    /// feature is missed).
+    /// level): a record is gathered where a visited point is not covered (1: every pixel's
+    /// point is visited, so no small feature is missed).
     #[arg(long, default_value_t = photon_defaults().irradiance_cache_spacing)]
     pub irradiance_cache_spacing: u32,
     /// Write both photon maps to FILE (versioned, with a fingerprint of scene and settings)
