@@ -2,18 +2,21 @@
 //! there, of the course's, the MGF and Mitsuba 3's test scenes, of Mitsuba's PLY meshes and of
 //! a small `serialized` mesh this test writes (bytes flipped or cut, lines doubled, numbers
 //! swapped for nan, inf, 1e38 or 2^64). A Mitsuba scene's mutant sits in a copy of the tree
-//! its relative paths climb (`../../../common`), a mesh's in a small scene that names it. Each
-//! mutant is loaded, and each that loads is rendered at 8×8 by every engine with both Accels,
-//! each render in a child process (the built `render`) under a time limit and an address-space
-//! limit, so that a panic, an abort, a runaway allocation or a render without end is caught and
-//! reported with the mutant that caused it, not suffered by the test.
+//! its relative paths climb (`../../../common`); a fragment it includes is mutated under its
+//! own name there and rendered through a scene that reads it; a mesh's mutant through a small
+//! scene that names it. Each mutant is loaded, and each that loads is rendered at 8×8 by every
+//! engine with both Accels, each render in a child process (the built `render`) under a time
+//! limit and an address-space limit, so that a panic, an abort, a runaway allocation or a
+//! render without end is caught and reported with the mutant that caused it, not suffered by
+//! the test.
 //!
 //! `TRILUX_FUZZ_CASES` sets the number of mutants (default `CASES`), `TRILUX_FUZZ_ONLY` the
 //! inputs (comma-separated parts of their paths, e.g. `mitsuba,serialized`; default all),
-//! `TRILUX_FUZZ_SEED` the seed (default fixed), `TRILUX_FUZZ_ADDRESS_SPACE` each render's address-space limit in
-//! bytes (default 4 GiB). The summary counts panics, aborts, failed allocations and renders
-//! killed; failing mutants are kept, and their paths printed. Without `../shared` its scenes
-//! are skipped (failed instead when `TRILUX_REQUIRE_SHARED` is set).
+//! `TRILUX_FUZZ_SEED` the seed (default fixed), `TRILUX_FUZZ_ADDRESS_SPACE` each render's
+//! address-space limit in bytes (default 4 GiB). The summary counts panics, aborts, failed
+//! allocations and renders killed; failing mutants are kept (each in its case's folder), and
+//! their paths printed. Without `../shared` its scenes are skipped (failed instead when
+//! `TRILUX_REQUIRE_SHARED` is set).
 
 mod common;
 
