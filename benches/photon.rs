@@ -37,7 +37,7 @@ fn lookups(c: &mut Criterion) {
     let accel = accel::build(&scene, AccelKind::Bvh, &AccelOptions::default()).expect("builds");
     let settings = RenderSettings {
         photon: PhotonSettings {
-            num_photons_to_shoot: 500_000,
+            num_photons_to_shoot: Some(500_000),
             gather_indirect: true,
             ..Default::default()
         },
@@ -86,7 +86,7 @@ fn nearest_50_of_2m(c: &mut Criterion) {
     let accel = accel::build(&scene, AccelKind::Bvh, &AccelOptions::default()).expect("builds");
     let settings = RenderSettings {
         photon: PhotonSettings {
-            num_photons_to_shoot: 2_000_000,
+            num_photons_to_shoot: Some(2_000_000),
             ..Default::default()
         },
         quiet: true,

@@ -1,12 +1,16 @@
 #!/usr/bin/env python3
 """Mitsuba 3's render-test scenes rendered by Mitsuba 3 and by trilux, side by side.
 
-Usage: scripts/mitsuba_render_tests.py [RENDER] [--spp N] [--size S] [--repeats R] [--only TEXT]
+Usage: scripts/mitsuba_render_tests.py [RENDER] [--spp N] [--size S] [--repeats R] [--only TEXT[,TEXT...]]
+                                      [--root DIR]
 
 For each scene of ../shared/mitsuba-tests (both renderers reading the same XML), at equal
 samples per pixel: the wall time of each (median of R runs, the two interleaved), the relMSE
-of each against Mitsuba's reference image, and time × relMSE, ours over Mitsuba's. With
---size S both render at S×S (trilux's -size, Mitsuba's film overridden), where the reference
+of each against Mitsuba's reference image, time × relMSE, ours over Mitsuba's, our mean over
+the reference's, and whether ours passes tests/shared_inputs.rs' rule (relMSE at most 1.5×
+what Mitsuba's estimator has at the same samples, from the reference's variance, plus 2e-4;
+mean within 2%). --root is the folder of scene groups (default ../shared/mitsuba-tests'
+tests/scenes; a checkout of Mitsuba's test data has more). With --size S both render at S×S (trilux's -size, Mitsuba's film overridden), where the reference
 no longer applies and only the times are compared.
 
 Mitsuba runs as its users run it: variant llvm_ad_rgb at the host's own vector width
@@ -33,7 +37,8 @@ def main():
     parser.add_argument("--spp", type=int, default=256)
     parser.add_argument("--size", type=int, default=None)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--only", default="", help="only the scenes whose path contains TEXT")
+    parser.add_argument("--only", default="", help="only the scenes whose path contains one of the comma-separated TEXTs")
+    parser.add_argument("--root", default=os.path.join(here, "..", "..", "shared", "mitsuba-tests", "tests", "scenes"))
     args = parser.parse_args()
 
     if not os.environ.get("DRJIT_LIBLLVM_PATH"):
@@ -52,10 +57,11 @@ def main():
     width = "AVX-512 (16 lanes)" if "avx512f" in open("/proc/cpuinfo").read() else "AVX2 (8 lanes)"
     print(f"# host: {cpu}, {width}; Mitsuba {mi.__version__} {variant}; {args.spp} spp" + (f", {args.size}x{args.size}" if args.size else ", the scenes' own film"))
 
-    root = os.path.join(here, "..", "..", "shared", "mitsuba-tests", "tests", "scenes")
-    scenes = [s for s in sorted(glob.glob(os.path.join(root, "*", "test_*.xml"))) if args.only in s]
+    wanted = args.only.split(",")
+    scenes = [s for s in sorted(glob.glob(os.path.join(args.root, "*", "*.xml")))
+              if os.path.basename(s).startswith(("test_", "scene_")) and any(w in s for w in wanted)]
     out = tempfile.mkdtemp()
-    print(f"{'scene':44} {'ours s':>8} {'Mitsuba s':>9} {'time x':>7} {'ours relMSE':>11} {'Mitsuba':>9} {'t*relMSE x':>10}")
+    print(f"{'scene':44} {'ours s':>8} {'Mitsuba s':>9} {'time x':>7} {'ours relMSE':>11} {'Mitsuba':>9} {'t*relMSE x':>10} {'mean x':>7} rule")
     ratios = []
     for scene in scenes:
         name = os.path.basename(scene)[:-4]
@@ -105,7 +111,11 @@ def main():
         ours_img = np.array(mi.Bitmap(ours_exr))[..., :3]
         relmse = lambda a: float(np.mean((a - ref) ** 2 / (ref ** 2 + 1e-2)))
         ours_e, theirs_e = relmse(ours_img), relmse(theirs_img)
-        print(f"{name:44} {ours_t:8.3f} {theirs_t:9.3f} {ours_t / theirs_t:7.2f} {ours_e:11.2e} {theirs_e:9.2e} {ours_t * ours_e / (theirs_t * theirs_e):10.2f}")
+        variance = np.array(mi.Bitmap(os.path.join(folder, "refs", stem + "_ref_rgb_var.exr")))[..., :3]
+        estimator = float(np.mean(np.maximum(variance, 0) / args.spp / (ref ** 2 + 1e-2)))
+        mean = float(ours_img.sum() / ref.sum())
+        passes = ours_e <= 1.5 * estimator + 2e-4 and abs(mean - 1) <= 0.02
+        print(f"{name:44} {ours_t:8.3f} {theirs_t:9.3f} {ours_t / theirs_t:7.2f} {ours_e:11.2e} {theirs_e:9.2e} {ours_t * ours_e / (theirs_t * theirs_e):10.2f} {mean:7.3f} {'pass' if passes else 'FAIL'}")
         ratios.append(ours_t / theirs_t)
     if ratios:
         print(f"# median time ratio, ours over Mitsuba's: {statistics.median(ratios):.2f} over {len(ratios)} scenes")

@@ -1359,7 +1359,7 @@ fn time_limit_renders_until_the_time_is_spent() {
         assert!(out.status.success(), "{flags:?}: {stderr}");
         let line = stderr
             .lines()
-            .find(|l| l.starts_with("--time-limit without quality flags"));
+            .find(|l| l.starts_with("--time-limit: for the quality flags not given"));
         match line {
             Some(line) => assert!(line.ends_with(chose), "{flags:?}: {line}"),
             None => assert!(chose.is_empty(), "{flags:?}: nothing chosen: {stderr}"),
@@ -1394,6 +1394,129 @@ fn time_limit_renders_until_the_time_is_spent() {
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.contains(expected), "{extra:?}: {stderr}");
     }
+}
+
+/// The mean of an image's channels.
+fn mean_of(file: &Path) -> f64 {
+    let film = trilux::film::read_pfm(file).expect("image");
+    let sum: f64 = film
+        .pixels
+        .iter()
+        .map(|c| (c.x + c.y + c.z) as f64 / 3.0)
+        .sum();
+    sum / film.pixels.len() as f64
+}
+
+/// The photon engine chooses what is not given. With no photon flag it traces photons
+/// (`photons_for_image`): the Cornell box's mean is the path tracer's converged mean within
+/// 5% (with no photons it is 18% low: no indirect light). With `--time-limit`,
+/// a photon flag given is kept and the others are still chosen; `-num_photons_to_shoot 0`
+/// is warned of.
+#[test]
+fn photon_engine_chooses_the_photon_settings_not_given() {
+    let dir = common::temp_dir("photon-defaults");
+    let scene = common::own_scene_dir().join("cornell_box_diffuse_sphere.obj");
+    let scene = scene.to_str().unwrap();
+    let base = ["-input", scene, "-size", "64", "64", "--threads", "2"];
+    let reference = [
+        &base[..],
+        &[
+            "--engine",
+            "path",
+            "-num_antialias_samples",
+            "1024",
+            "--quiet",
+            "-o",
+            "ref.pfm",
+        ],
+    ]
+    .concat();
+    ok(&render(&dir, &reference));
+    let out = render(
+        &dir,
+        &[&base[..], &["--engine", "photon", "-o", "photon.pfm"]].concat(),
+    );
+    ok(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("photons: 100000 emitted"),
+        "the floor of photons_for_image at 64×64: {stderr}"
+    );
+    let path = mean_of(&dir.join("ref.pfm"));
+    let photon = mean_of(&dir.join("photon.pfm"));
+    println!("no photon flags: mean {photon:.4}, the path tracer's {path:.4}");
+    assert!(
+        (photon / path - 1.0).abs() < 0.05,
+        "mean {photon} against the path tracer's {path}"
+    );
+    // Most of what is left (measured 4.7%) is the course's one shadow ray to the light's
+    // centre; with 16 shadow rays the photon map's indirect light is all that can differ.
+    let out = render(
+        &dir,
+        &[
+            &base[..],
+            &[
+                "--engine",
+                "photon",
+                "-num_shadow_samples",
+                "16",
+                "-o",
+                "soft.pfm",
+            ],
+        ]
+        .concat(),
+    );
+    ok(&out);
+    let soft = mean_of(&dir.join("soft.pfm"));
+    println!("no photon flags, 16 shadow rays: mean {soft:.4}");
+    assert!(
+        (soft / path - 1.0).abs() < 0.015,
+        "mean {soft} against the path tracer's {path}"
+    );
+    for (flags, chose, photons) in [
+        (
+            &["-gather_indirect"][..],
+            "chose -num_shadow_samples 16 -num_antialias_samples 4 -num_photons_to_shoot 50000",
+            "photons: 50000 emitted",
+        ),
+        (
+            &["-num_photons_to_shoot", "30000"],
+            "chose -num_shadow_samples 16 -num_antialias_samples 4 -gather_indirect",
+            "photons: 30000 emitted",
+        ),
+        (
+            &["-gather_indirect=false", "-num_shadow_samples", "2"],
+            "chose -num_antialias_samples 4 -num_photons_to_shoot 50000",
+            "photons: 50000 emitted",
+        ),
+    ] {
+        let args = [
+            &base[..],
+            flags,
+            &["--time-limit", "1", "-o", "limited.pfm"],
+        ]
+        .concat();
+        let out = render(&dir, &args);
+        ok(&out);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let line = stderr
+            .lines()
+            .find(|l| l.starts_with("--time-limit: for the quality flags not given"))
+            .unwrap_or_else(|| panic!("{flags:?}: nothing chosen: {stderr}"));
+        assert!(line.ends_with(chose), "{flags:?}: {line}");
+        assert!(stderr.contains(photons), "{flags:?}: {stderr}");
+    }
+    let out = render(
+        &dir,
+        &[&base[..], &["-num_photons_to_shoot", "0", "-o", "none.pfm"]].concat(),
+    );
+    ok(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("warning: -num_photons_to_shoot 0: no photon map"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// `render man` writes the manual page generated from the flag definitions: roff with a title,

@@ -92,7 +92,7 @@ fn photon_settings(shadow: u32, photons: u64) -> RenderSettings {
         num_antialias_samples: 16,
         ..base_settings()
     };
-    settings.photon.num_photons_to_shoot = photons;
+    settings.photon.num_photons_to_shoot = Some(photons);
     settings
 }
 
@@ -217,7 +217,7 @@ fn radiosity_photon_and_path_images_agree_on_flat_regions() {
             num_shadow_samples: 64,
             num_antialias_samples: 4,
             photon: PhotonSettings {
-                num_photons_to_shoot: 500_000,
+                num_photons_to_shoot: Some(500_000),
                 num_photons_to_collect: 200,
                 max_photon_depth: 1000,
                 gather_indirect: true,

@@ -144,7 +144,7 @@ fn the_photon_engine_keeps_the_fog_furnace_at_le_over_one_minus_rho() {
             num_antialias_samples: 4,
             ..RenderSettings::default()
         };
-        settings.photon.num_photons_to_shoot = 2_000_000;
+        settings.photon.num_photons_to_shoot = Some(2_000_000);
         settings.photon.gather_indirect = gather_indirect;
         let kind = backends()[0];
         let mean = mean_of(photon_render, &scene, kind, settings);
@@ -456,7 +456,7 @@ fn a_floor_under_the_sky_reflects_its_cosine_weighted_mean() {
         // The photon engine: the ray tracer's sky light, and photons from the sky's disk
         // whose later bounces (none reach the floor again) would be the maps'.
         let mut settings = settings;
-        settings.photon.num_photons_to_shoot = 100_000;
+        settings.photon.num_photons_to_shoot = Some(100_000);
         let mean = mean_of(photon_render, &uniform, kind, settings.clone());
         println!("uniform sky, photon engine ({kind}): {mean:?}");
         for (c, truth) in [0.6f64, 1.2, 2.4].into_iter().enumerate() {
@@ -575,7 +575,7 @@ fn a_floor_under_a_sky_map_reflects_its_cosine_weighted_integral() {
         let mean = mean_of(raytrace::render, &scene, kind, settings.clone());
         println!("sky map, ray tracer ({kind}): {mean:?}");
         assert_channels_within("ray tracer", mean, truth, 0.01);
-        settings.photon.num_photons_to_shoot = 100_000;
+        settings.photon.num_photons_to_shoot = Some(100_000);
         let mean = mean_of(photon_render, &scene, kind, settings.clone());
         println!("sky map, photon engine ({kind}): {mean:?}");
         assert_channels_within("photon engine", mean, truth, 0.01);

@@ -200,7 +200,7 @@ fn every_engine_renders_an_mgf_scene() {
         num_antialias_samples: 4,
         quiet: true,
         photon: trilux::engines::photon::PhotonSettings {
-            num_photons_to_shoot: 20_000,
+            num_photons_to_shoot: Some(20_000),
             ..Default::default()
         },
         ..RenderSettings::default()

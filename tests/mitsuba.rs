@@ -184,6 +184,54 @@ fn a_thin_dielectric_lets_through_what_it_does_not_reflect() {
     }
 }
 
+/// `hide_emitters`: the uniform environment (radiance 2) is not seen straight from the camera,
+/// and a glowing rectangle between the camera and the sphere is seen through, while the
+/// sphere it does not hide is still lit by both: ρ·L = 0.5 in the image's middle (the
+/// rectangle's own light, 1, adds ρ/π·E there: a little more), 0 in its corners.
+#[test]
+fn hidden_emitters_are_seen_through_and_still_light() {
+    let text = SPHERE
+        .replace(
+            r#"<integrator type="path">"#,
+            r#"<integrator type="path"><boolean name="hide_emitters" value="true"/>"#,
+        )
+        .replace(r#"<float name="fov" value="10"/>"#, r#"<float name="fov" value="40"/>"#)
+        .replace(
+            "</scene>",
+            r#"<shape type="rectangle">
+        <transform name="to_world"><scale value="0.3"/><rotate y="1" angle="180"/><translate x="3" z="5"/></transform>
+        <emitter type="area"><rgb name="radiance" value="1"/></emitter>
+    </shape>
+</scene>"#,
+        );
+    let file = write("hide", &[("hide.xml", text.as_bytes())]);
+    let scene = Scene::load(&file).expect("loads");
+    assert!(
+        scene.hide_emitters && scene.warnings.is_empty(),
+        "{:?}",
+        scene.warnings
+    );
+    for kind in backends() {
+        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+        let settings = RenderSettings {
+            width: 24,
+            height: 16,
+            num_antialias_samples: 64,
+            quiet: true,
+            ..RenderSettings::default()
+        };
+        let (film, _) = path::render(&scene, accel.as_ref(), &settings);
+        let at = |x: usize, y: usize| film.pixels[y * 24 + x].x;
+        assert_eq!(at(0, 0), 0.0, "{kind:?}: the sky is hidden");
+        assert_eq!(at(23, 15), 0.0, "{kind:?}: the sky is hidden");
+        let middle = at(12, 8);
+        assert!(
+            (0.5..0.6).contains(&middle),
+            "{kind:?}: the sphere through the rectangle: {middle}"
+        );
+    }
+}
+
 /// A mesh read through `<include>` and `<path>`, placed by a 4×4 matrix, with its own
 /// shading normals; a `rectangle` emitter with a spectrum converted as Mitsuba converts it.
 #[test]

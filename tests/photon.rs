@@ -19,7 +19,7 @@ fn settings(photons: u64) -> RenderSettings {
         num_shadow_samples: 16,
         num_antialias_samples: 4,
         photon: PhotonSettings {
-            num_photons_to_shoot: photons,
+            num_photons_to_shoot: Some(photons),
             num_photons_to_collect: 100,
             ..Default::default()
         },

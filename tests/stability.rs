@@ -105,7 +105,7 @@ fn stiff_path_and_photon_furnace() {
             quiet: true,
             ..RenderSettings::default()
         };
-        s.photon.num_photons_to_shoot = 400_000;
+        s.photon.num_photons_to_shoot = Some(400_000);
         s.photon.max_photon_depth = 100_000;
         let photons = render(EngineKind::Photon, &scene, kind, &s);
         let (p, ph) = (mean(&path), mean(&photons));
@@ -191,7 +191,7 @@ fn emitted_radiance_from_1e_minus_30_to_1e30_scales_linearly() {
         ..RenderSettings::default()
     };
     s.radiosity.subdivide = 1;
-    s.photon.num_photons_to_shoot = 50_000;
+    s.photon.num_photons_to_shoot = Some(50_000);
     for (kind, engine) in backends().into_iter().flat_map(|k| {
         [
             EngineKind::Raytrace,

@@ -104,10 +104,9 @@ pub struct CommonArgs {
     /// Render for about this many seconds, from the start (scene loading included): engines
     /// that can refine add pixel samples (passes of -num_antialias_samples), SPPM passes or
     /// radiosity shots until the time is spent, then write the image and say what they
-    /// reached. Without the quality flags, the ray tracer and the engines built on it choose
-    /// their own (16 shadow rays, passes of 4 camera samples; the photon engine, given none
-    /// of its flags, final gathering with 50,000 photons a second; radiosity interpolated)
-    /// and say so.
+    /// reached. The ray tracer and the engines built on it choose each quality setting not
+    /// given (16 shadow rays, passes of 4 camera samples; the photon engine final gathering
+    /// and 50,000 photons a second; radiosity interpolated) and say so.
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub time_limit: Option<f64>,
     /// Make quads opaque from both sides.
@@ -487,49 +486,61 @@ pub struct RadiosityArgs {
     pub load_radiosity: Option<PathBuf>,
 }
 
-/// The photon engine's flags.
+/// The photon engine's flags. Each help line gives the default and why it is the default.
 #[derive(Args, Debug)]
 #[command(next_help_heading = "Photon mapping")]
 pub struct PhotonArgs {
-    /// Photons to emit.
-    #[arg(long, default_value_t = photon_defaults().num_photons_to_shoot)]
-    pub num_photons_to_shoot: u64,
-    /// Photons aimed at the mirrors and glass for the caustic map (default: as many as
-    /// -num_photons_to_shoot; 0: caustics from the main pass only).
-    #[arg(long)]
+    /// Photons to emit; 0: no photon map [default: 4 a pixel of the image, 100,000 to
+    /// 1,000,000: past 100,000 the estimates' blur, not the count, limits a small image].
+    #[arg(long, value_name = "N")]
+    pub num_photons_to_shoot: Option<u64>,
+    /// Photons aimed at the mirrors and glass for the caustic map; 0: caustics from the main
+    /// pass only [default: as many as -num_photons_to_shoot: the few photons of the main pass
+    /// that reach a mirror make a blotchy caustic].
+    #[arg(long, value_name = "N")]
     pub caustic_photons: Option<u64>,
-    /// Photons per density estimate.
+    /// Photons per density estimate (100: fewer is noisier, more blurs light across
+    /// edges).
     #[arg(long, default_value_t = photon_defaults().num_photons_to_collect)]
     pub num_photons_to_collect: u32,
-    /// Final gathering for indirect light.
-    #[arg(long)]
-    pub gather_indirect: bool,
+    /// Final gathering for indirect light; `=false` to keep it off under --time-limit
+    /// [default: off (on under --time-limit): the map's own estimate costs no rays, and the
+    /// course's images use it].
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, require_equals = true,
+          default_missing_value = "true")]
+    pub gather_indirect: Option<bool>,
     /// Bounces a photon may make: a safety cap (Russian roulette ends photon paths long
-    /// before it).
+    /// before it, so that it cuts no light).
     #[arg(long, default_value_t = photon_defaults().max_photon_depth)]
     pub max_photon_depth: u32,
-    /// Largest radius of a photon density estimate, as a fraction of the scene's diagonal.
+    /// Largest radius of a photon density estimate, as a fraction of the scene's diagonal
+    /// (0.1: where photons are sparse, an estimate from afar beats none).
     #[arg(long, default_value_t = photon_defaults().max_radius, allow_negative_numbers = true)]
     pub photon_max_radius: f32,
     /// Points per camera or mirror ray in the fog at which the volume photon map is looked
-    /// up (jittered, evenly spaced over the part of the ray among the volume photons).
+    /// up (jittered, evenly spaced over the part of the ray among the volume photons; 16:
+    /// more points are less noise in the fog and more time a ray).
     #[arg(long, default_value_t = photon_defaults().volume_steps)]
     pub volume_steps: u32,
-    /// Hemisphere rays per final gather (-gather_indirect).
+    /// Hemisphere rays per final gather (-gather_indirect; 128: more rays are less noise in
+    /// each cache record and more time a record).
     #[arg(long, default_value_t = photon_defaults().final_gather_rays)]
     pub final_gather_rays: u32,
-    /// Ward's irradiance-cache error a: records are used where their weight exceeds 1/a.
+    /// Ward's irradiance-cache error a: records are used where their weight exceeds 1/a
+    /// (0.15: smaller makes more records, less interpolation error and more time).
     #[arg(long, default_value_t = photon_defaults().irradiance_cache_error, allow_negative_numbers = true)]
     pub irradiance_cache_error: f32,
     /// The irradiance cache's first pass visits every n-th pixel centre in x and y (its finest
-    /// level): a record is gathered where a visited point is not covered.
+    /// level): a record is gathered where a visited point is not covered (1: every pixel's
+    /// point is visited, so no small feature is missed).
     #[arg(long, default_value_t = photon_defaults().irradiance_cache_spacing)]
     pub irradiance_cache_spacing: u32,
-    /// Write both photon maps to FILE (versioned, with a fingerprint of scene and settings).
+    /// Write both photon maps to FILE (versioned, with a fingerprint of scene and settings)
+    /// [default: not written].
     #[arg(long, value_name = "FILE")]
     pub save_photons: Option<PathBuf>,
     /// Read the photon maps from FILE instead of tracing them; refused if made for another
-    /// scene or other settings.
+    /// scene or other settings [default: traced].
     #[arg(long, value_name = "FILE")]
     pub load_photons: Option<PathBuf>,
 }
@@ -576,7 +587,9 @@ impl PhotonArgs {
             num_photons_to_collect: self.num_photons_to_collect,
             max_photon_depth: self.max_photon_depth,
             max_radius: self.photon_max_radius,
-            gather_indirect: self.gather_indirect,
+            gather_indirect: self
+                .gather_indirect
+                .unwrap_or(photon_defaults().gather_indirect),
             volume_steps: self.volume_steps,
             final_gather_rays: self.final_gather_rays,
             irradiance_cache_error: self.irradiance_cache_error,
@@ -644,9 +657,9 @@ impl RenderArgs {
     /// - the ray tracer and the engines built on it (photon, ray tracer + radiosity): 16
     ///   shadow rays a light (soft shadows by solid angle; relMSE of direct light 1.2e-4 at
     ///   256×256 in 0.4 s) and passes of 4 camera samples;
-    /// - the photon engine, when none of its own flags is given: final gathering, with 50,000
-    ///   photons per second of the limit (at least 20,000, at most 2,000,000; 50,000 in
-    ///   1.09 s gave relMSE 9.2e-4);
+    /// - the photon engine, each unless given: final gathering, and 50,000 photons per second
+    ///   of the limit (at least 20,000, at most 2,000,000; 50,000 in 1.09 s gave relMSE
+    ///   9.2e-4);
     /// - radiosity: interpolated display.
     ///
     /// The path tracer and SPPM choose nothing: they add passes until the time is spent.
@@ -672,19 +685,20 @@ impl RenderArgs {
                 "-num_antialias_samples {TIME_LIMITED_PASS_SAMPLES}"
             ));
         }
-        // Only when no photon flag was given: a user who sets the photon count has chosen
-        // between final gathering and the map's own estimate (`-gather_indirect` has no
-        // "off" to give).
-        if engine == EngineKind::Photon
-            && settings.photon.display == Default::default()
-            && !self.group_given("PhotonArgs")
-        {
-            let photons = (TIME_LIMITED_PHOTONS_PER_SECOND * seconds)
-                .clamp(TIME_LIMITED_PHOTONS.0, TIME_LIMITED_PHOTONS.1)
-                as u64;
-            settings.photon.gather_indirect = true;
-            settings.photon.num_photons_to_shoot = photons;
-            chosen.push(format!("-gather_indirect -num_photons_to_shoot {photons}"));
+        // The photon engine's own settings, each unless given: final gathering (off with
+        // `-gather_indirect=false`) and a photon count from the time.
+        if engine == EngineKind::Photon && settings.photon.display == Default::default() {
+            if !given("gather_indirect") {
+                settings.photon.gather_indirect = true;
+                chosen.push("-gather_indirect".to_string());
+            }
+            if !given("num_photons_to_shoot") && settings.photon.load.is_none() {
+                let photons = (TIME_LIMITED_PHOTONS_PER_SECOND * seconds)
+                    .clamp(TIME_LIMITED_PHOTONS.0, TIME_LIMITED_PHOTONS.1)
+                    as u64;
+                settings.photon.num_photons_to_shoot = Some(photons);
+                chosen.push(format!("-num_photons_to_shoot {photons}"));
+            }
         }
         let radiosity =
             engine == EngineKind::Radiosity || settings.indirect == IndirectKind::Radiosity;

@@ -37,12 +37,20 @@ const COURSE_FLAGS: [&str; 15] = [
     "two_sided",
 ];
 
-/// Rewrites `-num_bounces` and `--num_bounces` to `--num-bounces`; everything else as it is.
+/// Rewrites `-num_bounces` and `--num_bounces` to `--num-bounces` (and
+/// `-gather_indirect=false` to `--gather-indirect=false`); everything else as it is.
 pub(crate) fn normalize_args(args: impl Iterator<Item = String>) -> Vec<String> {
     args.map(|a| {
         let name = a.strip_prefix("--").or_else(|| a.strip_prefix('-'));
+        let (name, value) = match name.map(|n| n.split_once('=')) {
+            Some(Some((n, v))) => (Some(n), Some(v)),
+            _ => (name, None),
+        };
         match name {
-            Some(n) if COURSE_FLAGS.contains(&n) => format!("--{}", n.replace('_', "-")),
+            Some(n) if COURSE_FLAGS.contains(&n) => {
+                let flag = format!("--{}", n.replace('_', "-"));
+                value.map_or(flag.clone(), |v| format!("{flag}={v}"))
+            }
             _ => a,
         }
     })

@@ -168,8 +168,14 @@ pub fn checked_settings(args: &RenderArgs) -> Result<RenderSettings, String> {
     let chosen = args.choose_for_time_limit(&mut settings);
     if !chosen.is_empty() && !args.common.quiet {
         eprintln!(
-            "--time-limit without quality flags: chose {}",
+            "--time-limit: for the quality flags not given, chose {}",
             chosen.join(" ")
+        );
+    }
+    let p = &settings.photon;
+    if args.engine() == EngineKind::Photon && p.load.is_none() && settings.photons() == 0 {
+        eprintln!(
+            "warning: -num_photons_to_shoot 0: no photon map, so no indirect light but --ambient-light"
         );
     }
     Ok(settings)

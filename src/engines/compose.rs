@@ -143,7 +143,7 @@ impl Engine for PhotonEngine {
         let mut s = base.clone();
         s.num_shadow_samples = 16;
         s.num_antialias_samples = doubling.min(256) as u32;
-        s.photon.num_photons_to_shoot = photons;
+        s.photon.num_photons_to_shoot = Some(photons);
         Some(Budget {
             counts: "photons",
             value: photons,

@@ -283,6 +283,18 @@ impl Default for RenderSettings {
 }
 
 impl RenderSettings {
+    /// The photon engine's main pass: `-num_photons_to_shoot`, else chosen from the whole
+    /// image's pixels (`photon::settings::photons_for_image`).
+    pub fn photons(&self) -> u64 {
+        self.photon.photons(self.width as u64 * self.height as u64)
+    }
+
+    /// The photon engine's caustic pass: `--caustic-photons`, else as many as the main pass.
+    pub fn caustic_photons(&self) -> u64 {
+        self.photon
+            .caustic_photons(self.width as u64 * self.height as u64)
+    }
+
     /// What the pixel loop and the camera read.
     pub fn image(&self) -> ImageSettings {
         ImageSettings {

@@ -269,6 +269,10 @@ pub struct Scene {
     /// Triangles are shaded with their vertex normals interpolated (Mitsuba scenes); the
     /// course's formats shade them flat, as the course program does.
     pub smooth_normals: bool,
+    /// What emits is not seen straight from the camera (Mitsuba's `hide_emitters`; default
+    /// false): the path tracer's camera rays pass through emitting surfaces and show no sky
+    /// until they have scattered. The other engines show emitters.
+    pub hide_emitters: bool,
     /// What the scene file asks of the render (a Mitsuba scene's film, sampler and
     /// integrator), which the command line's own flags override.
     pub render_hints: RenderHints,

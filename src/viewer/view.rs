@@ -134,10 +134,7 @@ impl ViewState {
                 Photons::KdTree => (PhotonDisplay::Kdtree, "KD-TREE", "kdtree"),
             };
             settings.photon.display = display;
-            let label = format!(
-                "{name} (photon, {} photons)",
-                settings.photon.num_photons_to_shoot
-            );
+            let label = format!("{name} (photon, {} photons)", settings.photons());
             return job(
                 EngineKind::Photon,
                 settings,

@@ -364,7 +364,7 @@ impl App {
             "i" => view.interpolate = !view.interpolate,
             "w" => view.wireframe = !view.wireframe,
             "p" | "l" | "k" => {
-                if self.session.settings.photon.num_photons_to_shoot == 0 {
+                if self.session.settings.photons() == 0 {
                     return eprintln!(
                         "render view: '{key}': no photons to shoot; start the viewer with -num_photons_to_shoot N"
                     );

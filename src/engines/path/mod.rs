@@ -573,8 +573,11 @@ impl PathTracer<'_> {
                     Flight::Passed { weight } => throughput *= weight,
                 }
             }
+            // What emits, hidden from the camera: seen through until the path scatters.
+            let hidden = depth == 0 && self.scene.hide_emitters;
             let Some(s) = hit else {
                 match &self.scene.sky {
+                    Some(_) if hidden => {}
                     Some(sky) => {
                         let towards = ray.direction.normalize();
                         let weight = match previous.bsdf_pdf {
@@ -592,6 +595,13 @@ impl PathTracer<'_> {
                 break;
             };
             let m = &self.scene.materials[s.material as usize];
+            if hidden && m.is_emissive() {
+                ray = s.spawn_ray(ray.direction);
+                counts.secondary += 1;
+                samples.prepare();
+                hit = closest_surface(self.accel, self.scene, &ray);
+                continue;
+            }
             let (front, n) = s.facing(ray.direction);
             radiance += self.emission(&s, ray.direction, &previous, throughput);
             // An index-matched boundary changes only the medium: the path goes on as it was
@@ -969,10 +979,11 @@ impl PathTracer<'_> {
     }
 
     /// The transmittance along a shadow ray that starts in `medium`, crossing index-matched
-    /// boundaries (each into its material's interior medium from the front, out to the fog
-    /// from the back) and multiplying the media's transmittance over each stretch (a
-    /// heterogeneous medium's estimated from `samples`); 0 where any other surface is in the
-    /// way, or after `MAX_CROSSINGS` boundaries.
+    /// boundaries and thin sheets (each into its material's interior medium from the front,
+    /// out to the fog from the back; a sheet lets through what `straight_transmission` says)
+    /// and multiplying the media's transmittance over each stretch (a heterogeneous medium's
+    /// estimated from `samples`); 0 where any other surface is in the way, or after
+    /// `MAX_CROSSINGS` boundaries.
     fn crossing_transmittance(
         &self,
         ray: &Ray,

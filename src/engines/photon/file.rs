@@ -32,8 +32,8 @@ pub fn fingerprint(scene: &Scene, settings: &RenderSettings) -> u64 {
     let p = &settings.photon;
     let mut h = scene.content_hash();
     for v in [
-        p.num_photons_to_shoot,
-        p.caustic_photons(),
+        settings.photons(),
+        settings.caustic_photons(),
         p.max_photon_depth as u64,
         settings.seed,
         p.gather_indirect as u64,

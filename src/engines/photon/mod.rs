@@ -77,10 +77,11 @@ impl PhotonMaps {
             radius: 0.5 * b.extent().length(),
         });
         let caustic_emitted = match caustic_aim {
-            Some(_) => p.caustic_photons(),
+            Some(_) => settings.caustic_photons(),
             None => 0,
         };
-        let blocks = p.num_photons_to_shoot.div_ceil(4096) + caustic_emitted.div_ceil(4096);
+        let emitted = settings.photons();
+        let blocks = emitted.div_ceil(4096) + caustic_emitted.div_ceil(4096);
         let bar = crate::progress::bar(blocks, "photons", settings.quiet);
         let trace = |count, aim| {
             trace::trace_photons(
@@ -93,7 +94,7 @@ impl PhotonMaps {
                 || bar.inc(1),
             )
         };
-        let main = trace(p.num_photons_to_shoot, Aim::Everywhere);
+        let main = trace(emitted, Aim::Everywhere);
         let aimed = caustic_aim
             .filter(|_| caustic_emitted > 0)
             .map(|aim| trace(caustic_emitted, aim));
@@ -130,7 +131,7 @@ impl PhotonMaps {
         let mut maps = PhotonMaps::from_photons(scene, settings, [global, caustic, volume]);
         maps.trace_seconds = trace_seconds;
         maps.build_seconds = clock.elapsed().as_secs_f64();
-        maps.emitted = p.num_photons_to_shoot;
+        maps.emitted = emitted;
         maps.caustic_emitted = caustic_emitted;
         maps.rays = rays;
         maps.truncated = truncated;
@@ -316,7 +317,8 @@ const PHOTON_BYTES: u64 = 52 + 52 + 16;
 /// What the photon engine builds, for `--plan`: the two maps and their memory.
 pub fn plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
     let p = &settings.photon;
-    let traced = p.num_photons_to_shoot > 0;
+    let shot = settings.photons();
+    let traced = shot > 0;
     let used = scene.used_materials();
     let any_specular = scene
         .materials
@@ -328,8 +330,8 @@ pub fn plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
     let bounces = (1.0 / (1.0 - mean_albedo(scene).min(0.95)))
         .min(p.max_photon_depth as f64 + 1.0)
         .max(1.0);
-    let emitted = p.num_photons_to_shoot.saturating_add(p.caustic_photons());
-    let volume = volume_events_per_photon(scene, bounces) * p.num_photons_to_shoot as f64;
+    let emitted = shot.saturating_add(settings.caustic_photons());
+    let volume = volume_events_per_photon(scene, bounces) * shot as f64;
     let stored = (emitted as f64 * bounces + volume).min(u64::MAX as f64 / PHOTON_BYTES as f64);
     let yes_no = |b: bool| if b { "yes" } else { "no" }.to_string();
     EnginePlan {

@@ -30,11 +30,12 @@ pub const MAX_VOLUME_STEPS: u32 = 4096;
 /// Settings only the photon engine reads.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PhotonSettings {
-    /// Photons emitted (`-num_photons_to_shoot`, default 0: no photon map).
-    pub num_photons_to_shoot: u64,
+    /// Photons emitted (`-num_photons_to_shoot`, default None: `photons_for_image` of the
+    /// image's pixels). 0 makes no photon map.
+    pub num_photons_to_shoot: Option<u64>,
     /// Photons aimed at the mirrors and glass for the caustic map (`--caustic-photons`,
-    /// default None: as many as `num_photons_to_shoot`). 0 turns the caustic pass off; the
-    /// caustic map then holds the caustic photons of the main pass.
+    /// default None: as many as the main pass). 0 turns the caustic pass off; the caustic map
+    /// then holds the caustic photons of the main pass.
     pub caustic_photons: Option<u64>,
     /// Photons per density estimate (`-num_photons_to_collect`, default 100).
     pub num_photons_to_collect: u32,
@@ -76,7 +77,7 @@ pub struct PhotonSettings {
 impl Default for PhotonSettings {
     fn default() -> Self {
         PhotonSettings {
-            num_photons_to_shoot: 0,
+            num_photons_to_shoot: None,
             caustic_photons: None,
             num_photons_to_collect: 100,
             max_photon_depth: SAFETY_DEPTH,
@@ -95,9 +96,38 @@ impl Default for PhotonSettings {
     }
 }
 
+/// Photons emitted a pixel of the image when no count is given.
+pub const PHOTONS_PER_PIXEL: u64 = 4;
+
+/// The fewest and the most photons emitted when no count is given.
+pub const PHOTONS_FOR_IMAGE: (u64, u64) = (100_000, 1_000_000);
+
+/// Photons emitted when `-num_photons_to_shoot` is not given: `PHOTONS_PER_PIXEL` a pixel of
+/// the whole image (every tile of a split render traces the same maps), at least
+/// `PHOTONS_FOR_IMAGE.0` and at most `PHOTONS_FOR_IMAGE.1`. Measured on the Cornell box with
+/// the diffuse sphere at 64×64 (16 shadow rays, 4 camera samples, against the path tracer at
+/// 1,024 paths): relMSE 2.23e-2 at 50,000 photons, 2.08e-2 at 200,000, 2.01e-2 at 1,000,000,
+/// in 0.5, 1.3 and 5.5 s on 2 shared cores — the density estimate's blur, not the count,
+/// limits it past about 100,000, so more photons are worth their time only as the image's
+/// pixels grow finer. The image's mean is the path tracer's within 0.7% at any of these
+/// counts (without photons it is 18% low: no indirect light).
+pub fn photons_for_image(pixels: u64) -> u64 {
+    pixels
+        .saturating_mul(PHOTONS_PER_PIXEL)
+        .clamp(PHOTONS_FOR_IMAGE.0, PHOTONS_FOR_IMAGE.1)
+}
+
 impl PhotonSettings {
-    /// Photons of the caustic pass: `--caustic-photons`, else as many as the main pass.
-    pub fn caustic_photons(&self) -> u64 {
-        self.caustic_photons.unwrap_or(self.num_photons_to_shoot)
+    /// Photons of the main pass for an image of `pixels`: `-num_photons_to_shoot`, else
+    /// `photons_for_image`.
+    pub fn photons(&self, pixels: u64) -> u64 {
+        self.num_photons_to_shoot
+            .unwrap_or_else(|| photons_for_image(pixels))
+    }
+
+    /// Photons of the caustic pass for an image of `pixels`: `--caustic-photons`, else as
+    /// many as the main pass.
+    pub fn caustic_photons(&self, pixels: u64) -> u64 {
+        self.caustic_photons.unwrap_or(self.photons(pixels))
     }
 }

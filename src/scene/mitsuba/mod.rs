@@ -56,6 +56,7 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneErr
         media: HashMap::new(),
         bsdf_textures: Vec::new(),
         bsdf_plugins: Vec::new(),
+        mesh_files: HashMap::new(),
     };
     for child in &root.children {
         let plugin = &child.plugin;
@@ -94,6 +95,9 @@ struct Builder {
     /// The plugins of the BSDF being made, outermost first (`bsdf_alone` adds each;
     /// `shape_material` gives them to the scene's `mitsuba_bsdfs`).
     bsdf_plugins: Vec<PluginSupport>,
+    /// Each mesh file read, by its shape type, path and shape index: a file that several
+    /// shapes name is read once (Mitsuba's BSDF tests place one 2.8 MB sphere twelve times).
+    mesh_files: HashMap<(String, PathBuf, u32), Mesh>,
 }
 
 impl Builder {
@@ -133,9 +137,7 @@ impl Builder {
                         let _ = p.integer(name, 1)?;
                     }
                 }
-                if p.boolean("hide_emitters", false)? {
-                    self.warn(&p.at, "hide_emitters is not supported: emitters are seen");
-                }
+                self.scene.hide_emitters = p.boolean("hide_emitters", false)?;
             }
             other => {
                 return Err(p.at.error(format!(
@@ -338,24 +340,32 @@ impl Builder {
             p.file(name)?
                 .ok_or_else(|| p.at.error(format!("shape \"{}\" needs a filename", p.kind)))
         };
-        let read = |result: Result<Mesh, String>, path: &Path, at: &xml::Location| {
-            result.map_err(|why| at.error(format!("cannot read {}: {why}", path.display())))
+        let mut read = |path: PathBuf, at: &xml::Location, index: u32| {
+            let key = (p.kind.clone(), path, index);
+            if let Some(mesh) = self.mesh_files.get(&key) {
+                return Ok(mesh.clone());
+            }
+            let path = &key.1;
+            let mesh = match p.kind.as_str() {
+                "obj" => meshes::read_obj(path),
+                "ply" => meshes::read_ply(path),
+                _ => meshes::read_serialized(path, index),
+            }
+            .map_err(|why| at.error(format!("cannot read {}: {why}", path.display())))?;
+            self.mesh_files.insert(key, mesh.clone());
+            Ok::<_, SceneError>(mesh)
         };
         let mut mesh = match p.kind.as_str() {
-            "obj" => {
+            "obj" | "ply" => {
                 let (path, at) = file("filename")?;
-                read(meshes::read_obj(&path), &path, at)?
-            }
-            "ply" => {
-                let (path, at) = file("filename")?;
-                read(meshes::read_ply(&path), &path, at)?
+                read(path, at, 0)?
             }
             "serialized" => {
                 let (path, at) = file("filename")?;
                 let index = p.integer("shape_index", 0)?;
                 let index = u32::try_from(index)
                     .map_err(|_| at.error(format!("shape_index {index}: expected ≥ 0")))?;
-                read(meshes::read_serialized(&path, index), &path, at)?
+                read(path, at, index)?
             }
             "rectangle" => meshes::rectangle(),
             "cube" => meshes::cube(),
