@@ -1242,6 +1242,21 @@ fn progress_bar_shows_on_a_terminal_only() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The path tracer's converged image (1,024 paths a pixel) of the scene `base` names, with
+/// `base`'s flags, as `ref.pfm` in `dir`: what the engines' defaults are measured against.
+fn render_converged(dir: &Path, base: &[&str]) {
+    let flags = [
+        "--engine",
+        "path",
+        "-num_antialias_samples",
+        "1024",
+        "--quiet",
+        "-o",
+        "ref.pfm",
+    ];
+    ok(&render(dir, &[base, &flags[..]].concat()));
+}
+
 /// `--time-limit`: the path tracer, SPPM, the ray tracer, radiosity and the photon engine with
 /// final gathering render until about the limit (a pass is started only if the last one's
 /// time still fits, so they end within a pass of it), write the image, and say what they
@@ -1254,20 +1269,7 @@ fn time_limit_renders_until_the_time_is_spent() {
     let scene = common::own_scene_dir().join("cornell_box_diffuse_sphere.obj");
     let scene = scene.to_str().unwrap();
     let base = ["-input", scene, "-size", "64", "64"];
-    let reference = [
-        &base[..],
-        &[
-            "--engine",
-            "path",
-            "-num_antialias_samples",
-            "1024",
-            "--quiet",
-            "-o",
-            "ref.pfm",
-        ],
-    ]
-    .concat();
-    ok(&render(&dir, &reference));
+    render_converged(&dir, &base);
     for flags in [
         &["--engine", "path"][..],
         &["--engine", "sppm"],
@@ -1418,20 +1420,7 @@ fn photon_engine_chooses_the_photon_settings_not_given() {
     let scene = common::own_scene_dir().join("cornell_box_diffuse_sphere.obj");
     let scene = scene.to_str().unwrap();
     let base = ["-input", scene, "-size", "64", "64", "--threads", "2"];
-    let reference = [
-        &base[..],
-        &[
-            "--engine",
-            "path",
-            "-num_antialias_samples",
-            "1024",
-            "--quiet",
-            "-o",
-            "ref.pfm",
-        ],
-    ]
-    .concat();
-    ok(&render(&dir, &reference));
+    render_converged(&dir, &base);
     let out = render(
         &dir,
         &[&base[..], &["--engine", "photon", "-o", "photon.pfm"]].concat(),

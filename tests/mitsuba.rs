@@ -8,7 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::{backends, temp_dir};
-use trilux::accel::{self, AccelOptions};
+use trilux::accel::{self, AccelKind, AccelOptions};
 use trilux::engines::{path, RenderSettings};
 use trilux::geometry::vec3;
 use trilux::scene::Scene;
@@ -93,43 +93,44 @@ fn max_depth_counts_the_camera_segment() {
 #[test]
 fn a_diffuse_sphere_under_a_uniform_sky_reflects_rho_times_the_sky() {
     let file = write("furnace", &[("furnace.xml", SPHERE.as_bytes())]);
-    let scene = Scene::load(&file).expect("loads");
-    for kind in backends() {
-        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
-        let settings = RenderSettings {
-            width: 24,
-            height: 16,
-            num_antialias_samples: 64,
-            quiet: true,
-            ..RenderSettings::default()
-        };
-        let (film, _) = path::render(&scene, accel.as_ref(), &settings);
-        let mean = film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64;
+    for mean in path_means(&file, 64) {
         assert!(
             (mean - 0.5).abs() < 0.005,
-            "{kind:?}: mean {mean}, expected ρ·L = 0.25 × 2"
+            "mean {mean}, expected ρ·L = 0.25 × 2"
         );
     }
+}
+
+/// `scene` rendered by the path tracer at `width`×`height` and `spp`, with each of `kinds`.
+fn path_films(
+    scene: &Scene,
+    kinds: &[AccelKind],
+    (width, height): (u32, u32),
+    spp: u32,
+) -> Vec<trilux::film::Film> {
+    kinds
+        .iter()
+        .map(|&kind| {
+            let accel = accel::build(scene, kind, &AccelOptions::default()).expect("builds");
+            let settings = RenderSettings {
+                width,
+                height,
+                num_antialias_samples: spp,
+                quiet: true,
+                ..RenderSettings::default()
+            };
+            path::render(scene, accel.as_ref(), &settings).0
+        })
+        .collect()
 }
 
 /// The mean of the first channel of `file` rendered by the path tracer at 24×16 and `spp`,
 /// with each Accel.
 fn path_means(file: &Path, spp: u32) -> Vec<f64> {
     let scene = Scene::load(file).expect("loads");
-    backends()
-        .into_iter()
-        .map(|kind| {
-            let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
-            let settings = RenderSettings {
-                width: 24,
-                height: 16,
-                num_antialias_samples: spp,
-                quiet: true,
-                ..RenderSettings::default()
-            };
-            let (film, _) = path::render(&scene, accel.as_ref(), &settings);
-            film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64
-        })
+    path_films(&scene, &backends(), (24, 16), spp)
+        .iter()
+        .map(|film| film.pixels.iter().map(|p| p.x as f64).sum::<f64>() / film.pixels.len() as f64)
         .collect()
 }
 
@@ -211,23 +212,14 @@ fn hidden_emitters_are_seen_through_and_still_light() {
         "{:?}",
         scene.warnings
     );
-    for kind in backends() {
-        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
-        let settings = RenderSettings {
-            width: 24,
-            height: 16,
-            num_antialias_samples: 64,
-            quiet: true,
-            ..RenderSettings::default()
-        };
-        let (film, _) = path::render(&scene, accel.as_ref(), &settings);
+    for film in path_films(&scene, &backends(), (24, 16), 64) {
         let at = |x: usize, y: usize| film.pixels[y * 24 + x].x;
-        assert_eq!(at(0, 0), 0.0, "{kind:?}: the sky is hidden");
-        assert_eq!(at(23, 15), 0.0, "{kind:?}: the sky is hidden");
+        assert_eq!(at(0, 0), 0.0, "the sky is hidden");
+        assert_eq!(at(23, 15), 0.0, "the sky is hidden");
         let middle = at(12, 8);
         assert!(
             (0.5..0.6).contains(&middle),
-            "{kind:?}: the sphere through the rectangle: {middle}"
+            "the sphere through the rectangle: {middle}"
         );
     }
 }
@@ -467,15 +459,7 @@ fn grid(name: &str, file: &str) -> String {
 
 /// The mean of each channel of a path-traced image of `scene` at `spp` paths a pixel.
 fn mean_colour(scene: &Scene, spp: u32) -> [f64; 3] {
-    let accel = accel::build(scene, backends()[0], &AccelOptions::default()).expect("builds");
-    let settings = RenderSettings {
-        width: 12,
-        height: 12,
-        num_antialias_samples: spp,
-        quiet: true,
-        ..RenderSettings::default()
-    };
-    let (film, _) = path::render(scene, accel.as_ref(), &settings);
+    let film = &path_films(scene, &backends()[..1], (12, 12), spp)[0];
     let n = film.pixels.len() as f64;
     [0, 1, 2].map(|c| film.pixels.iter().map(|p| p[c] as f64).sum::<f64>() / n)
 }

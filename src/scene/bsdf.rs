@@ -441,6 +441,23 @@ pub struct BsdfSample {
     pub eta: f32,
 }
 
+impl BsdfSample {
+    /// A direction drawn from a non-delta lobe, of density `pdf` (`pdf(wi, wo)`), weighed by
+    /// `value` (`eval(wi, wo)`) over it; None where the density is not positive.
+    fn drawn(wo: Vec3, pdf: f32, value: impl FnOnce() -> Color, eta: f32) -> Option<BsdfSample> {
+        if pdf.is_nan() || pdf <= 0.0 {
+            return None;
+        }
+        Some(BsdfSample {
+            wo,
+            weight: value() / pdf,
+            pdf,
+            delta: false,
+            eta,
+        })
+    }
+}
+
 /// A Mitsuba 3 BSDF. Colors are linear RGB; the defaults named are Mitsuba's.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Bsdf {
@@ -1712,17 +1729,7 @@ impl Principled {
             }
             (wo, 1.0)
         };
-        let pdf = self.pdf(wi, wo);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wo,
-            weight: self.eval(wi, wo) / pdf,
-            pdf,
-            delta: false,
-            eta: rel_eta,
-        })
+        BsdfSample::drawn(wo, self.pdf(wi, wo), || self.eval(wi, wo), rel_eta)
     }
 }
 
@@ -1950,16 +1957,6 @@ impl PrincipledThin {
             return None;
         };
         let wo = wo * side;
-        let pdf = self.pdf(wi, wo);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wo,
-            weight: self.eval(wi, wo) / pdf,
-            pdf,
-            delta: false,
-            eta: 1.0,
-        })
+        BsdfSample::drawn(wo, self.pdf(wi, wo), || self.eval(wi, wo), 1.0)
     }
 }

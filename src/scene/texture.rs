@@ -79,15 +79,12 @@ impl Texture {
     /// coordinates (s, t): what a height map tilts a normal by, as Mitsuba's bitmap
     /// `eval_1_grad` gives it (zero under the nearest filter, flat almost everywhere).
     pub fn gradient(&self, st: Vec2) -> Vec2 {
-        let mapped = self.mapped(st);
-        let x = mapped.x * self.width as f32 - 0.5;
-        let y = (1.0 - mapped.y) * self.height as f32 - 0.5;
-        if self.nearest || self.texels.is_empty() || !x.is_finite() || !y.is_finite() {
+        if self.nearest || self.texels.is_empty() {
             return Vec2::ZERO;
         }
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (ix, iy) = (x0 as i64, y0 as i64);
+        let Some((ix, iy, fx, fy)) = self.bilinear_cell(self.mapped(st)) else {
+            return Vec2::ZERO;
+        };
         let f = |dx, dy| luminance(self.texel(ix + dx, iy + dy));
         let (f00, f10, f01, f11) = (f(0, 0), f(1, 0), f(0, 1), f(1, 1));
         let dfdx = (1.0 - fy) * (f10 - f00) + fy * (f11 - f01);
@@ -99,6 +96,19 @@ impl Texture {
             None => Vec2::new(gx, gy),
             Some([a, b]) => Vec2::new(a[0] * gx + b[0] * gy, a[1] * gx + b[1] * gy),
         }
+    }
+
+    /// The texel whose centre is up and left of the mapped coordinates `st` (rows run down,
+    /// t up) and the fractions of the way to the next texel's centre, across and down: the
+    /// four texels a bilinear lookup weighs. None for coordinates that are not finite.
+    fn bilinear_cell(&self, st: Vec2) -> Option<(i64, i64, f32, f32)> {
+        let x = st.x * self.width as f32 - 0.5;
+        let y = (1.0 - st.y) * self.height as f32 - 0.5;
+        if !x.is_finite() || !y.is_finite() {
+            return None;
+        }
+        let (x0, y0) = (x.floor(), y.floor());
+        Some((x0 as i64, y0 as i64, x - x0, y - y0))
     }
 
     /// Bilinear lookup with repeat; `t = 0` is the bottom row of the image, as in OBJ.
@@ -115,14 +125,9 @@ impl Texture {
             }
             return self.texel(x as i64, y as i64);
         }
-        let x = st.x * self.width as f32 - 0.5;
-        let y = (1.0 - st.y) * self.height as f32 - 0.5;
-        if !x.is_finite() || !y.is_finite() {
+        let Some((ix, iy, fx, fy)) = self.bilinear_cell(st) else {
             return self.texel(0, 0);
-        }
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (ix, iy) = (x0 as i64, y0 as i64);
+        };
         let top = self.texel(ix, iy) * (1.0 - fx) + self.texel(ix + 1, iy) * fx;
         let bottom = self.texel(ix, iy + 1) * (1.0 - fx) + self.texel(ix + 1, iy + 1) * fx;
         top * (1.0 - fy) + bottom * fy
