@@ -84,6 +84,7 @@ struct TxScene {
 /* One ray's query: its range as asked, and the best hit the exact routines accepted so far
  * (key TX_INVALID_ID: none yet, and `t` is the end of the range). */
 typedef struct TxBest {
+  float near;
   float limit;
   float t;
   float u;
@@ -241,6 +242,7 @@ static int offer(const TxExact* g, unsigned int geom, unsigned int prim,
                  const struct RTCRayN* ray, unsigned int N, unsigned int i, TxBest* best,
                  float cap) {
   TxRay r = load_ray(ray, N, i);
+  r.tnear = best->near;
   /* Up to the best's t inclusive (a tie may win on its key); before any, the range. */
   const float upto = best->key == TX_INVALID_ID ? best->limit : nextafterf(best->t, INFINITY);
   r.tfar = cap < upto ? cap : upto;
@@ -261,6 +263,7 @@ static int offer(const TxExact* g, unsigned int geom, unsigned int prim,
 static int exact_occludes(const TxExact* g, unsigned int prim, const struct RTCRayN* ray,
                           unsigned int N, unsigned int i, const TxBest* best) {
   TxRay r = load_ray(ray, N, i);
+  r.tnear = best->near;
   r.tfar = best->limit;
   float t, u, v;
   return g->exact(g->user, prim, &r, &t, &u, &v);
@@ -598,8 +601,22 @@ static void init_ray(struct RTCRay* ray, const TxRay* r) {
   ray->flags = 0;
 }
 
-/* A query's context over `best` (one entry per ray id), each entry reset to the ray's range. */
-static void start_query(TxQuery* q, TxBest* best, const float* tfar, size_t n) {
+/* How much wider than asked the range Embree searches is, in an exact scene, relative to its
+ * ends: Embree's own t for a candidate differs from the exact routine's by the rounding of
+ * the enlarged polygon's plane over the cosine at which the ray meets it, and a candidate whose
+ * exact t is in range but Embree's just out of it is never proposed. A shadow ray grazing a
+ * light's neighbouring triangle (cosine 6e-4) had the exact t 0.99988 in a range ending at
+ * 0.9999 and Embree's t 0.99996: the BVH found the triangle in the way and Embree did not.
+ * The filters hold every hit to the range as asked. The slack stays below the 1e-4 by which
+ * shadow rays stop short of their light (`shadow_ray`): a slack of 1e-2 had Embree propose the
+ * light itself to every shadow ray, and halved their rate. */
+#define TX_RANGE_SLACK 8e-5f
+
+/* A query's context over `best` (one entry per ray id), each entry reset to the ray's range
+ * (`tnear`, `tfar`: Embree's ray's, n of them), which in an exact scene is then widened by
+ * TX_RANGE_SLACK for Embree. */
+static void start_query(const TxScene* s, TxQuery* q, TxBest* best, float* tnear, float* tfar,
+                        size_t n) {
 #if TX_EMBREE_MAJOR >= 4
   rtcInitRayQueryContext(&q->context);
 #else
@@ -607,10 +624,15 @@ static void start_query(TxQuery* q, TxBest* best, const float* tfar, size_t n) {
 #endif
   q->best = best;
   for (size_t k = 0; k < n; k++) {
+    best[k].near = tnear[k];
     best[k].limit = tfar[k];
     best[k].t = tfar[k];
     best[k].key = TX_INVALID_ID;
     best[k].geom = TX_INVALID_ID;
+    if (s->exact && tfar[k] >= tnear[k]) {
+      tnear[k] = fmaxf(tnear[k] - fabsf(tnear[k]) * TX_RANGE_SLACK, 0.0f);
+      tfar[k] += fabsf(tfar[k]) * TX_RANGE_SLACK;
+    }
   }
 }
 
@@ -671,7 +693,7 @@ void tx_intersect1(const TxScene* s, const TxRay* r, TxHit* hit) {
   init_rayhit(&rh, r);
   TxQuery q;
   TxBest best;
-  start_query(&q, &best, &r->tfar, 1);
+  start_query(s, &q, &best, &rh.ray.tnear, &rh.ray.tfar, 1);
   rtc_intersect1(s->scene, &q, &rh);
   if (s->exact) {
     write_hit(hit, &best);
@@ -689,7 +711,7 @@ int tx_occluded1(const TxScene* s, const TxRay* r) {
   init_ray(&ray, r);
   TxQuery q;
   TxBest best;
-  start_query(&q, &best, &r->tfar, 1);
+  start_query(s, &q, &best, &ray.tnear, &ray.tfar, 1);
   rtc_occluded1(s->scene, &q, &ray);
   return ray.tfar < 0.0f;
 }
@@ -742,7 +764,7 @@ void tx_intersect_batch(const TxScene* s, const TxRay* rays, size_t n, TxHit* hi
     size_t count = n - base < 8 ? n - base : 8;
     load_packet(&rh.ray, valid, rays + base, count);
     init_hit_packet(&rh.hit);
-    start_query(&q, best, rh.ray.tfar, 8);
+    start_query(s, &q, best, rh.ray.tnear, rh.ray.tfar, 8);
     rtc_intersect8(valid, s->scene, &q, &rh);
     for (size_t k = 0; k < count; k++) {
       TxHit* h = &hits[base + k];
@@ -767,7 +789,7 @@ void tx_occluded_batch(const TxScene* s, const TxRay* rays, size_t n, unsigned c
   for (size_t base = 0; base < n; base += 8) {
     size_t count = n - base < 8 ? n - base : 8;
     load_packet(&ray, valid, rays + base, count);
-    start_query(&q, best, ray.tfar, 8);
+    start_query(s, &q, best, ray.tnear, ray.tfar, 8);
     rtc_occluded8(valid, s->scene, &q, &ray);
     for (size_t k = 0; k < count; k++) hits[base + k] = ray.tfar[k] < 0.0f;
   }
@@ -782,7 +804,7 @@ size_t tx_baseline_intersect1(const TxScene* s, const TxRay* rays, size_t n) {
     init_rayhit(&rh, &rays[i]);
     TxQuery q;
     TxBest best;
-    start_query(&q, &best, &rays[i].tfar, 1);
+    start_query(s, &q, &best, &rh.ray.tnear, &rh.ray.tfar, 1);
     rtc_intersect1(s->scene, &q, &rh);
     count += (s->exact ? best.geom : rh.hit.geomID) != TX_INVALID_ID;
   }
@@ -796,7 +818,7 @@ size_t tx_baseline_occluded1(const TxScene* s, const TxRay* rays, size_t n) {
     init_ray(&ray, &rays[i]);
     TxQuery q;
     TxBest best;
-    start_query(&q, &best, &rays[i].tfar, 1);
+    start_query(s, &q, &best, &ray.tnear, &ray.tfar, 1);
     rtc_occluded1(s->scene, &q, &ray);
     count += ray.tfar < 0.0f;
   }
@@ -813,7 +835,7 @@ size_t tx_baseline_intersect8(const TxScene* s, const TxRay* rays, size_t n) {
     init_hit_packet(&rh.hit);
     TxQuery q;
     TxBest best[8];
-    start_query(&q, best, rh.ray.tfar, 8);
+    start_query(s, &q, best, rh.ray.tnear, rh.ray.tfar, 8);
     rtc_intersect8(valid, s->scene, &q, &rh);
     for (size_t k = 0; k < m; k++)
       count += (s->exact ? best[k].geom : rh.hit.geomID[k]) != TX_INVALID_ID;
@@ -830,7 +852,7 @@ size_t tx_baseline_occluded8(const TxScene* s, const TxRay* rays, size_t n) {
     load_packet(&ray, valid, rays + base, m);
     TxQuery q;
     TxBest best[8];
-    start_query(&q, best, ray.tfar, 8);
+    start_query(s, &q, best, ray.tnear, ray.tfar, 8);
     rtc_occluded8(valid, s->scene, &q, &ray);
     for (size_t k = 0; k < m; k++) count += ray.tfar[k] < 0.0f;
   }
