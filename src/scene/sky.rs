@@ -112,6 +112,10 @@ pub struct SkyMap {
     rows: Vec<f32>,
     /// For each row, the cumulative share of each of its texels (width + 1 entries a row).
     columns: Vec<f32>,
+    /// The density in solid angle with which `sample` draws each texel's directions, row by
+    /// row as `texels`: computed once, where every light sample and every escaping ray of a
+    /// path asks for it.
+    density: Vec<f32>,
     /// None: the layout above. Some(rotation from the scene's frame to the map's): Mitsuba's
     /// `envmap` layout, the mirror image of ours: column 0 looks along −z and the columns
     /// turn towards +x (u = atan2(x, −z) / 2π), row 0 is +y.
@@ -130,6 +134,7 @@ impl SkyMap {
             texels: Vec::new(),
             rows: Vec::new(),
             columns: Vec::new(),
+            density: Vec::new(),
             mitsuba_frame: None,
         }
     }
@@ -192,6 +197,21 @@ impl SkyMap {
             rows.push(sum as f32);
         }
         normalize_cdf(&mut rows, total);
+        // Each texel's share over its solid angle, (2π/w)·(cos θ0 − cos θ1).
+        let band = |k: usize| (k as f32 / h as f32 * std::f32::consts::PI).cos();
+        let mut density = Vec::with_capacity(w * h);
+        for r in 0..h {
+            let row_share = rows[r + 1] - rows[r];
+            let cdf = &columns[r * (w + 1)..(r + 1) * (w + 1)];
+            let solid_angle = (band(r) - band(r + 1)) * std::f32::consts::TAU / w as f32;
+            density.extend(cdf.windows(2).map(|c| {
+                if solid_angle <= 0.0 {
+                    0.0
+                } else {
+                    row_share * (c[1] - c[0]) / solid_angle
+                }
+            }));
+        }
         SkyMap {
             file: PathBuf::new(),
             line: 0,
@@ -201,6 +221,7 @@ impl SkyMap {
             texels,
             rows,
             columns,
+            density,
             mitsuba_frame: None,
         }
     }
@@ -263,7 +284,7 @@ impl SkyMap {
             None => vec3(sin * phi.cos(), theta.cos(), -sin * phi.sin()),
             Some(r) => r.transpose() * vec3(sin * phi.sin(), theta.cos(), -sin * phi.cos()),
         };
-        let pdf = self.pdf(d);
+        let pdf = self.density[row * w + column];
         (pdf > 0.0).then_some((d, pdf))
     }
 
@@ -278,22 +299,11 @@ impl SkyMap {
 
     /// The density in solid angle with which `sample` draws the unit direction `d`.
     pub fn pdf(&self, d: Vec3) -> f32 {
-        if self.rows.last().is_none_or(|&t| t <= 0.0) {
+        if self.density.is_empty() {
             return 0.0;
         }
-        let (w, h) = (self.width as usize, self.height as usize);
         let (c, r) = self.texel_of(d);
-        let row_share = self.rows[r + 1] - self.rows[r];
-        let cdf = &self.columns[r * (w + 1)..(r + 1) * (w + 1)];
-        let share = row_share * (cdf[c + 1] - cdf[c]);
-        // The texel's share over its solid angle, (2π/w)·(cos θ0 − cos θ1).
-        let band = |k: usize| (k as f32 / h as f32 * std::f32::consts::PI).cos();
-        let solid_angle = (band(r) - band(r + 1)) * std::f32::consts::TAU / w as f32;
-        if solid_angle <= 0.0 {
-            0.0
-        } else {
-            share / solid_angle
-        }
+        self.density[r * self.width as usize + c]
     }
 }
 
