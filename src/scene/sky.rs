@@ -96,6 +96,8 @@ impl Sky {
 /// zenith (+y), the last row the nadir; column 0 looks along +x, and the columns turn
 /// towards −z (φ = atan2(−z, x) from 0 to 2π): seen from inside, the image reads left to
 /// right as one turns to the right. Each texel is constant over its patch of the sphere.
+///
+/// Mitsuba's `envmap` (`mitsuba_frame`) lays its texels out otherwise, and interpolates them.
 #[derive(Clone, PartialEq)]
 pub struct SkyMap {
     /// The image file, as the scene names it, and the line that names it.
@@ -107,18 +109,25 @@ pub struct SkyMap {
     pub height: u32,
     /// Linear radiance, row 0 at the top (the zenith). Empty until decoded.
     texels: Vec<Color>,
-    /// The cumulative share of each row in the texels' weights (luminance × sin θ), 0 first
-    /// and 1 last (height + 1 entries).
+    /// The cells `sample` draws from, each of constant density: (columns, rows). In our
+    /// layout the texels; in Mitsuba's the squares between four texel centres, over which its
+    /// radiance is bilinear: `width` × (`height` − 1), the first column's left edge at the
+    /// first texel's centre.
+    cells: (usize, usize),
+    /// The cumulative share of each row of cells in their weights (luminance × sin θ; in
+    /// Mitsuba's layout the mean of the cell's four corners), 0 first and 1 last.
     rows: Vec<f32>,
-    /// For each row, the cumulative share of each of its texels (width + 1 entries a row).
+    /// For each row, the cumulative share of each of its cells (columns + 1 entries a row).
     columns: Vec<f32>,
-    /// The density in solid angle with which `sample` draws each texel's directions, row by
-    /// row as `texels`: computed once, where every light sample and every escaping ray of a
-    /// path asks for it.
+    /// The density in solid angle with which `sample` draws each cell's directions, row by
+    /// row: computed once, where every light sample and every escaping ray of a path asks
+    /// for it.
     density: Vec<f32>,
     /// None: the layout above. Some(rotation from the scene's frame to the map's): Mitsuba's
-    /// `envmap` layout, the mirror image of ours: column 0 looks along −z and the columns
-    /// turn towards +x (u = atan2(x, −z) / 2π), row 0 is +y.
+    /// `envmap` layout, the mirror image of ours: the texel centres of a row at
+    /// u = (column + 0.5) / width, u = atan2(x, −z) / 2π (column 0 looks along −z, the columns
+    /// turn towards +x), those of a column at θ = π · row / (height − 1) (row 0 at +y, the
+    /// last at −y), radiance bilinear between them, periodic in u.
     pub mitsuba_frame: Option<glam::Mat3>,
 }
 
@@ -132,6 +141,7 @@ impl SkyMap {
             width: 0,
             height: 0,
             texels: Vec::new(),
+            cells: (0, 0),
             rows: Vec::new(),
             columns: Vec::new(),
             density: Vec::new(),
@@ -163,8 +173,7 @@ impl SkyMap {
         *self = SkyMap {
             scale: self.scale,
             line: self.line,
-            mitsuba_frame: self.mitsuba_frame,
-            ..SkyMap::from_texels(width, height, texels)
+            ..SkyMap::from_texels(width, height, texels, self.mitsuba_frame)
         };
         self.file = path
             .strip_prefix(dir)
@@ -172,24 +181,48 @@ impl SkyMap {
         Ok(())
     }
 
-    /// A map of `width`×`height` linear texels (row 0 the zenith), with its distribution.
-    pub fn from_texels(width: u32, height: u32, texels: Vec<Color>) -> SkyMap {
+    /// A map of `width`×`height` linear texels (row 0 the zenith), in our layout or (with
+    /// `mitsuba_frame`) in Mitsuba's, with its distribution.
+    pub fn from_texels(
+        width: u32,
+        height: u32,
+        texels: Vec<Color>,
+        mitsuba_frame: Option<glam::Mat3>,
+    ) -> SkyMap {
         let (w, h) = (width as usize, height as usize);
-        let mut columns = Vec::with_capacity(h * (w + 1));
-        let mut row_weights = Vec::with_capacity(h);
-        for row in 0..h {
-            let sin = ((row as f32 + 0.5) / h as f32 * std::f32::consts::PI).sin();
+        let cells = match mitsuba_frame {
+            None => (w, h),
+            Some(_) => (w, h.saturating_sub(1).max(1)),
+        };
+        let mut map = SkyMap {
+            file: PathBuf::new(),
+            line: 0,
+            scale: 1.0,
+            width,
+            height,
+            texels,
+            cells,
+            rows: Vec::new(),
+            columns: Vec::new(),
+            density: Vec::new(),
+            mitsuba_frame,
+        };
+        let (cw, ch) = cells;
+        let mut columns = Vec::with_capacity(ch * (cw + 1));
+        let mut row_weights = Vec::with_capacity(ch);
+        for row in 0..ch {
+            let sin = ((row as f32 + 0.5) / ch as f32 * std::f32::consts::PI).sin();
             let mut sum = 0.0f64;
             columns.push(0.0);
-            for c in &texels[row * w..(row + 1) * w] {
-                sum += (luminance(*c) * sin) as f64;
+            for column in 0..cw {
+                sum += (luminance(map.cell_mean(column, row)) * sin) as f64;
                 columns.push(sum as f32);
             }
-            normalize_cdf(&mut columns[row * (w + 1)..(row + 1) * (w + 1)], sum);
+            normalize_cdf(&mut columns[row * (cw + 1)..(row + 1) * (cw + 1)], sum);
             row_weights.push(sum);
         }
         let total: f64 = row_weights.iter().sum();
-        let mut rows = Vec::with_capacity(h + 1);
+        let mut rows = Vec::with_capacity(ch + 1);
         rows.push(0.0);
         let mut sum = 0.0f64;
         for r in &row_weights {
@@ -197,13 +230,11 @@ impl SkyMap {
             rows.push(sum as f32);
         }
         normalize_cdf(&mut rows, total);
-        // Each texel's share over its solid angle, (2π/w)·(cos θ0 − cos θ1).
-        let band = |k: usize| (k as f32 / h as f32 * std::f32::consts::PI).cos();
-        let mut density = Vec::with_capacity(w * h);
-        for r in 0..h {
+        let mut density = Vec::with_capacity(cw * ch);
+        for r in 0..ch {
             let row_share = rows[r + 1] - rows[r];
-            let cdf = &columns[r * (w + 1)..(r + 1) * (w + 1)];
-            let solid_angle = (band(r) - band(r + 1)) * std::f32::consts::TAU / w as f32;
+            let cdf = &columns[r * (cw + 1)..(r + 1) * (cw + 1)];
+            let solid_angle = map.cell_solid_angle(r);
             density.extend(cdf.windows(2).map(|c| {
                 if solid_angle <= 0.0 {
                     0.0
@@ -212,22 +243,43 @@ impl SkyMap {
                 }
             }));
         }
-        SkyMap {
-            file: PathBuf::new(),
-            line: 0,
-            scale: 1.0,
-            width,
-            height,
-            texels,
-            rows,
-            columns,
-            density,
-            mitsuba_frame: None,
+        map.rows = rows;
+        map.columns = columns;
+        map.density = density;
+        map
+    }
+
+    /// The texel at (column, row), the column periodic and the row clamped.
+    fn texel(&self, column: usize, row: usize) -> Color {
+        let (w, h) = (self.width as usize, self.height as usize);
+        self.texels[row.min(h - 1) * w + column % w]
+    }
+
+    /// A cell's mean radiance (unscaled): its texel in our layout; in Mitsuba's the mean of
+    /// its four corners, which is the mean of the bilinear radiance over the cell.
+    fn cell_mean(&self, column: usize, row: usize) -> Color {
+        match self.mitsuba_frame {
+            None => self.texel(column, row),
+            Some(_) => {
+                (self.texel(column, row)
+                    + self.texel(column + 1, row)
+                    + self.texel(column, row + 1)
+                    + self.texel(column + 1, row + 1))
+                    * 0.25
+            }
         }
     }
 
-    /// The texel a unit direction falls in: (column, row).
-    fn texel_of(&self, d: Vec3) -> (usize, usize) {
+    /// The solid angle of a cell of row `row`: (2π/columns)·(cos θ0 − cos θ1).
+    fn cell_solid_angle(&self, row: usize) -> f32 {
+        let (cw, ch) = self.cells;
+        let band = |k: usize| (k as f32 / ch as f32 * std::f32::consts::PI).cos();
+        (band(row) - band(row + 1)) * std::f32::consts::TAU / cw as f32
+    }
+
+    /// Where a unit direction points in the map: (u, v) in [0, 1)×[0, 1], u = φ/2π in the
+    /// map's layout, v = θ/π from the zenith.
+    fn uv_of(&self, d: Vec3) -> (f32, f32) {
         let (d, phi) = match self.mitsuba_frame {
             None => (d, (-d.z).atan2(d.x)),
             Some(r) => {
@@ -236,55 +288,83 @@ impl SkyMap {
             }
         };
         let theta = d.y.clamp(-1.0, 1.0).acos();
-        let phi = phi.rem_euclid(std::f32::consts::TAU);
-        let column = (phi / std::f32::consts::TAU * self.width as f32) as usize;
-        let row = (theta / std::f32::consts::PI * self.height as f32) as usize;
         (
-            column.min(self.width as usize - 1),
-            row.min(self.height as usize - 1),
+            phi.rem_euclid(std::f32::consts::TAU) / std::f32::consts::TAU,
+            theta / std::f32::consts::PI,
         )
+    }
+
+    /// The cell a unit direction falls in: (column, row).
+    fn cell_of(&self, d: Vec3) -> (usize, usize) {
+        let (u, v) = self.uv_of(d);
+        let (cw, ch) = self.cells;
+        // Mitsuba's cells start at the first texel's centre, half a cell on.
+        let shift = if self.mitsuba_frame.is_some() {
+            0.5
+        } else {
+            0.0
+        };
+        let column = (u * cw as f32 - shift).rem_euclid(cw as f32) as usize;
+        let row = (v * ch as f32) as usize;
+        (column.min(cw - 1), row.min(ch - 1))
     }
 
     fn radiance(&self, towards: Vec3) -> Color {
         if self.texels.is_empty() {
             return Vec3::ZERO;
         }
-        let (c, r) = self.texel_of(towards);
-        self.texels[r * self.width as usize + c] * self.scale
+        if self.mitsuba_frame.is_none() {
+            let (c, r) = self.cell_of(towards);
+            return self.texel(c, r) * self.scale;
+        }
+        // Bilinear between the four texel centres around the direction.
+        let (u, v) = self.uv_of(towards);
+        let (w, h) = (self.width as f32, self.height as f32);
+        let x = (u * w - 0.5).rem_euclid(w);
+        let y = (v * (h - 1.0)).clamp(0.0, (h - 1.0).max(0.0));
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (c, r) = (x0 as usize, y0 as usize);
+        let top = self.texel(c, r) * (1.0 - fx) + self.texel(c + 1, r) * fx;
+        let bottom = self.texel(c, r + 1) * (1.0 - fx) + self.texel(c + 1, r + 1) * fx;
+        (top * (1.0 - fy) + bottom * fy) * self.scale
     }
 
+    /// ∫ L dω: the sum over the cells of their mean radiance × solid angle (exact in our
+    /// layout; in Mitsuba's to second order in the cell's size).
     fn integral(&self) -> Color {
-        let (w, h) = (self.width as usize, self.height as usize);
+        let (cw, ch) = self.cells;
         let mut sum = Vec3::ZERO;
-        for row in 0..h {
-            let band = |r: usize| (r as f32 / h as f32 * std::f32::consts::PI).cos();
-            let solid_angle = (band(row) - band(row + 1)) * std::f32::consts::TAU / w as f32;
-            let row_sum = self.texels[row * w..(row + 1) * w]
-                .iter()
-                .fold(Vec3::ZERO, |a, c| a + *c);
-            sum += row_sum * solid_angle;
+        for row in 0..ch {
+            let row_sum = (0..cw).fold(Vec3::ZERO, |a, c| a + self.cell_mean(c, row));
+            sum += row_sum * self.cell_solid_angle(row);
         }
         sum * self.scale
     }
 
-    /// A direction drawn in proportion to the texels' luminance (× sin θ, so the density is
+    /// A direction drawn in proportion to the cells' luminance (× sin θ, so the density is
     /// proportional to luminance per solid angle), from (u, v) in [0,1)², and its density in
     /// solid angle; None for a black map.
     pub fn sample(&self, u: f32, v: f32) -> Option<(Vec3, f32)> {
         if self.rows.last().is_none_or(|&t| t <= 0.0) {
             return None;
         }
-        let (w, h) = (self.width as usize, self.height as usize);
+        let (cw, ch) = self.cells;
         let (row, fv) = pick(&self.rows, v)?;
-        let (column, fu) = pick(&self.columns[row * (w + 1)..(row + 1) * (w + 1)], u)?;
-        let theta = (row as f32 + fv) / h as f32 * std::f32::consts::PI;
-        let phi = (column as f32 + fu) / w as f32 * std::f32::consts::TAU;
+        let (column, fu) = pick(&self.columns[row * (cw + 1)..(row + 1) * (cw + 1)], u)?;
+        let theta = (row as f32 + fv) / ch as f32 * std::f32::consts::PI;
         let sin = theta.sin();
         let d = match self.mitsuba_frame {
-            None => vec3(sin * phi.cos(), theta.cos(), -sin * phi.sin()),
-            Some(r) => r.transpose() * vec3(sin * phi.sin(), theta.cos(), -sin * phi.cos()),
+            None => {
+                let phi = (column as f32 + fu) / cw as f32 * std::f32::consts::TAU;
+                vec3(sin * phi.cos(), theta.cos(), -sin * phi.sin())
+            }
+            Some(r) => {
+                let phi = (column as f32 + 0.5 + fu) / cw as f32 * std::f32::consts::TAU;
+                r.transpose() * vec3(sin * phi.sin(), theta.cos(), -sin * phi.cos())
+            }
         };
-        let pdf = self.density[row * w + column];
+        let pdf = self.density[row * cw + column];
         (pdf > 0.0).then_some((d, pdf))
     }
 
@@ -302,8 +382,8 @@ impl SkyMap {
         if self.density.is_empty() {
             return 0.0;
         }
-        let (c, r) = self.texel_of(d);
-        self.density[r * self.width as usize + c]
+        let (c, r) = self.cell_of(d);
+        self.density[r * self.cells.0 + c]
     }
 }
 
@@ -400,11 +480,17 @@ mod tests {
         assert!((uniform - vec3(4.0, 8.0, 12.0) * std::f32::consts::PI).length() < 1e-5);
     }
 
-    /// A map with a bright patch: `sample`'s directions fall in each texel as often as its
-    /// share says, `pdf` is what `sample` returns, and the map's integral is the sum
-    /// ∫ L dω that uniform directions estimate.
+    /// A map with a bright patch, in our layout and in Mitsuba's (rotated): `sample`'s
+    /// directions fall in each cell as often as its share says, `pdf` is what `sample`
+    /// returns, and the map's integral is the sum ∫ L dω that uniform directions estimate.
     #[test]
     fn map_sampling_follows_the_texels_and_integrates() {
+        for frame in [None, Some(glam::Mat3::from_rotation_y(0.3))] {
+            sampling_follows_the_cells(frame);
+        }
+    }
+
+    fn sampling_follows_the_cells(frame: Option<glam::Mat3>) {
         let (w, h) = (16u32, 8u32);
         let texels: Vec<Color> = (0..w * h)
             .map(|k| {
@@ -416,14 +502,14 @@ mod tests {
                 }
             })
             .collect();
-        let map = SkyMap::from_texels(w, h, texels);
+        let map = SkyMap::from_texels(w, h, texels, frame);
         let mut rng = crate::sampling::Rng::new(1, 2, 3);
         let n = 400_000;
         let (mut bright, mut estimate) = (0usize, Vec3::ZERO);
         for _ in 0..n {
             let (d, pdf) = map.sample(rng.next_f32(), rng.next_f32()).expect("samples");
             assert!((map.pdf(d) / pdf - 1.0).abs() < 1e-3, "{d}: {pdf}");
-            if map.texel_of(d) == (3, 2) {
+            if map.cell_of(d) == (3, 2) {
                 bright += 1;
             }
             estimate += map.radiance(d) / pdf;
@@ -433,15 +519,16 @@ mod tests {
         for c in 0..3 {
             assert!(
                 (estimate[c] / exact[c] - 1.0).abs() < 0.01,
-                "{estimate} against {exact}"
+                "{frame:?}: {estimate} against {exact}"
             );
         }
         let expected = map.rows[3] - map.rows[2];
         let expected = expected * (map.columns[2 * 17 + 4] - map.columns[2 * 17 + 3]);
+        assert!(expected > 0.05, "the bright cell's share {expected}");
         let share = bright as f32 / n as f32;
         assert!(
             (share / expected - 1.0).abs() < 0.02,
-            "{share} against {expected}"
+            "{frame:?}: {share} against {expected}"
         );
         // Uniform directions estimate the same integral.
         let mut uniform = Vec3::ZERO;
@@ -452,7 +539,7 @@ mod tests {
         let uniform = uniform * (4.0 * std::f32::consts::PI / n as f32);
         assert!(
             (uniform.z / exact.z - 1.0).abs() < 0.02,
-            "{uniform} against {exact}"
+            "{frame:?}: {uniform} against {exact}"
         );
     }
 }
