@@ -19,7 +19,11 @@ fn main() -> ExitCode {
         }) => cli::tools::compare(image, reference, heatmap.as_deref()),
         Some(Command::Farm(args)) => cli::farm::run(args),
         Some(Command::View { words }) => trilux::viewer::run(words),
-        Some(Command::Merge { parts, output }) => cli::tools::merge(parts, output),
+        Some(Command::Merge {
+            parts,
+            output,
+            variance,
+        }) => cli::tools::merge(parts, output, variance.as_deref()),
         Some(Command::Man { output }) => cli::tools::man(output.as_deref()),
         Some(Command::GenTerrain { triangles, output }) => generate::check_size(
             "gen-terrain",

@@ -18,6 +18,7 @@ use common::references::{
 };
 use libtest_mimic::{Arguments, Failed, Trial};
 use trilux::engines::radiosity::Solution;
+use trilux::film::Film;
 use trilux::scene::Scene;
 
 fn main() {
@@ -37,6 +38,11 @@ fn main() {
             "mitsuba_render_tests_against_mitsubas_references",
             "mitsuba-tests/tests/scenes",
             mitsuba_render_tests_against_mitsubas_references,
+        ),
+        shared_input_trial(
+            "mitsuba_z_test_fails_on_a_ggx_roughness_off_by_5_percent",
+            GGX_SCENE,
+            mitsuba_z_test_fails_on_a_ggx_roughness_off_by_5_percent,
         ),
         shared_input_trial(
             "office3_against_path_traced_references",
@@ -330,20 +336,64 @@ const MITSUBA_TESTS_PASSING: [&str; 23] = [
     "test_surf_area_light_volpath",
 ];
 
-/// Samples per pixel of the comparison (the acceptance figure's).
+/// Samples per pixel of the relMSE comparison (the acceptance figure's).
 const MITSUBA_TEST_SPP: u32 = 256;
 
+/// Samples per pixel of the z-test's render of each scene: as many as the relMSE comparison
+/// takes (Mitsuba's own test takes 2,000,000 over the image's pixels, 868 at 48×48).
+const Z_TEST_SPP: u32 = 256;
+
+/// Mitsuba 3's render tests that our path tracer passes the z-test of at `Z_TEST_SPP`: each
+/// must keep passing it.
+const MITSUBA_Z_TESTS_PASSING: [&str; 7] = [
+    "test_arealight_path",
+    "test_constant_path",
+    "test_hetero_sigmat_albedo_volpath",
+    "test_hetero_sigmat_volpath",
+    "test_homo_emitter_inside_medium_volpath",
+    "test_homo_null_envmap_volpath",
+    "test_surf_area_light_volpath",
+];
+
+/// Mitsuba renders its references at this many samples per pixel (`test_renders.py` run as a
+/// script, `--spp` 32000), and their variance images are of one sample (the `moment`
+/// integrator's E[x²] − E[x]²): the reference's mean has that variance over 32000.
+const MITSUBA_REFERENCE_SPP: f64 = 32000.0;
+
+/// The floor of a per-sample variance (`test_renders.py`'s `max(var, 1e-4)`): where every
+/// sample agrees (a constant background), the images are not judged on rounding.
+const Z_TEST_VARIANCE_FLOOR: f64 = 1e-4;
+
+/// The chance that the whole image fails although both estimators agree, before Šidák's
+/// correction spreads it over the pixels, and the share of pixel channels that must pass:
+/// Mitsuba's.
+const Z_TEST_SIGNIFICANCE: f64 = 0.01;
+const Z_TEST_PASSING_SHARE: f64 = 0.9975;
+
+/// Mitsuba's GGX test scene, whose roughness the z-test must see off by 5%: an anisotropic
+/// GGX conductor (αu 0.25, αv 0.05) under an area light, a point light and an environment.
+const GGX_SCENE: &str =
+    "mitsuba-tests/tests/scenes/bsdf_spheres/test_normalmap_identity_roughconductor_path.xml";
+
+/// Samples per pixel of the GGX trial's renders: Mitsuba's own budget, 2,000,000 samples
+/// over the 48×48 image.
+const GGX_Z_TEST_SPP: u32 = 868;
+
 /// Every scene of Mitsuba 3's render tests rendered by our path tracer at 256 samples a
-/// pixel, against Mitsuba's reference image: a scene passes when its relMSE is at most 1.5×
-/// the relMSE Mitsuba's own estimator has at 256 samples (its per-sample variance, which the
-/// suite ships, over 256) plus 2e-4, and its mean is within 2% of the reference's. The table
-/// of every scene is printed; the scenes of `MITSUBA_TESTS_PASSING` must pass. A scene that
-/// holds what trilux does not read must be refused with its file and line. Both Accels must
-/// give the same image of every scene.
+/// pixel, against Mitsuba's reference image, by two rules:
+/// - relMSE: a scene passes when its relMSE is at most 1.5× the relMSE Mitsuba's own
+///   estimator has at 256 samples (its per-sample variance, which the suite ships, over 256)
+///   plus 2e-4, and its mean is within 2% of the reference's (`RelMse`);
+/// - Mitsuba's z-test with both images' noise, on a render of `Z_TEST_SPP` samples with
+///   independent numbers (`z_test`).
+///
+/// The table of every scene is printed; the scenes of `MITSUBA_TESTS_PASSING` must pass the
+/// relMSE rule, those of `MITSUBA_Z_TESTS_PASSING` the z-test too. A scene that holds what
+/// trilux does not read must be refused with its file and line. Both Accels must give the
+/// same image of every scene.
 fn mitsuba_render_tests_against_mitsubas_references(dir: &Path) {
     use trilux::accel::{self, AccelOptions};
     use trilux::engines::{path, RenderSettings};
-    use trilux::film::metrics::{compare, read_image, RELMSE_EPSILON};
 
     let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
         .expect("the scene groups")
@@ -362,6 +412,7 @@ fn mitsuba_render_tests_against_mitsubas_references(dir: &Path) {
         dir.display()
     );
     let mut passed = Vec::new();
+    let mut z_passed = Vec::new();
     let mut differ = Vec::new();
     for file in &scenes {
         let name = file
@@ -410,13 +461,210 @@ fn mitsuba_render_tests_against_mitsubas_references(dir: &Path) {
         let accel =
             accel::build(&scene, common::backends()[0], &AccelOptions::default()).expect("builds");
         let (film, _) = path::render(&scene, accel.as_ref(), &settings(MITSUBA_TEST_SPP));
-        let stem = name.rsplit_once('_').map_or(name.as_str(), |(t, _)| t);
-        let refs = file.parent().expect("a folder").join("refs");
-        let reference = read_image(&refs.join(format!("{stem}_ref_rgb.exr"))).expect("reference");
-        let variance = read_image(&refs.join(format!("{stem}_ref_rgb_var.exr"))).expect("variance");
-        let ours = compare(&film, &reference).expect("same size").relmse;
+        let (reference, reference_variance) = mitsuba_reference(file);
+        let relmse = RelMse::of(&film, &reference, &reference_variance);
+        let (image, variance) = path_traced_with_variance(&scene, Z_TEST_SPP, 0);
+        let z = z_test(
+            &Estimate {
+                image: &image,
+                variance: &variance,
+                spp: Z_TEST_SPP as f64,
+            },
+            &Estimate {
+                image: &reference,
+                variance: &reference_variance,
+                spp: MITSUBA_REFERENCE_SPP,
+            },
+        );
+        println!("{name:48} {relmse}; {z}");
+        if relmse.passes() {
+            passed.push(name.clone());
+        }
+        if z.passes() {
+            z_passed.push(name);
+        }
+    }
+    println!(
+        "{} of {} scenes pass the relMSE rule, {} the z-test at {Z_TEST_SPP} spp: {z_passed:?}",
+        passed.len(),
+        scenes.len(),
+        z_passed.len()
+    );
+    assert!(
+        differ.is_empty(),
+        "the Accels give different images of {differ:?}"
+    );
+    for name in MITSUBA_TESTS_PASSING {
+        assert!(passed.iter().any(|p| p == name), "{name} no longer passes");
+    }
+    for name in MITSUBA_Z_TESTS_PASSING {
+        assert!(
+            z_passed.iter().any(|p| p == name),
+            "{name} no longer passes the z-test"
+        );
+    }
+}
+
+/// The GGX conductor of Mitsuba's test scene and a copy whose roughness (αu and αv) is 5%
+/// larger, rendered by our path tracer at `GGX_Z_TEST_SPP`: the z-test must find two renders
+/// of the scene as shipped (two seeds) alike, and the rougher copy unlike the scene as
+/// shipped. Against Mitsuba's reference both fail today, on the environment map our path
+/// tracer looks up texel by texel where Mitsuba interpolates; that verdict, and the relMSE
+/// rule's on both (at its 256 samples), are printed.
+fn mitsuba_z_test_fails_on_a_ggx_roughness_off_by_5_percent(file: &Path) {
+    use trilux::accel::{self, AccelOptions};
+    use trilux::engines::{path, RenderSettings};
+
+    // The normal distribution's tail against its values to 15 digits (Python's math.erfc).
+    for (x, truth) in [
+        (0.0, 1.0),
+        (1.0, 0.157_299_207_050_285_13),
+        (3.0, 2.209_049_699_858_543_8e-5),
+        (4.5, 1.966_160_441_542_887_3e-10),
+    ] {
+        assert!(
+            (erfc(x) / truth - 1.0).abs() < 2e-7,
+            "erfc({x}) = {:e}, not {truth:e}",
+            erfc(x)
+        );
+    }
+    let (reference, reference_variance) = mitsuba_reference(file);
+    let folder = file.parent().expect("a folder");
+    // The copy lives in a temporary folder: its `<path>` names the suite's `common/` and the
+    // scene's own folder (for `fragments/`) by absolute paths, where Mitsuba's resolver (and
+    // ours) looks first.
+    let common_dir = folder.join("../../../common");
+    let text = std::fs::read_to_string(file).expect("the scene");
+    let path_element = "<path value=\"../../../common\"/>";
+    assert!(
+        text.contains(path_element),
+        "{}: no {path_element}",
+        file.display()
+    );
+    let mut copy = text.replace(
+        path_element,
+        &format!(
+            "<path value=\"{}\"/><path value=\"{}\"/>",
+            common_dir.display(),
+            folder.display()
+        ),
+    );
+    for alpha in ["alpha_u", "alpha_v"] {
+        let key = format!("name=\"{alpha}\" value=\"");
+        let start = copy.find(&key).expect("a roughness") + key.len();
+        let end = start + copy[start..].find('"').expect("a closing quote");
+        let value: f64 = copy[start..end].parse().expect("a number");
+        copy.replace_range(start..end, &format!("{}", value * 1.05));
+    }
+    let dir = common::temp_dir("ggx-roughness");
+    let rougher = dir.join(file.file_name().expect("a name"));
+    std::fs::write(&rougher, copy).expect("writes the copy");
+
+    let shipped = Scene::load(file).expect("loads");
+    let rougher_scene = Scene::load(&rougher).expect("loads the copy");
+    std::fs::remove_dir_all(&dir).expect("removes the copy");
+    let renders = [
+        path_traced_with_variance(&shipped, GGX_Z_TEST_SPP, 0),
+        path_traced_with_variance(&shipped, GGX_Z_TEST_SPP, 1),
+        path_traced_with_variance(&rougher_scene, GGX_Z_TEST_SPP, 1),
+    ];
+    let estimate = |k: usize| Estimate {
+        image: &renders[k].0,
+        variance: &renders[k].1,
+        spp: GGX_Z_TEST_SPP as f64,
+    };
+    let mitsuba = Estimate {
+        image: &reference,
+        variance: &reference_variance,
+        spp: MITSUBA_REFERENCE_SPP,
+    };
+    for (what, scene, k) in [
+        ("as shipped", &shipped, 0),
+        ("roughness ×1.05", &rougher_scene, 2),
+    ] {
+        let (width, height) = scene.render_hints.size.expect("a film");
+        let accel =
+            accel::build(scene, common::backends()[0], &AccelOptions::default()).expect("builds");
+        let settings = RenderSettings {
+            width,
+            height,
+            num_antialias_samples: MITSUBA_TEST_SPP,
+            max_depth: scene.render_hints.max_depth,
+            quiet: true,
+            ..RenderSettings::default()
+        };
+        let (film, _) = path::render(scene, accel.as_ref(), &settings);
+        let relmse = RelMse::of(&film, &reference, &reference_variance);
+        println!(
+            "{what:16} against Mitsuba's reference: at {GGX_Z_TEST_SPP} spp {}; at {MITSUBA_TEST_SPP} spp {relmse}",
+            z_test(&estimate(k), &mitsuba)
+        );
+    }
+    let alike = z_test(&estimate(0), &estimate(1));
+    let unlike = z_test(&estimate(0), &estimate(2));
+    println!("as shipped, seeds 0 and 1: {alike}\nas shipped against roughness ×1.05: {unlike}");
+    assert!(alike.passes(), "two seeds of one scene: {alike}");
+    assert!(!unlike.passes(), "a roughness 5% larger: {unlike}");
+}
+
+/// Mitsuba's reference image of a test scene and the variance of one of its samples, from
+/// the suite's `refs/` (`refs/<test>_ref_rgb.exr`, `…_ref_rgb_var.exr`).
+fn mitsuba_reference(file: &Path) -> (Film, Film) {
+    use trilux::film::metrics::read_image;
+    let name = file.file_stem().unwrap_or_default().to_string_lossy();
+    let stem = name.rsplit_once('_').map_or(&*name, |(t, _)| t);
+    let refs = file.parent().expect("a folder").join("refs");
+    let read = |suffix: &str| {
+        read_image(&refs.join(format!("{stem}_ref_rgb{suffix}.exr"))).expect("a reference")
+    };
+    (read(""), read("_var"))
+}
+
+/// Our path tracer's image of a Mitsuba test scene at `spp` samples a pixel from `seed`, and the variance
+/// of its samples (what `--variance` writes). Independent numbers (Mitsuba's sampler), so
+/// that the samples' variance over their count is the variance of the pixel's mean; only the
+/// camera's jittered pixel strata make it a little less, which errs towards passing.
+fn path_traced_with_variance(scene: &Scene, spp: u32, seed: u64) -> (Film, Film) {
+    use trilux::accel::{self, AccelOptions};
+    use trilux::engines::{path, RenderSettings};
+    use trilux::sampling::PathSampler;
+
+    let (width, height) = scene.render_hints.size.expect("a film");
+    let settings = RenderSettings {
+        width,
+        height,
+        num_antialias_samples: spp,
+        max_depth: scene.render_hints.max_depth,
+        path_sampler: PathSampler::Independent,
+        variance: true,
+        seed,
+        quiet: true,
+        ..RenderSettings::default()
+    };
+    let accel =
+        accel::build(scene, common::backends()[0], &AccelOptions::default()).expect("builds");
+    let (film, _) = path::render(scene, accel.as_ref(), &settings);
+    let variance = film
+        .samples
+        .as_ref()
+        .expect("the render kept its sums")
+        .variance(width, height);
+    (film, variance)
+}
+
+/// The relMSE rule: our relMSE against the reference, Mitsuba's own at `MITSUBA_TEST_SPP`
+/// (its per-sample variance over that count), and the ratio of the means.
+struct RelMse {
+    ours: f64,
+    mitsuba: f64,
+    mean_ratio: f64,
+}
+
+impl RelMse {
+    fn of(film: &Film, reference: &Film, variance: &Film) -> RelMse {
+        use trilux::film::metrics::{compare, RELMSE_EPSILON};
         let n = (reference.pixels.len() * 3) as f64;
-        let mitsuba: f64 = reference
+        let mitsuba = reference
             .pixels
             .iter()
             .zip(&variance.pixels)
@@ -427,25 +675,117 @@ fn mitsuba_render_tests_against_mitsubas_references(dir: &Path) {
             })
             .sum::<f64>()
             / n;
-        let mean = |f: &trilux::film::Film| {
-            f.pixels.iter().map(|p| p.element_sum() as f64).sum::<f64>() / n
-        };
-        let ratio = mean(&film) / mean(&reference);
-        let pass = ours <= 1.5 * mitsuba + 2e-4 && (ratio - 1.0).abs() <= 0.02;
-        println!(
-            "{name:48} mean {ratio:.3}× Mitsuba's, relMSE {ours:.2e} (Mitsuba's at {MITSUBA_TEST_SPP} spp: {mitsuba:.2e}){}",
-            if pass { "  pass" } else { "" }
-        );
-        if pass {
-            passed.push(name);
+        let mean = |f: &Film| f.pixels.iter().map(|p| p.element_sum() as f64).sum::<f64>() / n;
+        RelMse {
+            ours: compare(film, reference).expect("same size").relmse,
+            mitsuba,
+            mean_ratio: mean(film) / mean(reference),
         }
     }
-    println!("{} of {} scenes pass", passed.len(), scenes.len());
-    assert!(
-        differ.is_empty(),
-        "the Accels give different images of {differ:?}"
-    );
-    for name in MITSUBA_TESTS_PASSING {
-        assert!(passed.iter().any(|p| p == name), "{name} no longer passes");
+
+    fn passes(&self) -> bool {
+        self.ours <= 1.5 * self.mitsuba + 2e-4 && (self.mean_ratio - 1.0).abs() <= 0.02
     }
+}
+
+impl std::fmt::Display for RelMse {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(
+            f,
+            "mean {:.3}× Mitsuba's, relMSE {:.2e} (Mitsuba's at {MITSUBA_TEST_SPP} spp: {:.2e}) {}",
+            self.mean_ratio,
+            self.ours,
+            self.mitsuba,
+            if self.passes() { "pass" } else { "FAIL" }
+        )
+    }
+}
+
+/// A z-test's result: the share of pixel channels whose p-value is above the Šidák-corrected
+/// level, and the smallest p-value.
+struct ZTest {
+    share: f64,
+    min_p: f64,
+}
+
+impl ZTest {
+    fn passes(&self) -> bool {
+        self.share >= Z_TEST_PASSING_SHARE
+    }
+}
+
+impl std::fmt::Display for ZTest {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(
+            f,
+            "z-test {:.2}% of pixel channels p > α (min p {:.1e}) {}",
+            100.0 * self.share,
+            self.min_p,
+            if self.passes() { "pass" } else { "FAIL" }
+        )
+    }
+}
+
+/// An image, the variance of one of its samples per pixel and channel, and its samples per
+/// pixel: what the z-test compares.
+struct Estimate<'a> {
+    image: &'a Film,
+    variance: &'a Film,
+    spp: f64,
+}
+
+/// Mitsuba's render test (`test_renders.py`) with both images' noise, per pixel and channel:
+/// z = |a − b| / √(var_a / spp_a + var_b / spp_b), each variance that of one sample floored
+/// at 1e-4 as Mitsuba floors its; p = erfc(z / √2) against α = 1 − 0.99^(1 / pixels) (Šidák:
+/// 1% for the whole image); the images agree when 99.75% of the pixel channels have p > α.
+/// Mitsuba's own test takes the reference's variance for its image's, in XYZ; the suite's
+/// RGB variance file is that XYZ variance through the XYZ→RGB matrix (negative in places), so
+/// against a reference it stands only for the reference's own noise (32000 samples), which is
+/// 1/125 of ours at 256 samples.
+fn z_test(a: &Estimate, b: &Estimate) -> ZTest {
+    let alpha = 1.0 - (1.0 - Z_TEST_SIGNIFICANCE).powf(1.0 / a.image.pixels.len() as f64);
+    let channels = |f: &Film| -> Vec<f64> {
+        f.pixels
+            .iter()
+            .flat_map(|c| c.to_array())
+            .map(f64::from)
+            .collect()
+    };
+    let (xa, va) = (channels(a.image), channels(a.variance));
+    let (xb, vb) = (channels(b.image), channels(b.variance));
+    assert_eq!(xa.len(), xb.len(), "the images differ in size");
+    let mut passing = 0usize;
+    let mut min_p = 1.0f64;
+    for k in 0..xa.len() {
+        let sd = (va[k].max(Z_TEST_VARIANCE_FLOOR) / a.spp
+            + vb[k].max(Z_TEST_VARIANCE_FLOOR) / b.spp)
+            .sqrt();
+        let p = erfc((xa[k] - xb[k]).abs() / sd / std::f64::consts::SQRT_2);
+        min_p = min_p.min(p);
+        passing += usize::from(p > alpha);
+    }
+    ZTest {
+        share: passing as f64 / xa.len() as f64,
+        min_p,
+    }
+}
+
+/// erfc(x) for x ≥ 0 by Numerical Recipes' Chebyshev fit (relative error below 1.2e-7):
+/// p-values near Šidák's α (4.4e-6 at 48×48) need no more.
+fn erfc(x: f64) -> f64 {
+    const C: [f64; 10] = [
+        -1.265_512_23,
+        1.000_023_68,
+        0.374_091_96,
+        0.096_784_18,
+        -0.186_288_06,
+        0.278_868_07,
+        -1.135_203_98,
+        1.488_515_87,
+        -0.822_152_23,
+        0.170_872_77,
+    ];
+    let t = 1.0 / (1.0 + 0.5 * x);
+    let poly = C.iter().rev().fold(0.0, |acc, c| acc * t + c);
+    t * (poly - x * x).exp()
 }

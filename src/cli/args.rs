@@ -68,6 +68,14 @@ pub struct CommonArgs {
     /// the scene's name with .png (cornell_box.obj: cornell_box.png).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    /// Also write the variance of each pixel's samples, per colour channel, to this .exr or
+    /// .pfm: the unbiased estimate (n − 1) from the samples the image averages. It is the
+    /// variance of one sample, not of the pixel's mean: divide by the samples per pixel for
+    /// that (with stratified samples, such as the path tracer's sobol sampler, that quotient
+    /// overstates the mean's variance). Only engines whose pixels are means of samples; a
+    /// split render's parts keep what `render merge --variance` needs [default: none].
+    #[arg(long, value_name = "FILE")]
+    pub variance: Option<PathBuf>,
     /// Image size in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [rs().width, rs().height])]
     pub size: Vec<u32>,
@@ -646,6 +654,7 @@ impl RenderArgs {
             pixel_samples: self.part.pixel_samples.as_ref().map(|s| (s[0], s[1])),
             // Set by the render command when it starts the clock (`--time-limit`).
             deadline: None,
+            variance: self.common.variance.is_some(),
         }
     }
 
@@ -857,6 +866,18 @@ fn check_text_output(id: &str, path: &std::path::Path, extension: &str) -> Resul
     crate::output::check_folder(path).map_err(|e| format!("{flag}: {e}"))
 }
 
+/// A variance image's file: a linear float format (.exr or .pfm), in a folder that exists.
+pub fn check_variance_output(path: &std::path::Path) -> Result<(), String> {
+    use crate::film::ImageFormat;
+    match ImageFormat::check_output(path).map_err(|e| e.to_string())? {
+        ImageFormat::Exr | ImageFormat::Pfm => Ok(()),
+        _ => Err(format!(
+            "{}: expected .exr or .pfm (a variance is a linear float, not an 8-bit sRGB image)",
+            path.display()
+        )),
+    }
+}
+
 /// `value` must lie in `range`.
 fn check_count<T>(id: &str, value: T, range: std::ops::RangeInclusive<T>) -> Result<(), String>
 where
@@ -984,6 +1005,12 @@ impl RenderArgs {
         }
         if let Some(output) = &c.output {
             crate::film::ImageFormat::check_output(output).map_err(|e| e.to_string())?;
+        }
+        if let Some(path) = &c.variance {
+            if self.part.crop_window.is_some() || self.part.pixel_samples.is_some() {
+                return Err("--variance: not with --crop-window or --pixel-samples (a part keeps its sums and squares: give --variance to render merge)".into());
+            }
+            check_variance_output(path).map_err(|e| format!("--variance: {e}"))?;
         }
         for (id, path) in [
             ("save_photons", &p.save_photons),

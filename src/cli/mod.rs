@@ -126,6 +126,11 @@ pub enum Command {
         /// The merged image (.png, .jpg, .exr or .pfm).
         #[arg(short, long)]
         output: PathBuf,
+        /// Also write the variance of each pixel's samples (of one sample, not of the mean),
+        /// per colour channel, to this .exr or .pfm, from the parts' sums and squares, as
+        /// `render --variance` writes it [default: none].
+        #[arg(long, value_name = "FILE")]
+        variance: Option<PathBuf>,
     },
     /// Each engine's error against run time on a scene, and Embree against the BVH: a CSV, a
     /// log-log plot (PNG) and a markdown summary.

@@ -54,6 +54,15 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             }
         ));
     }
+    if args.common.variance.is_some() && !engine_impl.samples_pixels(&settings) {
+        return Err(format!(
+            "--variance: the {engine} engine's image{} is not a mean of pixel samples, so it has no variance of samples",
+            match engine {
+                EngineKind::Raycast | EngineKind::Sppm => "",
+                _ => " with these display flags",
+            }
+        ));
+    }
     if args.part.pre_pass_only {
         match engine_impl.pre_pass(&settings) {
             None => {
@@ -118,6 +127,9 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         .unwrap_or_else(|| default_output(input));
     let interrupted = crate::interrupt::requested();
     write_image(&film, &scene, &settings, &output, !interrupted)?;
+    if let Some(path) = &args.common.variance {
+        write_variance(&film, path)?;
+    }
     if interrupted {
         return Err(format!(
             "interrupted: wrote the image rendered so far to {}{}",
@@ -376,6 +388,20 @@ fn write_image(
         complete,
     };
     crate::film::part::write(output, film, &sums, &info).map_err(|e| e.to_string())
+}
+
+/// Writes the variance of each pixel's samples (`--variance`, `render merge --variance`)
+/// from the sums the film kept.
+pub fn write_variance(film: &Film, path: &Path) -> Result<(), String> {
+    let sums = film.samples.as_ref().ok_or_else(|| {
+        format!(
+            "--variance {}: the render kept no sums of samples",
+            path.display()
+        )
+    })?;
+    sums.variance(film.width, film.height)
+        .write(path)
+        .map_err(|e| e.to_string())
 }
 
 /// What the engine had to say, and the samples that came out NaN or infinite.

@@ -222,15 +222,21 @@ pub fn compare(image: &Path, reference: &Path, heatmap: Option<&Path>) -> Result
     ))
 }
 
-/// `render merge PART... -o OUT`.
-pub fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {
+/// `render merge PART... -o OUT [--variance FILE]`.
+pub fn merge(parts: &[PathBuf], output: &Path, variance: Option<&Path>) -> Result<(), String> {
     crate::film::ImageFormat::check_output(output).map_err(|e| e.to_string())?;
+    if let Some(path) = variance {
+        super::args::check_variance_output(path).map_err(|e| format!("--variance: {e}"))?;
+    }
     let read: Vec<(PathBuf, crate::film::part::Part)> = parts
         .iter()
         .map(|p| crate::film::part::read(p).map(|part| (p.clone(), part)))
         .collect::<Result<_, _>>()?;
     let film = crate::film::part::merge(read)?;
     film.write(output).map_err(|e| e.to_string())?;
+    if let Some(path) = variance {
+        super::render::write_variance(&film, path)?;
+    }
     eprintln!("merged {} parts into {}", parts.len(), output.display());
     Ok(())
 }

@@ -253,6 +253,9 @@ pub struct RenderSettings {
     /// Render until then (`--time-limit`, default None): engines that can refine go on
     /// refining (samples, passes, shots) until the time is spent.
     pub deadline: Option<std::time::Instant>,
+    /// Keep each pixel's sums in the film for the variance of its samples (`--variance FILE`,
+    /// default false).
+    pub variance: bool,
 }
 
 impl Default for RenderSettings {
@@ -278,6 +281,7 @@ impl Default for RenderSettings {
             window: None,
             pixel_samples: None,
             deadline: None,
+            variance: false,
         }
     }
 }
@@ -308,14 +312,16 @@ impl RenderSettings {
             window: self.window,
             samples: self.pixel_samples,
             deadline: self.deadline,
+            variance: self.variance,
         }
     }
 
     /// A hash of the scene and of every setting that changes a pixel's value, for the parts
     /// of a split render (`render merge` refuses parts whose fingerprints differ). Left out:
     /// the window and the sample range (what tells parts apart), the output and progress,
-    /// the files pre-passes are saved to or loaded from (a loaded pre-pass equals the computed
-    /// one: its own fingerprint is checked), and the memory budget. Settings are hashed as
+    /// whether the variance is kept, the files pre-passes are saved to or loaded from (a
+    /// loaded pre-pass equals the computed one: its own fingerprint is checked), and the
+    /// memory budget. Settings are hashed as
     /// their Debug text, which prints every field and floats in their shortest exact form.
     pub fn fingerprint(&self, scene: &Scene) -> u64 {
         let mut s = self.clone();
@@ -323,6 +329,7 @@ impl RenderSettings {
         s.window = None;
         s.pixel_samples = None;
         s.deadline = None;
+        s.variance = false;
         s.photon.save = None;
         s.photon.load = None;
         s.radiosity.save = None;

@@ -2,8 +2,9 @@
 //! merge`). A part is a window of the image and a range of each pixel's samples; it is written
 //! as an EXR whose display window is the whole image and whose data window is the part's, with
 //! the mean in R, G, B (so that any viewer shows it) and, per pixel, the sum of its finite
-//! samples (in two f32 channels each, `sum.*` and `sum_lo.*`, which hold the f64 sum to about
-//! 48 bits) and their number (`count`, u32). Attributes record the sample range, the
+//! samples and the sum of their squares (in two f32 channels each, `sum.*` and `sum_lo.*`,
+//! `sq.*` and `sq_lo.*`, which hold the f64 sums to about 48 bits) and their number (`count`,
+//! u32). Attributes record the sample range, the
 //! fingerprint of scene and settings, and whether the render ran to its end.
 //!
 //! Because every random number is a function of (seed, pixel, sample), a pixel's samples are
@@ -90,12 +91,13 @@ impl std::fmt::Display for Window {
     }
 }
 
-/// What a partial render took at each pixel of its window, row by row: the sum of the
-/// finite samples (in f64, as the pixel loop sums them) and how many there were.
+/// What a render took at each pixel of its window, row by row: the sum of the finite samples
+/// and the sum of their squares (in f64, as the pixel loop sums them), and how many there were.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SampleSums {
     pub window: Window,
     pub sums: Vec<[f64; 3]>,
+    pub squares: Vec<[f64; 3]>,
     pub counts: Vec<u32>,
 }
 
@@ -112,8 +114,40 @@ impl SampleSums {
         SampleSums {
             window,
             counts: vec![1; sums.len()],
+            squares: sums.iter().map(|s| s.map(|v| v * v)).collect(),
             sums,
         }
+    }
+
+    /// The variance of each pixel's samples (the unbiased estimate, n − 1 in the denominator;
+    /// 0 where a pixel has fewer than two samples), as a `width` × `height` image that is
+    /// black outside the window. The variance of a pixel's mean is this over its count.
+    pub fn variance(&self, width: u32, height: u32) -> Film {
+        let mut film = Film::new(width, height);
+        let w = self.window.width().max(1) as usize;
+        for (k, ((sum, squares), &n)) in self
+            .sums
+            .iter()
+            .zip(&self.squares)
+            .zip(&self.counts)
+            .enumerate()
+        {
+            let (x, row) = (
+                self.window.x0 as usize + k % w,
+                self.window.y0 as usize + k / w,
+            );
+            let n = n as f64;
+            // Σx² − (Σx)²/n cancels to rounding where the samples agree; it is never below 0.
+            let v = |c: usize| {
+                if n < 2.0 {
+                    0.0
+                } else {
+                    ((squares[c] - sum[c] * sum[c] / n).max(0.0) / (n - 1.0)) as f32
+                }
+            };
+            film.pixels[row * width as usize + x] = Color::new(v(0), v(1), v(2));
+        }
+        film
     }
 }
 
@@ -165,24 +199,25 @@ pub fn write(
     for (name, mean) in ["R", "G", "B"].iter().zip(means) {
         channels.push(AnyChannel::new(*name, FlatSamples::F32(mean)));
     }
-    for (c, name) in ["R", "G", "B"].iter().enumerate() {
-        // The f64 sum as a sum of two f32: the nearest f32, then the nearest f32 to what is
-        // left.
-        let hi: Vec<f32> = sums.sums.iter().map(|s| s[c] as f32).collect();
-        let lo: Vec<f32> = sums
-            .sums
-            .iter()
-            .zip(&hi)
-            .map(|(s, &h)| (s[c] - h as f64) as f32)
-            .collect();
-        channels.push(AnyChannel::new(
-            format!("sum.{name}").as_str(),
-            FlatSamples::F32(hi),
-        ));
-        channels.push(AnyChannel::new(
-            format!("sum_lo.{name}").as_str(),
-            FlatSamples::F32(lo),
-        ));
+    for (prefix, values) in [("sum", &sums.sums), ("sq", &sums.squares)] {
+        for (c, name) in ["R", "G", "B"].iter().enumerate() {
+            // The f64 sum as a sum of two f32: the nearest f32, then the nearest f32 to what
+            // is left.
+            let hi: Vec<f32> = values.iter().map(|s| s[c] as f32).collect();
+            let lo: Vec<f32> = values
+                .iter()
+                .zip(&hi)
+                .map(|(s, &h)| (s[c] - h as f64) as f32)
+                .collect();
+            channels.push(AnyChannel::new(
+                format!("{prefix}.{name}").as_str(),
+                FlatSamples::F32(hi),
+            ));
+            channels.push(AnyChannel::new(
+                format!("{prefix}_lo.{name}").as_str(),
+                FlatSamples::F32(lo),
+            ));
+        }
     }
     channels.push(AnyChannel::new(
         "count",
@@ -293,15 +328,25 @@ pub fn read(path: &Path) -> Result<Part, String> {
         _ => return Err(here("channel count is not u32")),
     };
     let mean = [f32s("R")?, f32s("G")?, f32s("B")?];
-    let hi = [f32s("sum.R")?, f32s("sum.G")?, f32s("sum.B")?];
-    let lo = [f32s("sum_lo.R")?, f32s("sum_lo.G")?, f32s("sum_lo.B")?];
     let n = window.pixels();
     let means = (0..n)
         .map(|k| Color::new(mean[0][k], mean[1][k], mean[2][k]))
         .collect();
-    let sums = (0..n)
-        .map(|k| [0, 1, 2].map(|c| hi[c][k] as f64 + lo[c][k] as f64))
-        .collect();
+    // A sum kept as two f32 channels per colour, `PREFIX.R` and `PREFIX_lo.R`, …
+    let split_sums = |prefix: &str| -> Result<Vec<[f64; 3]>, String> {
+        let mut channels = Vec::with_capacity(3);
+        for c in ["R", "G", "B"] {
+            channels.push((
+                f32s(&format!("{prefix}.{c}"))?,
+                f32s(&format!("{prefix}_lo.{c}"))?,
+            ));
+        }
+        Ok((0..n)
+            .map(|k| [0, 1, 2].map(|c| channels[c].0[k] as f64 + channels[c].1[k] as f64))
+            .collect())
+    };
+    let sums = split_sums("sum")?;
+    let squares = split_sums("sq")?;
     Ok(Part {
         info: PartInfo {
             width,
@@ -315,6 +360,7 @@ pub fn read(path: &Path) -> Result<Part, String> {
         sums: SampleSums {
             window,
             sums,
+            squares,
             counts,
         },
     })
@@ -325,6 +371,8 @@ pub fn read(path: &Path) -> Result<Part, String> {
 /// pixel exactly once. Parts are taken in a fixed order (by first sample, then window) and
 /// sums added in f64, so the result does not depend on the order the parts are given in. A
 /// pixel one part covers whole keeps that part's mean: tiles give the single render's bytes.
+/// The film keeps the merged sums of the whole image (for the variance of each pixel's
+/// samples).
 pub fn merge(mut parts: Vec<(PathBuf, Part)>) -> Result<Film, String> {
     let Some((first_path, first)) = parts.first() else {
         return Err("no parts to merge".into());
@@ -370,7 +418,8 @@ pub fn merge(mut parts: Vec<(PathBuf, Part)>) -> Result<Film, String> {
     // that covered it whole (if so).
     let mut next = vec![0u32; n];
     let mut sums = vec![[0.0f64; 3]; n];
-    let mut counts = vec![0u64; n];
+    let mut squares = vec![[0.0f64; 3]; n];
+    let mut counts = vec![0u32; n];
     let mut whole: Vec<Option<Color>> = vec![None; n];
     let mut gaps: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
     for (path, part) in &parts {
@@ -391,10 +440,12 @@ pub fn merge(mut parts: Vec<(PathBuf, Part)>) -> Result<Film, String> {
                     gaps.entry((next[p], s0)).or_default().push(p);
                 }
                 whole[p] = (s0 == 0 && s1 == spp).then_some(part.means[k]);
-                for (s, v) in sums[p].iter_mut().zip(part.sums.sums[k]) {
-                    *s += v;
+                for c in 0..3 {
+                    sums[p][c] += part.sums.sums[k][c];
+                    squares[p][c] += part.sums.squares[k][c];
                 }
-                counts[p] += part.sums.counts[k] as u64;
+                // At most `spp` samples of a pixel, each in one part: a u32 holds them.
+                counts[p] += part.sums.counts[k];
                 next[p] = s1;
                 k += 1;
             }
@@ -441,5 +492,11 @@ pub fn merge(mut parts: Vec<(PathBuf, Part)>) -> Result<Film, String> {
             )
         });
     }
+    film.samples = Some(SampleSums {
+        window: Window::full(w, h),
+        sums,
+        squares,
+        counts,
+    });
     Ok(film)
 }

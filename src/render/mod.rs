@@ -50,6 +50,9 @@ pub struct ImageSettings {
     /// Render until then (`--time-limit`): passes of `num_antialias_samples` samples per
     /// pixel, as many as fit (None: exactly `num_antialias_samples`).
     pub deadline: Option<Instant>,
+    /// Keep each pixel's sums in the film for the variance of its samples (`--variance`;
+    /// false: only a part of a split render keeps them).
+    pub variance: bool,
 }
 
 impl ImageSettings {
@@ -71,6 +74,11 @@ impl ImageSettings {
     /// its samples, for `render merge`.
     pub fn is_part(&self) -> bool {
         self.window.is_some() || self.samples.is_some()
+    }
+
+    /// Whether the film keeps the sums of its samples: for a part, or for `--variance`.
+    pub fn keeps_sums(&self) -> bool {
+        self.is_part() || self.variance
     }
 }
 
@@ -219,8 +227,44 @@ impl CameraSampler {
 /// many).
 pub const CHUNK_SAMPLES: usize = 4096;
 
-/// A pixel's samples summed (in f64) and counted.
-type PixelSum = ([f64; 3], u32);
+/// A pixel's finite samples: their sum and the sum of their squares (in f64, per channel), and
+/// how many there were. The squares cost three multiply-adds a sample, nothing beside a path,
+/// and give the samples' variance (`--variance`) exactly however the samples are split.
+#[derive(Clone, Copy, Debug, Default)]
+struct PixelSum {
+    sum: [f64; 3],
+    squares: [f64; 3],
+    count: u32,
+}
+
+impl PixelSum {
+    fn add_sample(&mut self, l: Color) {
+        for ((s, q), c) in self.sum.iter_mut().zip(&mut self.squares).zip(l.to_array()) {
+            let c = c as f64;
+            *s += c;
+            *q += c * c;
+        }
+        self.count += 1;
+    }
+
+    fn add(&mut self, other: &PixelSum) {
+        for c in 0..3 {
+            self.sum[c] += other.sum[c];
+            self.squares[c] += other.squares[c];
+        }
+        self.count += other.count;
+    }
+
+    /// The samples' mean (black without samples).
+    fn mean(&self) -> Color {
+        let n = self.count.max(1) as f64;
+        crate::geometry::vec3(
+            (self.sum[0] / n) as f32,
+            (self.sum[1] / n) as f32,
+            (self.sum[2] / n) as f32,
+        )
+    }
+}
 
 /// The pixel loop every sampling engine shares: rows in parallel, the camera rays of a row
 /// traced as one batch, `-num_antialias_samples` per pixel averaged with a box filter, and
@@ -283,11 +327,11 @@ pub fn render_pixel_batches(
             &mut film,
             &stats,
             &bar,
-            settings.is_part(),
+            settings.keeps_sums(),
             &radiance,
         );
         bar.finish_and_clear();
-        if settings.is_part() {
+        if settings.keeps_sums() {
             film.samples = Some(sample_sums(window, rows));
         }
         return (film, stats);
@@ -296,7 +340,7 @@ pub fn render_pixel_batches(
     let start = Instant::now();
     let budget = deadline.saturating_duration_since(start).as_secs_f64();
     let bar = crate::progress::bar(1000, label, settings.quiet);
-    let mut total = vec![([0.0f64; 3], 0u32); window.pixels()];
+    let mut total = vec![PixelSum::default(); window.pixels()];
     let mut taken = 0u32;
     // The first pass takes one sample a pixel, so that an engine whose samples are dear (final
     // gathering: 4 samples a pixel took half a second at 256×256) overruns a short limit by
@@ -316,11 +360,8 @@ pub fn render_pixel_batches(
             true,
             &radiance,
         );
-        for (t, (sum, count)) in total.iter_mut().zip(rows.into_iter().flatten()) {
-            for (a, b) in t.0.iter_mut().zip(sum) {
-                *a += b;
-            }
-            t.1 += count;
+        for (t, pass_sum) in total.iter_mut().zip(rows.into_iter().flatten()) {
+            t.add(&pass_sum);
         }
         taken += pass;
         let now = Instant::now();
@@ -337,17 +378,21 @@ pub fn render_pixel_batches(
     }
     bar.finish_and_clear();
     stats.samples_reached.store(taken as u64, Relaxed);
-    for (k, (sum, count)) in total.iter().enumerate() {
+    for (k, pixel) in total.iter().enumerate() {
         let (x, row) = (
             window.x0 as usize + k % window.width() as usize,
             window.y0 as usize + k / window.width() as usize,
         );
-        let n = (*count).max(1) as f64;
-        film.pixels[row * settings.width as usize + x] = crate::geometry::vec3(
-            (sum[0] / n) as f32,
-            (sum[1] / n) as f32,
-            (sum[2] / n) as f32,
-        );
+        film.pixels[row * settings.width as usize + x] = pixel.mean();
+    }
+    if settings.keeps_sums() {
+        film.samples = Some(sample_sums(
+            window,
+            total
+                .chunks(window.width() as usize)
+                .map(<[PixelSum]>::to_vec)
+                .collect(),
+        ));
     }
     (film, stats)
 }
@@ -376,13 +421,15 @@ fn sample_sums(window: Window, rows: Vec<Vec<PixelSum>>) -> SampleSums {
     let mut sums = SampleSums {
         window,
         sums: Vec::with_capacity(window.pixels()),
+        squares: Vec::with_capacity(window.pixels()),
         counts: Vec::with_capacity(window.pixels()),
     };
     for mut row in rows {
-        row.resize(window.width() as usize, ([0.0; 3], 0));
-        for (sum, count) in row {
-            sums.sums.push(sum);
-            sums.counts.push(count);
+        row.resize(window.width() as usize, PixelSum::default());
+        for pixel in row {
+            sums.sums.push(pixel.sum);
+            sums.squares.push(pixel.squares);
+            sums.counts.push(pixel.count);
         }
     }
     sums
@@ -423,7 +470,7 @@ fn take_samples(
             // reference of ten million a pixel is cut inside a pixel). A pixel Ctrl-C cut
             // short keeps the mean of the samples it took; those not reached stay black,
             // with no samples.
-            let mut sums: Vec<PixelSum> = vec![([0.0; 3], 0); out.len()];
+            let mut sums: Vec<PixelSum> = vec![PixelSum::default(); out.len()];
             let total = out.len() * spp;
             let mut done = 0;
             while done < total {
@@ -462,12 +509,8 @@ fn take_samples(
                 // Summed in f64: finite samples near f32's largest value must not add up to
                 // infinity; their mean is again a finite f32.
                 for ((p, _), l) in pixels_and_samples(chunk.clone(), spp).zip(&radiances) {
-                    let (sum, good) = &mut sums[p];
                     if l.is_finite() {
-                        for (s, c) in sum.iter_mut().zip(l.to_array()) {
-                            *s += c as f64;
-                        }
-                        *good += 1;
+                        sums[p].add_sample(*l);
                     } else {
                         counts.non_finite += 1;
                     }
@@ -475,13 +518,8 @@ fn take_samples(
                 done = chunk.end;
             }
             let reached = done.div_ceil(spp.max(1));
-            for (pixel, (sum, good)) in out.iter_mut().zip(&sums).take(reached) {
-                let n = (*good).max(1) as f64;
-                *pixel = crate::geometry::vec3(
-                    (sum[0] / n) as f32,
-                    (sum[1] / n) as f32,
-                    (sum[2] / n) as f32,
-                );
+            for (pixel, sum) in out.iter_mut().zip(&sums).take(reached) {
+                *pixel = sum.mean();
             }
             let row_sums = if keep {
                 sums.truncate(reached);

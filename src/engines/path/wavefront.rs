@@ -480,6 +480,7 @@ mod tests {
             window: None,
             samples: None,
             deadline: None,
+            variance: false,
         };
         let camera = CameraSampler::new(scene, &settings);
         let (mut rays, mut samples, mut alone) = (Vec::new(), Vec::new(), Vec::new());
