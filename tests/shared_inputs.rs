@@ -345,9 +345,21 @@ const Z_TEST_SPP: u32 = 256;
 
 /// Mitsuba 3's render tests that our path tracer passes the z-test of at `Z_TEST_SPP`: each
 /// must keep passing it.
-const MITSUBA_Z_TESTS_PASSING: [&str; 7] = [
+const MITSUBA_Z_TESTS_PASSING: [&str; 19] = [
     "test_arealight_path",
+    "test_bumpmap_path",
     "test_constant_path",
+    "test_envmap_path",
+    "test_normalmap_identity_roughconductor_path",
+    "test_normalmap_path",
+    "test_normalmap_roughconductor_path",
+    "test_roughplastic_linear_path",
+    "test_roughplastic_nonlinear_path",
+    "test_textured_diffuse_path",
+    "test_textured_roughconductor_path",
+    "test_texturedprincipled1_path",
+    "test_texturedprincipled2_path",
+    "test_texturedprincipledthin_path",
     "test_hetero_sigmat_albedo_volpath",
     "test_hetero_sigmat_volpath",
     "test_homo_emitter_inside_medium_volpath",
@@ -506,11 +518,10 @@ fn mitsuba_render_tests_against_mitsubas_references(dir: &Path) {
 }
 
 /// The GGX conductor of Mitsuba's test scene and a copy whose roughness (αu and αv) is 5%
-/// larger, rendered by our path tracer at `GGX_Z_TEST_SPP`: the z-test must find two renders
-/// of the scene as shipped (two seeds) alike, and the rougher copy unlike the scene as
-/// shipped. Against Mitsuba's reference both fail today, on the environment map our path
-/// tracer looks up texel by texel where Mitsuba interpolates; that verdict, and the relMSE
-/// rule's on both (at its 256 samples), are printed.
+/// larger, rendered by our path tracer at `GGX_Z_TEST_SPP`: against Mitsuba's reference the
+/// z-test must pass the scene as shipped and fail the rougher copy; two renders of the scene
+/// as shipped (two seeds) must be alike, and the copy unlike the scene. The relMSE rule's
+/// verdicts (at its 256 samples) are printed: it passes both.
 fn mitsuba_z_test_fails_on_a_ggx_roughness_off_by_5_percent(file: &Path) {
     use trilux::accel::{self, AccelOptions};
     use trilux::engines::{path, RenderSettings};
@@ -578,6 +589,7 @@ fn mitsuba_z_test_fails_on_a_ggx_roughness_off_by_5_percent(file: &Path) {
         variance: &reference_variance,
         spp: MITSUBA_REFERENCE_SPP,
     };
+    let mut against_mitsuba = Vec::new();
     for (what, scene, k) in [
         ("as shipped", &shipped, 0),
         ("roughness ×1.05", &rougher_scene, 2),
@@ -595,11 +607,22 @@ fn mitsuba_z_test_fails_on_a_ggx_roughness_off_by_5_percent(file: &Path) {
         };
         let (film, _) = path::render(scene, accel.as_ref(), &settings);
         let relmse = RelMse::of(&film, &reference, &reference_variance);
+        let z = z_test(&estimate(k), &mitsuba);
         println!(
-            "{what:16} against Mitsuba's reference: at {GGX_Z_TEST_SPP} spp {}; at {MITSUBA_TEST_SPP} spp {relmse}",
-            z_test(&estimate(k), &mitsuba)
+            "{what:16} against Mitsuba's reference: at {GGX_Z_TEST_SPP} spp {z}; at {MITSUBA_TEST_SPP} spp {relmse}"
         );
+        against_mitsuba.push(z);
     }
+    assert!(
+        against_mitsuba[0].passes(),
+        "the scene as shipped against Mitsuba's reference: {}",
+        against_mitsuba[0]
+    );
+    assert!(
+        !against_mitsuba[1].passes(),
+        "a roughness 5% larger against Mitsuba's reference: {}",
+        against_mitsuba[1]
+    );
     let alike = z_test(&estimate(0), &estimate(1));
     let unlike = z_test(&estimate(0), &estimate(2));
     println!("as shipped, seeds 0 and 1: {alike}\nas shipped against roughness ×1.05: {unlike}");
