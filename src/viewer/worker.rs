@@ -4,6 +4,11 @@
 //! every long loop stops within a chunk of samples, and the superseded job's images are
 //! never shown.
 //!
+//! What a pre-pass makes is kept between jobs while what it reads stays the same: the radiosity
+//! solve (more shots shoot on from it, a solve cut short by a newer job keeping the shots it
+//! took) and the photon maps. The image drawn from them is the one the offline command
+//! renders: a solve shot on is, after n shots, the solve of n shots in one go.
+//!
 //! A progressive trace ('r') renders first with one sample per 16×16 block of pixels (the
 //! image at a sixteenth of the resolution, each pixel drawn as its block), then 8×8, 4×4 and
 //! 2×2, then every pixel with one sample (when more are asked for), then the full image with
