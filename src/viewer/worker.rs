@@ -110,10 +110,10 @@ pub struct Renderer {
 /// A radiosity solve the render thread keeps.
 pub enum KeptSolve {
     /// Shot on a few shots at a time (space, 'a').
-    Shooting(ProgressiveSolve),
+    Shooting(Box<ProgressiveSolve>),
     /// Solved in one go for the shots it was asked (`--radiosity-iterations`, None: until
     /// converged): the solves `ProgressiveSolve` cannot take a few shots at a time.
-    Solved(Option<u64>, Solution),
+    Solved(Option<u64>, Box<Solution>),
 }
 
 impl KeptSolve {
@@ -129,7 +129,7 @@ impl KeptSolve {
     fn solution(&self) -> &Solution {
         match self {
             KeptSolve::Shooting(solve) => solve.solution(),
-            KeptSolve::Solved(_, solution) => solution,
+            KeptSolve::Solved(_, solution) => solution.as_ref(),
         }
     }
 }
@@ -276,16 +276,19 @@ impl Renderer {
                 .radiosity
                 .take()
                 .filter(|(k, kept)| *k == key && kept.reaches(iterations));
-            let mut kept = match kept {
-                Some((_, kept)) => kept,
-                None => match pool.install(|| ProgressiveSolve::new(scene, accel, settings)) {
-                    Some(solve) => KeptSolve::Shooting(solve),
-                    None => KeptSolve::Solved(
-                        iterations,
-                        pool.install(|| radiosity::solve_with_progress(scene, accel, settings))?,
-                    ),
-                },
-            };
+            let mut kept =
+                match kept {
+                    Some((_, kept)) => kept,
+                    None => match pool.install(|| ProgressiveSolve::new(scene, accel, settings)) {
+                        Some(solve) => KeptSolve::Shooting(Box::new(solve)),
+                        None => KeptSolve::Solved(
+                            iterations,
+                            Box::new(pool.install(|| {
+                                radiosity::solve_with_progress(scene, accel, settings)
+                            })?),
+                        ),
+                    },
+                };
             if let KeptSolve::Shooting(solve) = &mut kept {
                 pool.install(|| solve.shoot_to(scene, accel, settings));
             }
