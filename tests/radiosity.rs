@@ -553,3 +553,81 @@ fn radiosity_images_show_each_patchs_value() {
         );
     }
 }
+
+/// Each colour's bits, to compare solutions bit for bit.
+fn bits(colours: &[trilux::scene::Color]) -> Vec<[u32; 3]> {
+    colours
+        .iter()
+        .map(|c| [c.x.to_bits(), c.y.to_bits(), c.z.to_bits()])
+        .collect()
+}
+
+/// The viewer's space key and 'a': a progressive solve shot on a shot at a time, or in
+/// uneven steps, ends where the offline render's solve of all its shots in one go ends, bit
+/// for bit: every patch's light, the ambient term, the summary and the image. On a room of
+/// boxes (visibility rays, the row cache full at once) and the subdivided Cornell box.
+#[test]
+fn a_solve_shot_on_a_few_shots_at_a_time_equals_one_solve_of_all_its_shots() {
+    use trilux::engines::radiosity::{self, ProgressiveSolve};
+    let cases = [
+        ("gen-room 300", trilux::generate::room(300), 0),
+        ("cornell_box.obj", common::own_scene("cornell_box.obj"), 1),
+    ];
+    for (name, scene, subdivide) in cases {
+        let accel = accel_for(&scene);
+        let settings = |shots: u64| RenderSettings {
+            width: 48,
+            height: 48,
+            num_shadow_samples: 1,
+            quiet: true,
+            radiosity: RadiositySettings {
+                iterations: Some(shots),
+                subdivide,
+                // With no room for rows, every shot computes its row again.
+                ff_cache_mb: if subdivide > 0 { 0 } else { 64 },
+                ..RadiositySettings::default()
+            },
+            ..RenderSettings::default()
+        };
+        let offline = settings(64);
+        let (film, _, solved) = radiosity::render(&scene, accel.as_ref(), &offline).unwrap();
+        assert_eq!(solved.state.iterations, 64, "{name}");
+        for steps in [vec![1u64; 64], vec![3, 7, 20, 34]] {
+            let mut solve =
+                ProgressiveSolve::new(&scene, accel.as_ref(), &settings(0)).expect("progressive");
+            let mut shots = 0;
+            for step in &steps {
+                shots += step;
+                solve.shoot_to(&scene, accel.as_ref(), &settings(shots));
+                assert_eq!(solve.shots(), shots, "{name}");
+            }
+            let kept = solve.solution();
+            let what = format!("{name}, shot on in steps of {steps:?}");
+            let (a, b) = (&kept.state, &solved.state);
+            assert!(
+                bits(&a.radiance) == bits(&b.radiance),
+                "{what}: radiance differs"
+            );
+            assert!(
+                bits(&a.undistributed) == bits(&b.undistributed),
+                "{what}: undistributed differs"
+            );
+            assert!(
+                bits(&a.incident) == bits(&b.incident),
+                "{what}: incident differs"
+            );
+            assert!(
+                bits(&a.incident_direct) == bits(&b.incident_direct),
+                "{what}: incident_direct differs"
+            );
+            assert_eq!(bits(&[kept.ambient]), bits(&[solved.ambient]), "{what}");
+            assert_eq!(a.residual.to_bits(), b.residual.to_bits(), "{what}");
+            assert_eq!(kept.summary(&offline), solved.summary(&offline), "{what}");
+            let (image, _) = radiosity::render_solved(&scene, accel.as_ref(), &offline, kept);
+            assert!(
+                bits(&image.pixels) == bits(&film.pixels),
+                "{what}: the image differs"
+            );
+        }
+    }
+}

@@ -50,6 +50,10 @@ fn main() {
             radiosity_shots_and_photons,
         ),
         trial(
+            "space_shoots_on_from_the_solution_kept",
+            space_shoots_on_from_the_solution_kept,
+        ),
+        trial(
             "the_ray_tree_under_the_pointer_is_the_offline_ray_tree",
             the_ray_tree_under_the_pointer_is_the_offline_ray_tree,
         ),
@@ -283,24 +287,28 @@ fn rgb(path: &Path) -> Result<image::RgbImage, Failed> {
 }
 
 /// 'o', then the screen photographed and the printed command line run offline: the two
-/// images must be the same, pixel for pixel. Returns the command line and the screenshot.
+/// images must be the same, pixel for pixel. Returns the command line, the screenshot and how
+/// long the offline render took (the whole command: loading, building, rendering).
 fn screen_is_offline_render(
     display: &Display,
     viewer: &Viewer,
     id: &str,
     dir: &Path,
     name: &str,
-) -> Result<(String, image::RgbImage), Failed> {
+) -> Result<(String, image::RgbImage, Duration), Failed> {
     display.run("xdotool", &["key", "o"])?;
     let line = viewer.command_line()?;
     let shot = display.screenshot(id, &dir.join(format!("{name}.png")))?;
-    let offline = rgb(&render_offline(&line, dir)?)?;
+    let start = Instant::now();
+    let offline = render_offline(&line, dir)?;
+    let offline_time = start.elapsed();
+    let offline = rgb(&offline)?;
     assert_eq!(
         differing_pixels(&shot, &offline)?,
         0,
         "the screen and `{line}`"
     );
-    Ok((line, shot))
+    Ok((line, shot, offline_time))
 }
 
 /// How many pixels two images of the same size differ in.
@@ -356,7 +364,8 @@ fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
     let trace_time = trace_start.elapsed();
     assert!(title.contains("raytrace: done, 64 spp"), "{title}");
     eprintln!("viewer: the trace took {trace_time:?}");
-    let (traced_line, traced) = screen_is_offline_render(&display, &viewer, &id, &dir, "traced")?;
+    let (traced_line, traced, _) =
+        screen_is_offline_render(&display, &viewer, &id, &dir, "traced")?;
     assert!(traced_line.contains("--engine raytrace"), "{traced_line}");
     // docs/viewer.md's screenshot is this one (TRILUX_VIEWER_SCREENSHOT=docs/viewer.png).
     if let Some(keep) = std::env::var_os("TRILUX_VIEWER_SCREENSHOT") {
@@ -408,7 +417,7 @@ fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
         title.contains("MATERIALS"),
         "the trace went on after the drag: {title}"
     );
-    let (moved_line, moved) = screen_is_offline_render(&display, &viewer, &id, &dir, "moved")?;
+    let (moved_line, moved, _) = screen_is_offline_render(&display, &viewer, &id, &dir, "moved")?;
     assert!(moved_line.contains("--engine raycast"), "{moved_line}");
     let camera = |line: &str| {
         line.split(" --camera-position ")
@@ -431,15 +440,14 @@ fn shows_what_its_offline_command_renders() -> Result<(), Failed> {
     Ok(())
 }
 
-/// Opens the viewer on `scene` with `flags` in `dir` and waits for its window; the viewer
-/// and the window's id, focused.
+/// Opens the viewer on the scene at `path` with `flags` in `dir` and waits for its window;
+/// the viewer and the window's id, focused.
 fn open(
     display: &Display,
     dir: &Path,
-    scene_name: &str,
+    path: &Path,
     flags: &[&str],
 ) -> Result<(Viewer, String), Failed> {
-    let path = scene(scene_name);
     let mut args = vec![path.to_str().unwrap()];
     args.extend_from_slice(flags);
     let (viewer, id, _) = Viewer::open_window(display, dir, &args)?;
@@ -473,13 +481,13 @@ fn radiosity_shots_and_photons() -> Result<(), Failed> {
         "-num_photons_to_shoot",
         "20000",
     ];
-    let (mut viewer, id) = open(&display, &dir, "cornell_box.obj", &flags)?;
+    let (mut viewer, id) = open(&display, &dir, &scene("cornell_box.obj"), &flags)?;
     let mut keys = vec!["key", "--delay", "30"];
     keys.extend(["space"; 16]);
     display.run("xdotool", &keys)?;
     let title = display.wait_for_title(&id, "16 shots)", Duration::from_secs(30))?;
     assert!(title.contains("RADIANCE"), "{title}");
-    let (line, radiance) = screen_is_offline_render(&display, &viewer, &id, &dir, "radiance")?;
+    let (line, radiance, _) = screen_is_offline_render(&display, &viewer, &id, &dir, "radiance")?;
     assert!(
         line.contains("--engine radiosity")
             && line.contains("--radiosity-iterations 16 --visualize radiance"),
@@ -493,7 +501,7 @@ fn radiosity_shots_and_photons() -> Result<(), Failed> {
         title.contains("FORM_FACTORS (radiosity, 16 shots)"),
         "{title}"
     );
-    let (line, two_sided) = screen_is_offline_render(&display, &viewer, &id, &dir, "two-sided")?;
+    let (line, two_sided, _) = screen_is_offline_render(&display, &viewer, &id, &dir, "two-sided")?;
     assert!(
         line.contains("--two-sided") && line.contains("--visualize form-factors"),
         "{line}"
@@ -505,7 +513,7 @@ fn radiosity_shots_and_photons() -> Result<(), Failed> {
     display.run("xdotool", &["key", "b"])?;
     display.run("xdotool", &["key", "p", "l"])?;
     display.wait_for_title(&id, "PHOTONS", Duration::from_secs(30))?;
-    let (line, photons) = screen_is_offline_render(&display, &viewer, &id, &dir, "photons")?;
+    let (line, photons, _) = screen_is_offline_render(&display, &viewer, &id, &dir, "photons")?;
     assert!(
         line.contains("--engine photon") && line.contains("--visualize photons"),
         "{line}"
@@ -519,6 +527,76 @@ fn radiosity_shots_and_photons() -> Result<(), Failed> {
     Ok(())
 }
 
+/// Space × 64 on a room of 2,981 quads (`render gen-room 3000`), each press once the image
+/// of the one before is on screen: each press shoots one shot more on from the solution
+/// kept, so the render thread's 64 jobs (their seconds, which the title gives) take no longer
+/// than 1.5× the offline command's 64-shot render (loading and building included), where
+/// solving again from the start at each press would take 1 + 2 + … + 64 = 2,080 shots. The
+/// screen is then that render's image. A camera move keeps the solution: the next press is
+/// shot 65, and the screen the offline 65-shot image.
+fn space_shoots_on_from_the_solution_kept() -> Result<(), Failed> {
+    let dir = common::temp_dir("viewer-space");
+    let room = dir.join("room.obj");
+    let made = Command::new(env!("CARGO_BIN_EXE_render"))
+        .args(["gen-room", "3000", "-o", room.to_str().unwrap()])
+        .output()?;
+    assert!(made.status.success(), "{made:?}");
+    let display = Display::start();
+    // A small image: each press's image (a few milliseconds at 128×128) would otherwise
+    // weigh more than its shot.
+    let flags = ["-size", "32", "32", "-num_shadow_samples", "1"];
+    let (mut viewer, id) = open(&display, &dir, &room, &flags)?;
+    let (mut jobs, start) = (0.0, Instant::now());
+    for shots in 1..=64 {
+        display.run("xdotool", &["key", "space"])?;
+        let shown = format!("(radiosity, {shots} shots) in ");
+        let title = display.wait_for_title(&id, &shown, Duration::from_secs(60))?;
+        let seconds = title
+            .split(&shown)
+            .nth(1)
+            .and_then(|t| t.split(' ').next())
+            .and_then(|t| t.parse::<f64>().ok())
+            .ok_or_else(|| format!("no seconds in {title:?}"))?;
+        jobs += seconds;
+    }
+    let pressing = start.elapsed();
+    let (line, _, offline) = screen_is_offline_render(&display, &viewer, &id, &dir, "64")?;
+    assert!(line.contains("--radiosity-iterations 64 "), "{line}");
+    eprintln!(
+        "viewer: 64 presses of space: {jobs:.3} s on the render thread ({pressing:?} with the keys and screenshots); the offline 64-shot render {offline:?}"
+    );
+    assert!(
+        jobs <= 1.5 * offline.as_secs_f64(),
+        "64 presses of space took {jobs:.3} s, the offline 64-shot render {offline:?}"
+    );
+    display.run(
+        "xdotool",
+        &[
+            "mousemove",
+            "--window",
+            &id,
+            "64",
+            "64",
+            "mousedown",
+            "1",
+            "mousemove",
+            "--window",
+            &id,
+            "84",
+            "70",
+            "mouseup",
+            "1",
+        ],
+    )?;
+    display.run("xdotool", &["key", "space"])?;
+    display.wait_for_title(&id, "(radiosity, 65 shots)", Duration::from_secs(60))?;
+    let (line, _, _) = screen_is_offline_render(&display, &viewer, &id, &dir, "65")?;
+    assert!(line.contains("--radiosity-iterations 65 "), "{line}");
+    quit(&display, &mut viewer, &id)?;
+    std::fs::remove_dir_all(&dir)?;
+    Ok(())
+}
+
 /// Space held down while the focus is elsewhere, then the window focused and space let go:
 /// winit replays the held key as a synthetic press, which is not the user pressing it. Had
 /// the viewer taken it (as it did), a space pressed just after `windowfocus` could count twice
@@ -526,7 +604,12 @@ fn radiosity_shots_and_photons() -> Result<(), Failed> {
 fn a_key_held_as_the_window_gains_focus_is_not_pressed() -> Result<(), Failed> {
     let dir = common::temp_dir("viewer-focus");
     let display = Display::start();
-    let (mut viewer, id) = open(&display, &dir, "cornell_box.obj", &["-size", "96", "96"])?;
+    let (mut viewer, id) = open(
+        &display,
+        &dir,
+        &scene("cornell_box.obj"),
+        &["-size", "96", "96"],
+    )?;
     display.run("xdotool", &["key", "space"])?;
     display.wait_for_title(&id, "(radiosity, 1 shots)", Duration::from_secs(30))?;
     // --maxdepth 0: the root window only.
@@ -566,7 +649,7 @@ fn the_ray_tree_under_the_pointer_is_the_offline_ray_tree() -> Result<(), Failed
         "-num_shadow_samples",
         "1",
     ];
-    let (mut viewer, id) = open(&display, &dir, "reflective_spheres.obj", &flags)?;
+    let (mut viewer, id) = open(&display, &dir, &scene("reflective_spheres.obj"), &flags)?;
     display.run("xdotool", &["key", "r"])?;
     display.wait_for_title(&id, "done", Duration::from_secs(60))?;
     // The large sphere, top right of the default view.

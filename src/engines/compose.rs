@@ -164,26 +164,37 @@ pub fn render_photons(
     settings: &RenderSettings,
 ) -> Result<(Rendered, photon::PhotonMaps), String> {
     let maps = photon::maps(scene, accel, settings)?;
+    Ok((render_with_maps(scene, accel, settings, &maps), maps))
+}
+
+/// The photon engine's image with `maps` traced before (the viewer keeps them while the
+/// camera moves): the ray tracer with them as its indirect light, or a display of the
+/// photons.
+pub fn render_with_maps(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+    maps: &photon::PhotonMaps,
+) -> Rendered {
     let warnings = maps
         .truncation_warning(settings.photon.max_photon_depth)
         .into_iter()
         .collect();
-    if let Some(film) = photon::display(scene, &maps, settings) {
+    if let Some(film) = photon::display(scene, maps, settings) {
         let stats = RenderStats::default();
         stats.photon_rays.store(maps.rays, Relaxed);
-        let rendered = Rendered {
+        return Rendered {
             summary: vec![maps.summary()],
             warnings,
             ..Rendered::plain(film, stats)
         };
-        return Ok((rendered, maps));
     }
     let cache = settings
         .photon
         .gather_indirect
-        .then(|| photon::IrradianceCache::build(scene, accel, settings, &maps));
+        .then(|| photon::IrradianceCache::build(scene, accel, settings, maps));
     let indirect = photon::PhotonIndirect {
-        maps: &maps,
+        maps,
         cache: cache.as_ref(),
     };
     let (film, stats) = raytrace::render_with(scene, accel, settings, &indirect);
@@ -196,10 +207,9 @@ pub fn render_photons(
         summary.push(c.summary());
     }
     summary.push(maps.summary());
-    let rendered = Rendered {
+    Rendered {
         summary,
         warnings,
         ..Rendered::plain(film, stats)
-    };
-    Ok((rendered, maps))
+    }
 }

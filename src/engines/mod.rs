@@ -44,16 +44,21 @@ pub fn render(
     accel: &dyn Accel,
     settings: &RenderSettings,
 ) -> Result<Rendered, String> {
-    // Where the rays are made: a camera whose rays would hold inf or NaN is an error, not a
-    // render of misses (the scene's range check makes none; this is the backstop).
-    let camera = scene.camera();
-    if !camera.view().is_finite() {
-        return Err(format!(
-            "{}: the camera (at {}, looking at {}) makes rays of inf or NaN",
-            scene.path.display(),
-            camera.position,
-            camera.point_of_interest
-        ));
-    }
+    check_camera(scene)?;
     engine(kind).render(scene, accel, settings)
+}
+
+/// Where the rays are made: a camera whose rays would hold inf or NaN is an error, not a
+/// render of misses (the scene's range check makes none; this is the backstop).
+pub fn check_camera(scene: &Scene) -> Result<(), String> {
+    let camera = scene.camera();
+    if camera.view().is_finite() {
+        return Ok(());
+    }
+    Err(format!(
+        "{}: the camera (at {}, looking at {}) makes rays of inf or NaN",
+        scene.path.display(),
+        camera.position,
+        camera.point_of_interest
+    ))
 }

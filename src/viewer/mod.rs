@@ -37,6 +37,7 @@ pub fn run(words: &[String]) -> Result<(), String> {
         accel_kind: kind,
         accel_options: args.accel_options(),
         radiosity: None,
+        photons: None,
     };
     window::run(session, world, |wake_up| {
         worker::Worker::start(renderer, wake_up)

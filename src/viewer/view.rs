@@ -4,8 +4,9 @@
 //! the offline command render the same image.
 //!
 //! The radiosity views are the library's solve with `--radiosity-iterations` shots; the
-//! render thread keeps the last solution, so that a camera move or another mode only draws
-//! it, while another number of shots solves again from the start.
+//! render thread keeps the solve, so that a camera move or another mode only draws it, and
+//! more shots (space, 'a') shoot on from it. Fewer shots ('c'), or a change to what the
+//! solve reads (the mesh's subdivision, the quads' sides), solve again from the start.
 
 use super::session::Session;
 use super::worker::Job;

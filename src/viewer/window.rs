@@ -29,8 +29,8 @@ keys:
   t      draw the ray tree of the pixel under the pointer (again on the same pixel: hide it)
   r      ray trace progressively (16x16 blocks, 8x8, 4x4, 2x2, then the full image) with the render flags given
   v      cycle the views: MATERIALS, RADIANCE, FORM_FACTORS, LIGHTS, UNDISTRIBUTED, ABSORBED
-  space  one radiosity shot more
-  a      animate the radiosity solver: shots added, the image updating, until it converges or a key stops it
+  space  one radiosity shot more, shot on from the solution kept
+  a      animate the radiosity solver: shots added to the solution kept, the image updating, until it converges or a key stops it
   c      reset the radiosity solution (0 shots)
   s      subdivide the radiosity mesh once more
   i      interpolate the radiosity display (toggle)
@@ -219,7 +219,9 @@ impl App {
             Some(f) if f.job.progressive => {
                 format!("{}: done, {} in {:.2} s", f.job.label, f.stage, f.seconds)
             }
-            Some(f) => format!("{} in {:.2} s", f.job.label, f.seconds),
+            // Milliseconds: a view drawn from what the render thread keeps (a shot more, a
+            // camera move) takes a few.
+            Some(f) => format!("{} in {:.3} s", f.job.label, f.seconds),
         };
         let residual = self
             .shown

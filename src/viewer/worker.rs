@@ -4,6 +4,11 @@
 //! every long loop stops within a chunk of samples, and the superseded job's images are
 //! never shown.
 //!
+//! What a pre-pass makes is kept between jobs while what it reads stays the same: the radiosity
+//! solve (more shots shoot on from it, a solve cut short by a newer job keeping the shots it
+//! took) and the photon maps. The image drawn from them is the one the offline command
+//! renders: a solve shot on is, after n shots, the solve of n shots in one go.
+//!
 //! A progressive trace ('r') renders first with one sample per 16×16 block of pixels (the
 //! image at a sixteenth of the resolution, each pixel drawn as its block), then 8×8, 4×4 and
 //! 2×2, then every pixel with one sample (when more are asked for), then the full image with
@@ -16,9 +21,11 @@ use std::thread::JoinHandle;
 use std::time::Instant;
 
 use crate::accel::{Accel, AccelKind, AccelOptions};
-use crate::engines::radiosity::{self, Solution};
-use crate::engines::{self, EngineKind, RenderSettings, Rendered};
+use crate::engines::photon::{self, PhotonMaps};
+use crate::engines::radiosity::{self, ProgressiveSolve, Solution};
+use crate::engines::{self, compose, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
+use crate::geometry::Vec3;
 use crate::scene::{Camera, Scene};
 
 /// The block sides of a progressive trace's coarse stages (one sample each), coarsest first;
@@ -90,11 +97,47 @@ pub struct Renderer {
     /// How to build the Accel again when a job turns `--two-sided` on or off.
     pub accel_kind: AccelKind,
     pub accel_options: AccelOptions,
-    /// The last radiosity solution, and what it was solved with (the settings with their
-    /// display fields reset, see `solve_key`, and the quads' sides): another view of it or
-    /// another camera renders it without solving again.
-    pub radiosity: Option<((RenderSettings, bool), Solution)>,
+    /// The last radiosity solve, and what it was solved with (the settings with their
+    /// display fields and shots reset, see `solve_key`, and the quads' sides): another view
+    /// of it or another camera renders it without solving again, and more shots shoot on
+    /// from it.
+    pub radiosity: Option<((RenderSettings, bool), KeptSolve)>,
+    /// The last photon maps, and what they were traced with (see `photon_key`): another
+    /// camera or display of them renders them without tracing again.
+    pub photons: Option<(PhotonKey, PhotonMaps)>,
 }
+
+/// A radiosity solve the render thread keeps.
+pub enum KeptSolve {
+    /// Shot on a few shots at a time (space, 'a').
+    Shooting(Box<ProgressiveSolve>),
+    /// Solved in one go for the shots it was asked (`--radiosity-iterations`, None: until
+    /// converged): the solves `ProgressiveSolve` cannot take a few shots at a time.
+    Solved(Option<u64>, Box<Solution>),
+}
+
+impl KeptSolve {
+    /// Whether this solve gives the solution of `iterations` shots: one shot on, from no
+    /// more shots than those; one solved in one go, for those shots only.
+    fn reaches(&self, iterations: Option<u64>) -> bool {
+        match self {
+            KeptSolve::Shooting(solve) => iterations.is_none_or(|n| solve.shots() <= n),
+            KeptSolve::Solved(solved_for, _) => *solved_for == iterations,
+        }
+    }
+
+    fn solution(&self) -> &Solution {
+        match self {
+            KeptSolve::Shooting(solve) => solve.solution(),
+            KeptSolve::Solved(_, solution) => solution.as_ref(),
+        }
+    }
+}
+
+/// What photon maps are traced with: the settings with those of the image but its size
+/// reset (see `photon_key`), the quads' sides, and — in a fog, whose photons are kept only
+/// in reach of the camera — the camera's position.
+pub type PhotonKey = (RenderSettings, bool, Option<Vec3>);
 
 impl Worker {
     /// Starts the render thread; `report` hands what it makes to the window.
@@ -223,49 +266,111 @@ impl Renderer {
         let world = self.world.read().map_err(|_| POISONED)?;
         let (scene, accel): (&Scene, &dyn Accel) = (&world.scene, world.accel.as_ref());
         let pool = &self.pool;
-        // A radiosity image of a solution solved before (no time limit: a deadline makes
-        // the solve depend on the clock).
-        let key = (solve_key(settings), job.two_sided);
+        engines::check_camera(scene)?;
+        // A radiosity image of a solve kept from the last one (no time limit: a deadline
+        // makes the solve depend on the clock).
         if job.engine == EngineKind::Radiosity && settings.deadline.is_none() {
-            let cached = self.radiosity.take().filter(|(k, _)| *k == key);
-            let solution = match cached {
-                Some((_, solution)) => solution,
-                None => pool.install(|| radiosity::solve_with_progress(scene, accel, settings))?,
-            };
+            let iterations = settings.radiosity.iterations;
+            let key = (solve_key(settings), job.two_sided);
+            let kept = self
+                .radiosity
+                .take()
+                .filter(|(k, kept)| *k == key && kept.reaches(iterations));
+            let mut kept =
+                match kept {
+                    Some((_, kept)) => kept,
+                    None => match pool.install(|| ProgressiveSolve::new(scene, accel, settings)) {
+                        Some(solve) => KeptSolve::Shooting(Box::new(solve)),
+                        None => KeptSolve::Solved(
+                            iterations,
+                            Box::new(pool.install(|| {
+                                radiosity::solve_with_progress(scene, accel, settings)
+                            })?),
+                        ),
+                    },
+                };
+            if let KeptSolve::Shooting(solve) = &mut kept {
+                pool.install(|| solve.shoot_to(scene, accel, settings));
+            }
             if crate::interrupt::superseded() {
-                // Cut short: not the solution the settings ask for.
+                // Cut short. The shots a solve shooting on took stand (the next job shoots
+                // on from them); a solve in one go is not the one its settings ask for.
+                if matches!(kept, KeptSolve::Shooting(_)) {
+                    self.radiosity = Some((key, kept));
+                }
                 return Ok(None);
             }
+            let solution = kept.solution();
             let (film, stats) =
-                pool.install(|| radiosity::render_solved(scene, accel, settings, &solution));
+                pool.install(|| radiosity::render_solved(scene, accel, settings, solution));
             let rendered = solution.rendered(film, stats, settings)?;
-            self.radiosity = Some((key, solution));
+            self.radiosity = Some((key, kept));
             return Ok((!crate::interrupt::superseded()).then_some(rendered));
         }
-        let rendered = pool.install(|| engines::render(job.engine, scene, accel, settings))?;
+        if job.engine == EngineKind::Photon {
+            let key = (
+                photon_key(settings),
+                job.two_sided,
+                scene.fog.map(|_| job.camera.position),
+            );
+            let maps = match self.photons.take().filter(|(k, _)| *k == key) {
+                Some((_, maps)) => maps,
+                None => pool.install(|| photon::maps(scene, accel, settings))?,
+            };
+            if crate::interrupt::superseded() {
+                // Maps cut short hold fewer photons than the settings ask for.
+                return Ok(None);
+            }
+            let rendered =
+                pool.install(|| compose::render_with_maps(scene, accel, settings, &maps));
+            self.photons = Some((key, maps));
+            return Ok((!crate::interrupt::superseded()).then_some(rendered));
+        }
+        let rendered =
+            pool.install(|| engines::engine(job.engine).render(scene, accel, settings))?;
         Ok((!crate::interrupt::superseded()).then_some(rendered))
     }
 }
 
-/// What a radiosity solve reads of the settings: all of them but how the solution is shown
-/// (image, samples, lens, display mode, outlines, interpolation, the form factors' source)
-/// and whether progress is drawn.
+/// The settings but those of the image (samples, lens, the time limit) and whether progress
+/// is drawn: what a pre-pass (a radiosity solve, photon maps) may read, besides the image's
+/// size.
+fn pre_pass_key(settings: &RenderSettings) -> RenderSettings {
+    let defaults = RenderSettings::default();
+    RenderSettings {
+        num_antialias_samples: defaults.num_antialias_samples,
+        aperture: defaults.aperture,
+        focus_distance: defaults.focus_distance,
+        quiet: defaults.quiet,
+        deadline: defaults.deadline,
+        ..settings.clone()
+    }
+}
+
+/// What a radiosity solve reads of the settings: all of them but the image's, how the
+/// solution is shown (display mode, outlines, interpolation, the form factors' source) and
+/// the shots (a solve kept shoots on to more).
 fn solve_key(settings: &RenderSettings) -> RenderSettings {
     let defaults = RenderSettings::default();
     let mut key = RenderSettings {
         width: defaults.width,
         height: defaults.height,
-        num_antialias_samples: defaults.num_antialias_samples,
-        aperture: defaults.aperture,
-        focus_distance: defaults.focus_distance,
-        quiet: defaults.quiet,
-        ..settings.clone()
+        ..pre_pass_key(settings)
     };
     let r = &mut key.radiosity;
     r.display = defaults.radiosity.display;
     r.wireframe = defaults.radiosity.wireframe;
     r.interpolate = defaults.radiosity.interpolate;
     r.ff_source = defaults.radiosity.ff_source;
+    r.iterations = defaults.radiosity.iterations;
+    key
+}
+
+/// What photon maps are traced from: all the settings but the image's (its size stays: it
+/// sets the photons when `-num_photons_to_shoot` is not given) and how the photons are shown.
+fn photon_key(settings: &RenderSettings) -> RenderSettings {
+    let mut key = pre_pass_key(settings);
+    key.photon.display = RenderSettings::default().photon.display;
     key
 }
 

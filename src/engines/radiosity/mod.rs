@@ -68,6 +68,149 @@ pub struct Solution {
     pub twins: usize,
 }
 
+/// The patches a solver shoots between: the solution's, coincident twins given no area and
+/// the sky's reflected light added to their emission.
+struct Shooters {
+    patches: Vec<Patch>,
+    /// For each patch, the earlier patch it coincides with (`NONE` for none).
+    twin_of: Vec<u32>,
+    /// Rays cast to find the sky's reflected light.
+    sky_rays: u64,
+}
+
+impl Shooters {
+    /// The form factors between the patches.
+    fn sampler<'a>(
+        &'a self,
+        scene: &'a Scene,
+        accel: &'a dyn Accel,
+        settings: &RenderSettings,
+        visibility: bool,
+    ) -> FormFactorSampler<'a> {
+        FormFactorSampler::new(
+            scene,
+            accel,
+            &self.patches,
+            settings.radiosity.num_form_factor_samples.max(1),
+            visibility,
+            settings.seed,
+        )
+    }
+
+    /// When the settings stop a solve of these patches.
+    fn limits(&self, settings: &RenderSettings) -> SolveLimits {
+        let r = &settings.radiosity;
+        SolveLimits {
+            tolerance: r.tolerance,
+            iterations: r.iterations,
+            cap: r
+                .max_shots_per_patch
+                .saturating_mul(self.patches.len() as u64),
+            log: r.log_convergence,
+            // The solve takes four fifths of what is left of `--time-limit`; the pixels
+            // the rest.
+            deadline: settings.deadline.map(|d| {
+                let now = std::time::Instant::now();
+                now + d.saturating_duration_since(now).mul_f64(0.8)
+            }),
+        }
+    }
+}
+
+/// A progressive solve kept between images, as the viewer keeps it: shot on a few shots at a
+/// time (`shoot_to`), each time shown (`solution`). After n shots in all, however they were
+/// split, its solution is the one `Solution::solve` finds with `--radiosity-iterations n`,
+/// bit for bit.
+pub struct ProgressiveSolve {
+    solution: Solution,
+    shooters: Shooters,
+    solver: progressive::Progressive,
+    shooting: progressive::Shooting,
+    /// Visibility rays the shots so far cast.
+    form_factor_rays: u64,
+}
+
+impl ProgressiveSolve {
+    /// The solve `settings` ask for, before its first shot; None where that solve cannot be
+    /// taken a few shots at a time: another solver, a solution loaded or saved, adaptive
+    /// subdivision (which solves again on a finer mesh), or a time limit (which makes the
+    /// shots taken depend on the clock).
+    pub fn new(
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+    ) -> Option<ProgressiveSolve> {
+        let r = &settings.radiosity;
+        if r.load.is_some()
+            || r.save.is_some()
+            || r.adaptive_threshold.is_some()
+            || settings.deadline.is_some()
+        {
+            return None;
+        }
+        let (mesh, kind) = Solution::initial_mesh(scene, r, r.subdivide);
+        if kind != SolverKind::Progressive {
+            return None;
+        }
+        let (solution, shooters) = Solution::unsolved(scene, accel, settings, mesh, kind);
+        let solver = progressive::Progressive {
+            cache_bytes: r.ff_cache_mb << 20,
+            relaxation: r.relaxation,
+        };
+        let shooting = solver.start(&shooters.patches);
+        let mut solve = ProgressiveSolve {
+            solution,
+            shooters,
+            solver,
+            shooting,
+            form_factor_rays: 0,
+        };
+        // The light before any shot, shown as zero shots.
+        solve.shoot_to(
+            scene,
+            accel,
+            &RenderSettings {
+                radiosity: RadiositySettings {
+                    iterations: Some(0),
+                    ..r.clone()
+                },
+                ..settings.clone()
+            },
+        );
+        Some(solve)
+    }
+
+    /// Shots taken so far.
+    pub fn shots(&self) -> u64 {
+        self.shooting.light().iterations
+    }
+
+    /// Shoots on until `settings` stop the solve, counting the shots already taken
+    /// (`--radiosity-iterations` is the shots in all). The settings are those the solve was
+    /// started with, but for the shots (and how the solution is shown).
+    pub fn shoot_to(&mut self, scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) {
+        let shooters = &self.shooters;
+        let sampler = shooters.sampler(scene, accel, settings, self.solution.visibility);
+        let stop = self.solver.shoot(
+            &mut self.shooting,
+            &sampler,
+            &shooters.limits(settings),
+            &|_| {},
+        );
+        self.form_factor_rays += sampler.rays.load(Relaxed);
+        self.solution.take_light(
+            self.shooting.solved(stop),
+            &self.shooters,
+            self.form_factor_rays,
+        );
+    }
+
+    /// The solution as the shots so far leave it.
+    pub fn solution(&self) -> &Solution {
+        &self.solution
+    }
+}
+
 /// `subdivide_to_fit` stops here whatever the time: 4⁸ patches from each face.
 const MAX_SUBDIVIDE_TO_FIT: u32 = 8;
 
@@ -245,7 +388,23 @@ impl Solution {
         kind: SolverKind,
         on_progress: &impl Fn(f32),
     ) -> Solution {
-        let r = &settings.radiosity;
+        let (mut solution, shooters) = Solution::unsolved(scene, accel, settings, mesh, kind);
+        let sampler = shooters.sampler(scene, accel, settings, solution.visibility);
+        let limits = shooters.limits(settings);
+        let solved = solver(&settings.radiosity, kind).solve(&sampler, &limits, on_progress);
+        solution.take_light(solved, &shooters, sampler.rays.load(Relaxed));
+        solution
+    }
+
+    /// A solution on `mesh` before its solver has run (no light yet), and the patches the
+    /// solver shoots between.
+    fn unsolved(
+        scene: &Scene,
+        accel: &dyn Accel,
+        settings: &RenderSettings,
+        mesh: QuadMesh,
+        kind: SolverKind,
+    ) -> (Solution, Shooters) {
         let (visibility, visibility_reason) = Solution::visibility(scene, settings);
         let patches = patch::patches(scene, &mesh);
         // Coincident twins take no part: the solvers see them with no area.
@@ -267,49 +426,45 @@ impl Solution {
             }
             sky_rays = rays;
         }
-        let sampler = FormFactorSampler::new(
-            scene,
-            accel,
-            &solved_patches,
-            r.num_form_factor_samples.max(1),
-            visibility,
-            settings.seed,
-        );
-        let limits = SolveLimits {
-            tolerance: r.tolerance,
-            iterations: r.iterations,
-            cap: r.max_shots_per_patch.saturating_mul(patches.len() as u64),
-            log: r.log_convergence,
-            // The solve takes four fifths of what is left of `--time-limit`; the pixels
-            // the rest.
-            deadline: settings.deadline.map(|d| {
-                let now = std::time::Instant::now();
-                now + d.saturating_duration_since(now).mul_f64(0.8)
-            }),
-        };
-        let solved = solver(r, kind).solve(&sampler, &limits, on_progress);
-        let (mut state, stop) = (solved.light, solved.stop);
-        state.copy_twins(&twin_of);
-        let ambient = solver::ambient(&solved_patches, &state.undistributed);
-        Solution {
+        let solution = Solution {
             patch_of_face: patch_of_face(&mesh, &patches),
             mesh,
             patches,
-            state,
-            stop,
-            ambient,
+            state: PatchLight::default(),
+            stop: Stop::NoLight,
+            ambient: Vec3::ZERO,
             visibility,
             visibility_reason,
-            rays: sampler.rays.load(Relaxed) + sky_rays,
-            solver_report: solved.report,
-            solver_counters: solved.counters,
-            solver_warning: solved.warning,
+            rays: sky_rays,
+            solver_report: String::new(),
+            solver_counters: Vec::new(),
+            solver_warning: None,
             adaptive_rounds: 0,
             splits: Vec::new(),
-            subdivide: r.subdivide,
+            subdivide: settings.radiosity.subdivide,
             solver: kind,
             twins,
-        }
+        };
+        let shooters = Shooters {
+            patches: solved_patches,
+            twin_of,
+            sky_rays,
+        };
+        (solution, shooters)
+    }
+
+    /// Takes the light a solver found on `shooters`, which cast `form_factor_rays`
+    /// visibility rays for it.
+    fn take_light(&mut self, solved: solver::Solved, shooters: &Shooters, form_factor_rays: u64) {
+        let mut state = solved.light;
+        state.copy_twins(&shooters.twin_of);
+        self.ambient = solver::ambient(&shooters.patches, &state.undistributed);
+        self.state = state;
+        self.stop = solved.stop;
+        self.rays = form_factor_rays + shooters.sky_rays;
+        self.solver_report = solved.report;
+        self.solver_counters = solved.counters;
+        self.solver_warning = solved.warning;
     }
 
     /// The mesh a solve starts from: the scene's faces, subdivided `subdivide` times; and

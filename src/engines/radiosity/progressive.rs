@@ -1,10 +1,11 @@
 //! Progressive refinement with over-relaxation, the radiosity engine's first solver.
 
 use std::collections::HashMap;
-use std::rc::Rc;
 use std::sync::atomic::Ordering::Relaxed;
+use std::sync::Arc;
 use std::time::Instant;
 
+use super::patch::Patch;
 use super::settings::Relaxation;
 use super::solver::{
     FormFactorSampler, PatchLight, RadiositySolver, ShotRecord, SolveLimits, Solved, Step, Stop,
@@ -38,10 +39,41 @@ impl RadiositySolver for Progressive {
         limits: &SolveLimits,
         on_step: &dyn Fn(f32),
     ) -> Solved {
-        let (light, stop, cache) = self.shoot(sampler, limits, on_step);
+        let mut shooting = self.start(sampler.patches());
+        let stop = self.shoot(&mut shooting, sampler, limits, on_step);
+        shooting.solved(stop)
+    }
+}
+
+/// A progressive solve between shots: everything the next shot reads. Shooting on from it
+/// takes exactly the shots a solve in one go would have taken after as many shots, so a
+/// solve held here and advanced a few shots at a time (the viewer's space key) ends where
+/// a solve of all the shots at once ends, bit for bit.
+pub struct Shooting {
+    light: PatchLight,
+    /// Part of the undistributed radiance that is emission (shot once, at the emitter's
+    /// first shot): what `incident_direct` records.
+    unshot_emission: Vec<Color>,
+    cache: RowCache,
+    total_emitted: f64,
+    /// The running mean of the returned fraction μ (None before the first shot).
+    returned: Option<f32>,
+    /// When the first shot began, for the convergence log's seconds.
+    start: Instant,
+}
+
+impl Shooting {
+    /// The light found so far.
+    pub fn light(&self) -> &PatchLight {
+        &self.light
+    }
+
+    /// The solve as it stands, stopped for `stop`.
+    pub fn solved(&self, stop: Stop) -> Solved {
+        let cache = &self.cache;
         Solved {
             counters: vec![
-                ("shots", light.iterations),
+                ("shots", self.light.iterations),
                 ("form-factor rows computed", cache.misses),
                 ("rows reused", cache.hits),
                 ("row cache peak bytes", cache.peak_bytes as u64),
@@ -52,7 +84,7 @@ impl RadiositySolver for Progressive {
                 cache.hits,
                 cache.peak_bytes as f64 / (1 << 20) as f64
             ),
-            light,
+            light: self.light.clone(),
             stop,
             warning: None,
         }
@@ -60,36 +92,52 @@ impl RadiositySolver for Progressive {
 }
 
 impl Progressive {
-    /// Shoots until the limits stop it.
-    fn shoot(
+    /// A solve of `patches` before its first shot: all light emitted, none distributed.
+    pub fn start(&self, patches: &[Patch]) -> Shooting {
+        let emitted: Vec<Color> = patches.iter().map(|p| p.emitted).collect();
+        Shooting {
+            light: PatchLight {
+                radiance: emitted.clone(),
+                undistributed: emitted.clone(),
+                incident: vec![Vec3::ZERO; patches.len()],
+                incident_direct: vec![Vec3::ZERO; patches.len()],
+                ..Default::default()
+            },
+            unshot_emission: emitted,
+            cache: RowCache::new(patches.len(), self.cache_bytes),
+            total_emitted: patches
+                .iter()
+                .map(|p| power(p.emitted, p.area) as f64)
+                .sum(),
+            returned: None,
+            start: Instant::now(),
+        }
+    }
+
+    /// Shoots on from `shooting` until the limits stop it (`limits.iterations` counts every
+    /// shot `shooting` has taken); why it stopped. `sampler` is over the patches `shooting`
+    /// started from.
+    pub fn shoot(
         &self,
+        shooting: &mut Shooting,
         sampler: &FormFactorSampler,
         limits: &SolveLimits,
         on_shot: &dyn Fn(f32),
-    ) -> (PatchLight, Stop, RowCache) {
+    ) -> Stop {
         let patches = sampler.patches();
-        let emitted: Vec<Color> = patches.iter().map(|p| p.emitted).collect();
-        // Part of the undistributed radiance that is emission (shot once, at the emitter's
-        // first shot): what `incident_direct` records.
-        let mut unshot_emission = emitted.clone();
-        let mut s = PatchLight {
-            radiance: emitted.clone(),
-            undistributed: emitted,
-            incident: vec![Vec3::ZERO; patches.len()],
-            incident_direct: vec![Vec3::ZERO; patches.len()],
-            ..Default::default()
-        };
-        let mut cache = RowCache::new(patches.len(), self.cache_bytes);
-        let total_emitted: f64 = patches
-            .iter()
-            .map(|p| power(p.emitted, p.area) as f64)
-            .sum();
+        let Shooting {
+            light: s,
+            unshot_emission,
+            cache,
+            total_emitted,
+            returned,
+            start,
+        } = shooting;
+        let total_emitted = *total_emitted;
         if total_emitted <= 0.0 {
-            return (s, Stop::NoLight, cache);
+            return Stop::NoLight;
         }
-        let start = Instant::now();
-        let mut returned: Option<f32> = None;
-        let stop = loop {
+        loop {
             let (mut best, mut best_power, mut undistributed) = (0usize, -1.0f32, 0.0f64);
             for (i, (u, p)) in s.undistributed.iter().zip(patches).enumerate() {
                 let pw = power(*u, p.area);
@@ -102,25 +150,25 @@ impl Progressive {
             s.residual = (undistributed / total_emitted) as f32;
             on_shot(s.residual);
             if crate::interrupt::requested() {
-                break Stop::Interrupted;
+                return Stop::Interrupted;
             }
             if limits.out_of_time() {
-                break Stop::TimeLimit;
+                return Stop::TimeLimit;
             }
             match limits.iterations {
-                Some(k) if s.iterations >= k => break Stop::Iterations,
-                None if s.residual <= limits.tolerance => break Stop::Converged,
-                None if s.iterations >= limits.cap => break Stop::Cap,
+                Some(k) if s.iterations >= k => return Stop::Iterations,
+                None if s.residual <= limits.tolerance => return Stop::Converged,
+                None if s.iterations >= limits.cap => return Stop::Cap,
                 _ => {}
             }
             if best_power <= 0.0 {
-                break Stop::Converged;
+                return Stop::Converged;
             }
             let row = cache.get_or_insert(best, || sampler.row(best));
             // Over-relaxation (ω > 1) shoots more than the patch holds; what it shot too much
             // stays behind as negative unshot radiance, shot back later. The patch's own
             // radiance is what it received, unchanged by shooting.
-            let omega = match (self.relaxation, returned) {
+            let omega = match (self.relaxation, *returned) {
                 (Relaxation::Fixed(w), _) => w,
                 (Relaxation::Auto, None) => 1.0,
                 (Relaxation::Auto, Some(mu)) => {
@@ -153,7 +201,7 @@ impl Progressive {
             let shot_power = power(shot, patches[best].area) as f64;
             if shot_power > 0.0 {
                 let mu = (returned_power / shot_power) as f32;
-                returned = Some(returned.map_or(mu, |m| m + RETURN_MEAN_WEIGHT * (mu - m)));
+                *returned = Some(returned.map_or(mu, |m| m + RETURN_MEAN_WEIGHT * (mu - m)));
             }
             s.iterations += 1;
             if limits.log {
@@ -165,8 +213,7 @@ impl Progressive {
                     rays: sampler.rays.load(Relaxed),
                 });
             }
-        };
-        (s, stop, cache)
+        }
     }
 }
 
@@ -176,7 +223,7 @@ impl Progressive {
 /// of the rows); the rows kept are instead those of the patches that have shot most often
 /// (least-frequently-used eviction), since a patch that shot often will shoot again.
 pub struct RowCache {
-    rows: HashMap<usize, Rc<[f32]>>,
+    rows: HashMap<usize, Arc<[f32]>>,
     /// Times each patch has asked for its row.
     uses: Vec<u32>,
     budget_bytes: usize,
@@ -199,14 +246,14 @@ impl RowCache {
         }
     }
 
-    pub fn get_or_insert(&mut self, i: usize, compute: impl FnOnce() -> Vec<f32>) -> Rc<[f32]> {
+    pub fn get_or_insert(&mut self, i: usize, compute: impl FnOnce() -> Vec<f32>) -> Arc<[f32]> {
         self.uses[i] += 1;
         if let Some(row) = self.rows.get(&i) {
             self.hits += 1;
             return row.clone();
         }
         self.misses += 1;
-        let row: Rc<[f32]> = compute().into();
+        let row: Arc<[f32]> = compute().into();
         let size = std::mem::size_of_val(&*row);
         if size > self.budget_bytes {
             return row;
