@@ -343,28 +343,13 @@ const MITSUBA_TEST_SPP: u32 = 256;
 /// takes (Mitsuba's own test takes 2,000,000 over the image's pixels, 868 at 48×48).
 const Z_TEST_SPP: u32 = 256;
 
-/// Mitsuba 3's render tests that our path tracer passes the z-test of at `Z_TEST_SPP`: each
-/// must keep passing it.
-const MITSUBA_Z_TESTS_PASSING: [&str; 19] = [
-    "test_arealight_path",
-    "test_bumpmap_path",
-    "test_constant_path",
-    "test_envmap_path",
-    "test_normalmap_identity_roughconductor_path",
-    "test_normalmap_path",
-    "test_normalmap_roughconductor_path",
-    "test_roughplastic_linear_path",
-    "test_roughplastic_nonlinear_path",
-    "test_textured_diffuse_path",
-    "test_textured_roughconductor_path",
-    "test_texturedprincipled1_path",
-    "test_texturedprincipled2_path",
-    "test_texturedprincipledthin_path",
-    "test_hetero_sigmat_albedo_volpath",
-    "test_hetero_sigmat_volpath",
-    "test_homo_emitter_inside_medium_volpath",
-    "test_homo_null_envmap_volpath",
-    "test_surf_area_light_volpath",
+/// The scenes of `MITSUBA_TESTS_PASSING` that our path tracer does not yet pass the z-test of
+/// at `Z_TEST_SPP`; every other one must pass it.
+const MITSUBA_Z_TESTS_NOT_YET: [&str; 4] = [
+    "test_roughdielectric_path",
+    "test_homo_area_light_volpath",
+    "test_homo_dielectric_envmap_volpath",
+    "test_homo_roughdielectric_spot_volpath",
 ];
 
 /// Mitsuba renders its references at this many samples per pixel (`test_renders.py` run as a
@@ -400,7 +385,7 @@ const GGX_Z_TEST_SPP: u32 = 868;
 ///   independent numbers (`z_test`).
 ///
 /// The table of every scene is printed; the scenes of `MITSUBA_TESTS_PASSING` must pass the
-/// relMSE rule, those of `MITSUBA_Z_TESTS_PASSING` the z-test too. A scene that holds what
+/// relMSE rule, those of `MITSUBA_Z_TESTS_NOT_YET` the z-test too. A scene that holds what
 /// trilux does not read must be refused with its file and line. Both Accels must give the
 /// same image of every scene.
 fn mitsuba_render_tests_against_mitsubas_references(dir: &Path) {
@@ -509,7 +494,10 @@ fn mitsuba_render_tests_against_mitsubas_references(dir: &Path) {
     for name in MITSUBA_TESTS_PASSING {
         assert!(passed.iter().any(|p| p == name), "{name} no longer passes");
     }
-    for name in MITSUBA_Z_TESTS_PASSING {
+    for name in MITSUBA_TESTS_PASSING
+        .iter()
+        .filter(|name| !MITSUBA_Z_TESTS_NOT_YET.contains(name))
+    {
         assert!(
             z_passed.iter().any(|p| p == name),
             "{name} no longer passes the z-test"
