@@ -604,22 +604,14 @@ fn a_solve_shot_on_a_few_shots_at_a_time_equals_one_solve_of_all_its_shots() {
             let kept = solve.solution();
             let what = format!("{name}, shot on in steps of {steps:?}");
             let (a, b) = (&kept.state, &solved.state);
-            assert!(
-                bits(&a.radiance) == bits(&b.radiance),
-                "{what}: radiance differs"
-            );
-            assert!(
-                bits(&a.undistributed) == bits(&b.undistributed),
-                "{what}: undistributed differs"
-            );
-            assert!(
-                bits(&a.incident) == bits(&b.incident),
-                "{what}: incident differs"
-            );
-            assert!(
-                bits(&a.incident_direct) == bits(&b.incident_direct),
-                "{what}: incident_direct differs"
-            );
+            for (field, kept, solved) in [
+                ("radiance", &a.radiance, &b.radiance),
+                ("undistributed", &a.undistributed, &b.undistributed),
+                ("incident", &a.incident, &b.incident),
+                ("incident_direct", &a.incident_direct, &b.incident_direct),
+            ] {
+                assert!(bits(kept) == bits(solved), "{what}: {field} differs");
+            }
             assert_eq!(bits(&[kept.ambient]), bits(&[solved.ambient]), "{what}");
             assert_eq!(a.residual.to_bits(), b.residual.to_bits(), "{what}");
             assert_eq!(kept.summary(&offline), solved.summary(&offline), "{what}");
