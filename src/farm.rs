@@ -113,6 +113,8 @@ pub struct Farm {
     pub threads_given: bool,
     /// The merged image (absolute).
     pub output: PathBuf,
+    /// The variance of each pixel's samples, written by the merge (absolute) [default: none].
+    pub variance: Option<PathBuf>,
     pub parts: Vec<PartSpec>,
     /// The engine's pre-pass, unless it needs none or the flags load one already.
     pub pre_pass: Option<PrePass>,
@@ -249,6 +251,9 @@ impl Farm {
             let _ = write!(command, " {}", quote_path(&self.part_file(k)));
         }
         let _ = write!(command, " -o {}", quote_path(&self.output));
+        if let Some(variance) = &self.variance {
+            let _ = write!(command, " --variance {}", quote_path(variance));
+        }
         s += &Farm::keep_status(&command, &quote_path(&self.status_file("merge")));
         s
     }

@@ -128,23 +128,27 @@ impl FarmArgs {
     }
 }
 
-/// Removes `-o FILE`, `--output FILE` and `--output=FILE` from the words: the output.
-fn take_output(words: &mut Vec<String>) -> Option<PathBuf> {
-    let mut output = None;
+/// Removes a file flag (`NAME FILE` or `NAME=FILE`, under any of `names`) from the words:
+/// its file, the last given.
+fn take_file_flag(words: &mut Vec<String>, names: &[&str]) -> Option<PathBuf> {
+    let mut file = None;
     let mut k = 0;
     while k < words.len() {
         let w = &words[k];
-        if (w == "-o" || w == "--output") && k + 1 < words.len() {
-            output = Some(PathBuf::from(words.remove(k + 1)));
+        if names.contains(&w.as_str()) && k + 1 < words.len() {
+            file = Some(PathBuf::from(words.remove(k + 1)));
             words.remove(k);
-        } else if let Some(v) = w.strip_prefix("--output=") {
-            output = Some(PathBuf::from(v));
+        } else if let Some(v) = names
+            .iter()
+            .find_map(|n| w.strip_prefix(n).and_then(|v| v.strip_prefix('=')))
+        {
+            file = Some(PathBuf::from(v));
             words.remove(k);
         } else {
             k += 1;
         }
     }
-    output
+    file
 }
 
 fn absolute(path: &Path) -> Result<PathBuf, String> {
@@ -168,7 +172,14 @@ pub fn run(args: &FarmArgs) -> Result<(), String> {
     }
     let mut words = normalize_args(args.words.iter().cloned());
     let scene_arg = words.remove(0);
-    let output = take_output(&mut words);
+    let output = take_file_flag(&mut words, &["-o", "--output"]);
+    // The variance is the merge's: each part keeps its sums and squares.
+    let variance = take_file_flag(&mut words, &["--variance"])
+        .map(|v| absolute(&v))
+        .transpose()?;
+    if let Some(path) = &variance {
+        super::args::check_variance_output(path).map_err(|e| format!("--variance: {e}"))?;
+    }
     for word in &words {
         let name = word.split('=').next().unwrap_or(word);
         if let Some((flag, why)) = FARM_SETS.iter().find(|(f, _)| *f == name) {
@@ -203,6 +214,11 @@ pub fn run(args: &FarmArgs) -> Result<(), String> {
             "--sample-batches: the {engine} engine's image with these flags is not a mean of pixel samples; use --tiles"
         ));
     }
+    if variance.is_some() && !engine_impl.samples_pixels(&settings) {
+        return Err(format!(
+            "--variance: the {engine} engine's image with these flags is not a mean of pixel samples, so it has no variance of samples"
+        ));
+    }
     let loads_pre_pass = settings.photon.load.is_some() || settings.radiosity.load.is_some();
     let pre_pass = engine_impl.pre_pass(&settings).filter(|_| !loads_pre_pass);
     let accel = render.accel_kind();
@@ -231,6 +247,7 @@ pub fn run(args: &FarmArgs) -> Result<(), String> {
         threads_given: render.given.iter().any(|(_, id)| id == "threads"),
         flags: words,
         output,
+        variance,
         pre_pass,
         partition: args.partition.clone(),
         time_minutes: args.time,
