@@ -24,7 +24,7 @@ fn furnace_radiance_is_le_over_one_minus_rho() {
                     width: 16,
                     height: 16,
                     num_antialias_samples: 1024,
-                    light_sampling: sampling,
+                    light_sampling: Some(sampling),
                     quiet: true,
                     ..RenderSettings::default()
                 };
@@ -105,7 +105,7 @@ fn square_light_matches_the_closed_form() {
                 height: 8,
                 num_antialias_samples: 1024,
                 ambient_light: Vec3::ZERO,
-                light_sampling: sampling,
+                light_sampling: Some(sampling),
                 quiet: true,
                 ..RenderSettings::default()
             };
@@ -142,7 +142,7 @@ fn stratified_paths_have_less_error_than_independent_ones() {
             height: 16,
             num_antialias_samples: paths,
             ambient_light: Vec3::ZERO,
-            light_sampling: LightSampling::Random,
+            light_sampling: Some(LightSampling::Random),
             path_sampler: sampler,
             seed,
             quiet: true,

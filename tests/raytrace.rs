@@ -149,7 +149,7 @@ fn adaptive_light_sampling_is_exact_where_the_corners_agree() {
         let run = |scene: &Scene, depth: u32| {
             let settings = RenderSettings {
                 num_shadow_samples: 4,
-                light_sampling: LightSampling::Adaptive,
+                light_sampling: Some(LightSampling::Adaptive),
                 adaptive_depth: depth,
                 ..quiet(2, 2)
             };
@@ -197,7 +197,7 @@ fn jittered_and_stratified_beat_random_sampling() {
     let error = |pattern: LightSampling, n: u32| {
         let settings = RenderSettings {
             num_shadow_samples: n,
-            light_sampling: pattern,
+            light_sampling: Some(pattern),
             ..quiet(24, 24)
         };
         rmse(
@@ -837,7 +837,7 @@ fn direct_light_by_solid_angle_has_no_fireflies() {
             num_shadow_samples: n,
             num_antialias_samples: 4,
             ambient_light: Vec3::ZERO,
-            light_sampling: sampling,
+            light_sampling: Some(sampling),
             ..quiet(256, 256)
         };
         raytrace::render(&scene, accel.as_ref(), &settings).0

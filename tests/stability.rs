@@ -729,7 +729,7 @@ fn non_finite_samples_are_counted_and_left_out() {
         num_antialias_samples: 4,
         // By area: a shadow ray's weight cosθ·cosθ'·A/r² overflows near the light's edge.
         // By solid angle it is at most Ω/π and 3e38 stays finite (measured: none counted).
-        light_sampling: trilux::sampling::LightSampling::Jittered,
+        light_sampling: Some(trilux::sampling::LightSampling::Jittered),
         quiet: true,
         ..RenderSettings::default()
     };

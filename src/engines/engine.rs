@@ -230,8 +230,9 @@ pub struct RenderSettings {
     pub indirect: IndirectKind,
     /// What the photon engine reads (photon count, density estimates, final gathering).
     pub photon: photon::PhotonSettings,
-    /// Placement of points on lights (`--light-sampling`, default solid-angle).
-    pub light_sampling: crate::sampling::LightSampling,
+    /// Placement of points on lights (`--light-sampling`); None: the engine's own default,
+    /// `raytrace::DEFAULT_LIGHT_SAMPLING` or `path::DEFAULT_LIGHT_SAMPLING` [default: None].
+    pub light_sampling: Option<crate::sampling::LightSampling>,
     /// Where the path tracer's numbers come from (`--sampler`, default sobol).
     pub path_sampler: crate::sampling::PathSampler,
     /// Levels of splitting with `--light-sampling adaptive` (`--adaptive-depth`, default 2:
@@ -271,7 +272,7 @@ impl Default for RenderSettings {
             radiosity: Default::default(),
             indirect: IndirectKind::Ambient,
             photon: Default::default(),
-            light_sampling: crate::sampling::LightSampling::SolidAngle,
+            light_sampling: None,
             path_sampler: crate::sampling::PathSampler::Sobol,
             adaptive_depth: 2,
             aperture: 0.0,

@@ -28,6 +28,11 @@ use crate::scene::{Camera, Color, Scene, SurfaceHit};
 /// contribution cannot reach 1e-4 of the pixel.
 const MIN_WEIGHT: f32 = 1e-4;
 
+/// The ray tracer's light sampling when `--light-sampling` is not given: by solid angle. Its N
+/// shadow rays a light are strata of the solid angle, which resolve the edges where walls meet
+/// a large light, where points by area put fireflies (BENCHMARKS.md, "Light sampling").
+pub const DEFAULT_LIGHT_SAMPLING: LightSampling = LightSampling::SolidAngle;
+
 struct Tracer<'a> {
     /// Diffuse indirect light: the ambient term, a radiosity solution or photon maps.
     indirect: &'a dyn IndirectLight,
@@ -35,6 +40,9 @@ struct Tracer<'a> {
     accel: &'a dyn Accel,
     settings: &'a RenderSettings,
     lights: Vec<Light>,
+    /// How the points on each light are placed (`--light-sampling`, default
+    /// `DEFAULT_LIGHT_SAMPLING`).
+    light_sampling: LightSampling,
     /// Where the N points on each light go (`--light-sampling`, `-num_shadow_samples`).
     light_strata: Strata,
     /// The rays traced, when recording a ray tree (`--ray-tree`); None while rendering.
@@ -67,16 +75,15 @@ impl<'a> Tracer<'a> {
         tree: Option<std::sync::Mutex<Vec<Segment>>>,
     ) -> Tracer<'a> {
         let lights = Light::collect(scene);
+        let light_sampling = settings.light_sampling.unwrap_or(DEFAULT_LIGHT_SAMPLING);
         Tracer {
             indirect,
             scene,
             accel,
             settings,
             lights,
-            light_strata: Strata::new(
-                settings.light_sampling.pattern(),
-                settings.num_shadow_samples,
-            ),
+            light_sampling,
+            light_strata: Strata::new(light_sampling.pattern(), settings.num_shadow_samples),
             tree,
             sky_strata: Strata::new(
                 crate::sampling::Pattern::Jittered,
@@ -468,7 +475,7 @@ impl Tracer<'_> {
             if samples == 1 {
                 batch.push(light.centre(s.point));
             } else if let (LightSampling::Adaptive, LightShape::Parallelogram(quad), None) =
-                (self.settings.light_sampling, &light.shape, fog)
+                (self.light_sampling, &light.shape, fog)
             {
                 // (In fog the light's corners do not bound what each point brings through
                 // the medium: the points are sampled by solid angle below instead.)
@@ -489,8 +496,8 @@ impl Tracer<'_> {
                 total += light.emitted * visible;
                 continue;
             } else {
-                let by_solid_angle = if self.settings.light_sampling.by_solid_angle()
-                    || (self.settings.light_sampling == LightSampling::Adaptive && fog.is_some())
+                let by_solid_angle = if self.light_sampling.by_solid_angle()
+                    || (self.light_sampling == LightSampling::Adaptive && fog.is_some())
                 {
                     light.solid_angle_sampler(s.point)
                 } else {

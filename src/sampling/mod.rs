@@ -82,13 +82,12 @@ pub enum Pattern {
 }
 
 /// How the ray tracer places its shadow rays on a light (`--light-sampling`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum LightSampling {
     /// Rectangular lights by solid angle across the longer edge and by the receiver's
     /// cosine along it, multi-jittered in that parametrisation; spheres uniform in the cone
     /// they subtend; other lights, and lights too small or far to matter, by area (the
     /// points multi-jittered too).
-    #[default]
     SolidAngle,
     /// As `solid-angle`, with independent uniform points in its parametrisation: what one
     /// shadow ray is worth alone, its error falling as 1/N (the default's strata make it fall

@@ -41,6 +41,13 @@ use crate::scene::{Color, PrimRef, Scene, ShadingTilt, SurfaceHit};
 /// Mitsuba's relMSE (0.99× its 7.10e-3, against 0.90×) in 0.94× the time: time × error no
 /// better (0.59 of Mitsuba's efficiency against 0.61), so 5 stays.
 const ROULETTE_FROM: u32 = 5;
+
+/// The path tracer's light sampling when `--light-sampling` is not given: by area (`random`).
+/// A point by solid angle (the spherical rectangle's inversion at every vertex) costs a
+/// rendered path about twice the time of a point by area, more than it saves in error: by
+/// area, time × relMSE was 0.73–0.96 of solid angle's on every course scene (BENCHMARKS.md,
+/// "Light sampling in the path tracer").
+pub const DEFAULT_LIGHT_SAMPLING: LightSampling = LightSampling::Random;
 /// The largest survival probability of Russian roulette. Survival is the path throughput's
 /// largest channel, so the throughput stays near 1 and the estimate has no heavy tail; the cap
 /// only keeps a perfectly white closed room finite. (A cap of 0.95 let throughput grow as
@@ -1212,7 +1219,7 @@ fn roulette(throughput: &mut Color, draw: f32) -> bool {
 pub fn render(scene: &Scene, accel: &dyn Accel, settings: &RenderSettings) -> (Film, RenderStats) {
     let tracer = PathTracer::new(scene, accel)
         .with_max_depth(settings.max_depth)
-        .with_light_sampling(settings.light_sampling);
+        .with_light_sampling(settings.light_sampling.unwrap_or(DEFAULT_LIGHT_SAMPLING));
     if tracer.wavefront_applies() {
         return render_pixel_batches(
             scene,
