@@ -53,6 +53,13 @@ pub enum AccelKind {
     Bvh,
 }
 
+/// Scenes of at most this many primitives get the BVH when `--accel` is not given. Up to here
+/// the BVH was as fast as Embree or faster in every engine measured (BENCHMARKS.md, "Which
+/// Accel by default"): the path tracer 1.25× on 1,000 quads and 1.66× on the Cornell box,
+/// whose sphere Embree reaches through a user-geometry callback; above it Embree's build and
+/// traversal win (the hospital's radiosity, 25,099 patches, 1.3×).
+pub const BVH_UP_TO_PRIMITIVES: usize = 1_000;
+
 impl AccelKind {
     /// Embree when this build has it, else the BVH.
     pub fn default_available() -> AccelKind {
@@ -60,6 +67,16 @@ impl AccelKind {
             AccelKind::Embree
         } else {
             AccelKind::Bvh
+        }
+    }
+
+    /// The backend when `--accel` is not given: the BVH for a scene of at most
+    /// `BVH_UP_TO_PRIMITIVES` primitives, else `default_available`.
+    pub fn default_for(scene: &Scene) -> AccelKind {
+        if scene.primitive_count() <= BVH_UP_TO_PRIMITIVES {
+            AccelKind::Bvh
+        } else {
+            AccelKind::default_available()
         }
     }
 }

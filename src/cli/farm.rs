@@ -221,7 +221,7 @@ pub fn run(args: &FarmArgs) -> Result<(), String> {
     }
     let loads_pre_pass = settings.photon.load.is_some() || settings.radiosity.load.is_some();
     let pre_pass = engine_impl.pre_pass(&settings).filter(|_| !loads_pre_pass);
-    let accel = render.accel_kind();
+    let accel = render.accel_kind(&scene);
     let plan = Plan::new(&scene, engine, accel, &settings);
     let stem = scene_path
         .file_stem()

@@ -28,7 +28,7 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     let mut scene = load_scene(args, input, engine)?;
     apply_scene_hints(args, &mut scene, &mut settings);
     let load_s = load_start.elapsed().as_secs_f64();
-    let kind = args.accel_kind();
+    let kind = args.accel_kind(&scene);
     let plan = Plan::new(&scene, engine, kind, &settings);
     let unused = args.unused_flags();
     if args.common.plan {

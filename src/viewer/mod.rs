@@ -25,7 +25,7 @@ pub fn run(words: &[String]) -> Result<(), String> {
     let (session, scene) = session::Session::start(words)?;
     let args = &session.args;
     let pool = crate::parallel::thread_pool(args.common.threads).map_err(|e| e.to_string())?;
-    let kind = args.accel_kind();
+    let kind = args.accel_kind(&scene);
     crate::parallel::worker_start();
     let accel = pool
         .install(|| crate::accel::build(&scene, kind, &args.accel_options()))

@@ -107,7 +107,7 @@ impl Session {
         let scene = crate::cli::render::load_scene(&args, &input, engine)?;
         // As `render` plans: refused above --max-memory, and the hierarchical solver bounded
         // by what the limit leaves.
-        let plan = crate::plan::Plan::new(&scene, engine, args.accel_kind(), &settings);
+        let plan = crate::plan::Plan::new(&scene, engine, args.accel_kind(&scene), &settings);
         settings.radiosity.memory_budget = crate::cli::render::check_memory(&plan, &args)?;
         let mut camera = scene.camera();
         let fov_degrees = match camera.projection {
