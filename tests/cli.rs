@@ -1532,3 +1532,90 @@ fn man_writes_the_manual_page_from_the_flag_definitions() {
     let written = std::fs::read_to_string(dir.join("render.1")).expect("render.1 written");
     assert_eq!(written, page, "-o writes what standard output shows");
 }
+
+/// The option blocks of `render --help`, each joined into one line: a block starts at a line
+/// naming the flag (indented at most six columns; possible values are indented further).
+fn help_blocks(help: &str) -> Vec<String> {
+    let mut blocks: Vec<String> = Vec::new();
+    for line in help.lines() {
+        let text = line.trim_start();
+        let indent = line.len() - text.len();
+        if text.starts_with('-') && (1..=6).contains(&indent) {
+            blocks.push(text.to_string());
+        } else if indent == 0 {
+            // A heading or the end of the options: no block continues past it.
+            blocks.push(String::new());
+        } else if let Some(block) = blocks.last_mut().filter(|b| !b.is_empty()) {
+            block.push(' ');
+            block.push_str(text);
+        }
+    }
+    blocks.retain(|b| !b.is_empty());
+    blocks
+}
+
+/// Why a block's default is what it is, or None when the block shows a default without a
+/// reason. A hand-written `[default: VALUE: why]` (or `, why` / `; why`) carries it inside the
+/// brackets; behind clap's bare `[default: VALUE]` the help text says `VALUE: why` (a switch
+/// that is on says `on by default` and why).
+fn default_reason(block: &str) -> Option<String> {
+    let start = block.find("[default: ")? + "[default: ".len();
+    let inside = &block[start..start + block[start..].find(']')?];
+    let separated = [": ", ", ", "; "].iter().any(|s| inside.contains(s));
+    if separated && inside.split_whitespace().count() >= 5 {
+        return Some(inside.to_string());
+    }
+    // The help text proper: before the default and before the list of possible values.
+    let text_end = ["[default: ", "Possible values:", "[possible values:"]
+        .iter()
+        .filter_map(|m| block.find(m))
+        .min()
+        .unwrap_or(block.len());
+    let text = &block[..text_end];
+    let mention = match inside {
+        "true" => "on by default".to_string(),
+        "false" => "off by default".to_string(),
+        value => value.to_string(),
+    };
+    [":", ",", ";"].iter().find_map(|p| {
+        let at = text.find(&format!("{mention}{p} "))?;
+        let why = &text[at + mention.len() + 2..];
+        (why.split_whitespace().count() >= 3).then(|| why.to_string())
+    })
+}
+
+/// Every flag of `render --help` that shows a default says why it is the default, in the
+/// same form, and no flag states its default outside the `[default: …]` brackets.
+#[test]
+fn every_default_in_render_help_says_why() {
+    let help = ok(&Command::new(env!("CARGO_BIN_EXE_render"))
+        .arg("--help")
+        .output()
+        .expect("render runs"));
+    let blocks = help_blocks(&help);
+    assert!(blocks.len() > 50, "too few option blocks:\n{help}");
+    let defaults: Vec<&String> = blocks.iter().filter(|b| b.contains("[default: ")).collect();
+    assert!(defaults.len() > 40, "too few defaults shown:\n{help}");
+    let bare: Vec<&&String> = defaults
+        .iter()
+        .filter(|b| default_reason(b).is_none())
+        .collect();
+    assert!(
+        bare.is_empty(),
+        "defaults without a reason (write `VALUE: why` in the help, or `[default: VALUE: why]`):\n{}",
+        bare.iter().map(|b| b.as_str()).collect::<Vec<_>>().join("\n")
+    );
+    let loose: Vec<&String> = blocks
+        .iter()
+        .filter(|b| b.contains("(default") || b.contains("Default:"))
+        .collect();
+    assert!(
+        loose.is_empty(),
+        "a default stated outside `[default: …]`:\n{}",
+        loose
+            .iter()
+            .map(|b| b.as_str())
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+}

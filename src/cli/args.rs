@@ -1,6 +1,8 @@
 //! The render command's flags: one clap group per engine, each converting itself into that
 //! engine's settings. Every default is read from the settings' `Default`, so it is written
-//! once; a flag's help says what it does, clap adds the default.
+//! once; a flag's help says what it does and why its default is the default: `VALUE: why`
+//! in the text, before the `[default: VALUE]` clap adds, or `[default: VALUE: why]` written
+//! by hand for an `Option` (`tests/cli.rs` checks every flag that shows a default).
 //!
 //! Adding a flag to an engine: a field in that engine's group here (with its help line) and
 //! the field it sets in the engine's settings; nothing else. The group a flag is in decides
@@ -64,8 +66,9 @@ pub struct CommonArgs {
     /// (`.xml`).
     #[arg(long, required = true)]
     pub input: Option<PathBuf>,
-    /// Output image: .png or .jpg (sRGB 8-bit), .exr or .pfm (linear float). Default:
-    /// the scene's name with .png (cornell_box.obj: cornell_box.png).
+    /// Output image: .png or .jpg (sRGB 8-bit), .exr or .pfm (linear float) [default: the
+    /// scene's name with .png (cornell_box.obj: cornell_box.png): the course's command lines
+    /// name no output].
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Also write the variance of each pixel's samples, per colour channel, to this .exr or
@@ -73,18 +76,21 @@ pub struct CommonArgs {
     /// variance of one sample, not of the pixel's mean: divide by the samples per pixel for
     /// that (with stratified samples, such as the path tracer's sobol sampler, that quotient
     /// overstates the mean's variance). Only engines whose pixels are means of samples; a
-    /// split render's parts keep what `render merge --variance` needs [default: none].
+    /// split render's parts keep what `render merge --variance` needs [default: none: its
+    /// sums cost memory only when asked].
     #[arg(long, value_name = "FILE")]
     pub variance: Option<PathBuf>,
-    /// Image size in pixels.
+    /// Image size in pixels (256 256: the course's size).
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [rs().width, rs().height])]
     pub size: Vec<u32>,
-    /// Lighting engine (default: photon when a photon flag is given, radiosity when a
-    /// radiosity flag is given, path for a Mitsuba scene, else raytrace).
+    /// Lighting engine [default: photon when a photon flag is given, radiosity when a
+    /// radiosity flag is given, as the course's command lines name no engine; path for a
+    /// Mitsuba scene, written for a path tracer; else raytrace].
     #[arg(long, value_enum)]
     pub engine: Option<EngineKind>,
     /// What to show instead of the rendered image: a radiosity mode (implies the radiosity
-    /// engine) or photons/kdtree (implies the photon engine) [default: the image].
+    /// engine) or photons/kdtree (implies the photon engine) [default: the image, which a
+    /// view replaces only when asked].
     #[arg(long, value_enum)]
     pub visualize: Option<Visualize>,
     /// Visibility backend [default: bvh for a scene of at most 1,000 primitives, where it was
@@ -92,10 +98,12 @@ pub struct CommonArgs {
     /// traversal win on large scenes, when this build has it].
     #[arg(long, value_enum)]
     pub accel: Option<AccelKind>,
-    /// Worker threads (0: one per core; at most 1024).
+    /// Worker threads (0: one per core, so that a render uses the whole machine; at most
+    /// 1024).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
-    /// Seed of every random number; the same seed gives the same image at any thread count.
+    /// Seed of every random number; the same seed gives the same image at any thread count
+    /// (0: a fixed seed, so that a command line renders the same image every run).
     #[arg(long, default_value_t = rs().seed)]
     pub seed: u64,
     /// No progress bar.
@@ -104,8 +112,9 @@ pub struct CommonArgs {
     /// Print the stages and structures this render would build, and exit.
     #[arg(long)]
     pub plan: bool,
-    /// Refuse renders estimated to need more memory than this (e.g. 512M, 8G; default 80% of
-    /// physical memory).
+    /// Refuse renders estimated to need more memory than this (e.g. 512M, 8G) [default: 80%
+    /// of physical memory: a render that would not fit is refused before anything is built,
+    /// with room left for the rest of the machine].
     #[arg(long, value_name = "SIZE", value_parser = crate::bytes::parse_bytes)]
     pub max_memory: Option<u64>,
     /// Print counters (rays cast, build and render time) after rendering.
@@ -126,7 +135,8 @@ pub struct CommonArgs {
     /// `<default>` (Mitsuba's -D); may be given more than once.
     #[arg(long, value_name = "NAME=VALUE", value_parser = parse_define)]
     pub define: Vec<(String, String)>,
-    /// Embree's build quality.
+    /// Embree's build quality (medium: Embree's own default, a compromise between build and
+    /// render time).
     #[arg(long, value_enum, default_value_t = AccelOptions::default().embree_quality)]
     pub embree_quality: EmbreeQuality,
     /// Embree's robust (watertight) mode: on by default; `--embree-robust false` trades
@@ -151,7 +161,8 @@ pub struct PathArgs {
     pub max_depth: Option<u32>,
     /// Where a path's numbers come from: sobol stratifies a pixel's paths together (each
     /// light point and bounce direction of the pixel's paths spread over the square),
-    /// independent draws every number on its own (Mitsuba 3's default sampler).
+    /// independent draws every number on its own (Mitsuba 3's default sampler); sobol: on
+    /// the Cornell box 0.64× the relMSE of independent numbers at equal paths.
     #[arg(long, value_enum, default_value_t = rs().path_sampler)]
     pub sampler: PathSampler,
 }
@@ -160,11 +171,13 @@ pub struct PathArgs {
 #[derive(Args, Debug)]
 #[command(next_help_heading = "Stochastic progressive photon mapping (--engine sppm)")]
 pub struct SppmArgs {
-    /// Photons traced a pass [default: one per pixel of the image].
+    /// Photons traced a pass [default: one per pixel of the image, so that a pass's photons
+    /// grow with its camera samples].
     #[arg(long, value_name = "N")]
     pub sppm_photons: Option<u64>,
     /// The initial gathering radius, as a fraction of the scene's diagonal (each pixel's
-    /// radius then shrinks as photons arrive).
+    /// radius then shrinks as photons arrive; 0.01: radii only shrink from it, so it bounds
+    /// the blur of the first passes).
     #[arg(long, value_name = "F", default_value_t = photon_defaults().sppm_radius, allow_negative_numbers = true)]
     pub sppm_radius: f32,
 }
@@ -289,26 +302,29 @@ impl Visualize {
 #[derive(Args, Debug)]
 #[command(next_help_heading = "Camera")]
 pub struct CameraArgs {
-    /// Samples per pixel (at least 1).
+    /// Samples per pixel, at least 1 (1: the course's value).
     #[arg(long, default_value_t = rs().num_antialias_samples)]
     pub num_antialias_samples: u32,
-    /// Thin-lens radius for depth of field (0: pinhole).
+    /// Thin-lens radius for depth of field (0: pinhole, the course's camera).
     #[arg(long, default_value_t = rs().aperture, allow_negative_numbers = true)]
     pub aperture: f32,
-    /// Distance of the plane in focus (default: the camera's point of interest).
+    /// Distance of the plane in focus [default: the camera's point of interest, so that what
+    /// it looks at is sharp].
     #[arg(long, allow_negative_numbers = true)]
     pub focus_distance: Option<f32>,
-    /// Camera position, overriding (or supplying) the scene's camera [default: the scene's].
+    /// Camera position, overriding (or supplying) the scene's camera [default: the scene's, as
+    /// its file sets it].
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
     pub camera_position: Option<Vec<f32>>,
-    /// The point the camera looks at [default: the scene's point of interest].
+    /// The point the camera looks at [default: the scene's point of interest, as its file
+    /// sets it].
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
     pub look_at: Option<Vec<f32>>,
-    /// The camera's up direction [default: the scene's].
+    /// The camera's up direction [default: the scene's, as its file sets it].
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true)]
     pub up: Option<Vec<f32>>,
     /// Field of view in degrees across the larger image side (makes the camera perspective)
-    /// [default: the scene's].
+    /// [default: the scene's, as its file sets it].
     #[arg(long, value_name = "DEGREES", allow_negative_numbers = true)]
     pub fov: Option<f32>,
 }
@@ -384,13 +400,14 @@ impl CameraArgs {
 #[derive(Args, Debug)]
 #[command(next_help_heading = "Ray tracing")]
 pub struct RayTraceArgs {
-    /// Mirror/refraction recursion depth.
+    /// Mirror/refraction recursion depth (0: the course's value).
     #[arg(long, default_value_t = rs().num_bounces)]
     pub num_bounces: u32,
-    /// Shadow rays per light (radiosity: visibility in form factors when > 0).
+    /// Shadow rays per light (radiosity: visibility in form factors when > 0; 0: the light's
+    /// centre with no shadow ray, the course's value).
     #[arg(long, default_value_t = rs().num_shadow_samples)]
     pub num_shadow_samples: u32,
-    /// Ambient radiance R G B [default: 0.1 0.1 0.1].
+    /// Ambient radiance R G B [default: 0.1 0.1 0.1, the course's value].
     #[arg(long, num_args = 3, value_names = ["R", "G", "B"], allow_negative_numbers = true)]
     pub ambient_light: Option<Vec<f32>>,
     /// Placement of the points on each light for soft shadows: uniform in the solid angle a
@@ -401,11 +418,13 @@ pub struct RayTraceArgs {
     #[arg(long, value_enum)]
     pub light_sampling: Option<LightSampling>,
     /// With --light-sampling adaptive: how many times a light may be split in four where
-    /// its corners disagree (2: up to 5×5 points).
+    /// its corners disagree (2: up to 5×5 points; each level more can quadruple the shadow
+    /// rays).
     #[arg(long, value_name = "N", default_value_t = rs().adaptive_depth,
           value_parser = clap::value_parser!(u32).range(0..=crate::render::adaptive::MAX_DEPTH as i64))]
     pub adaptive_depth: u32,
-    /// Diffuse indirect light: the constant -ambient_light, or the radiosity solution.
+    /// Diffuse indirect light: the constant -ambient_light, or the radiosity solution
+    /// (ambient: the course program's, and no solve to wait for).
     #[arg(long, value_enum, default_value_t = rs().indirect)]
     pub indirect: IndirectKind,
     /// Trace pixel (X, Y) (column from the left, row from the bottom) and write its rays
@@ -419,66 +438,76 @@ pub struct RayTraceArgs {
 #[derive(Args, Debug)]
 #[command(next_help_heading = "Radiosity")]
 pub struct RadiosityArgs {
-    /// Point pairs per form factor.
+    /// Point pairs per form factor (1: the patch centres, the course's value).
     #[arg(long, default_value_t = radiosity_defaults().num_form_factor_samples)]
     pub num_form_factor_samples: u32,
-    /// Sphere tessellation H V.
+    /// Sphere tessellation H V (8 6: the course's value).
     #[arg(long, num_args = 2, value_names = ["H", "V"], default_values_t = [radiosity_defaults().sphere_rasterization.0, radiosity_defaults().sphere_rasterization.1])]
     pub sphere_rasterization: Vec<u32>,
-    /// Ring tessellation around the axis.
+    /// Ring tessellation around the axis (20: the course's value).
     #[arg(long, default_value_t = radiosity_defaults().cylinder_ring_rasterization)]
     pub cylinder_ring_rasterization: u32,
     /// Smooth display: bilinear between values averaged at patch corners.
     #[arg(long)]
     pub interpolate: bool,
-    /// Split every quad into four this many times, keeping the parents.
+    /// Split every quad into four this many times, keeping the parents (0: the scene's own
+    /// quads, as the course's command lines solve them).
     #[arg(long, default_value_t = radiosity_defaults().subdivide)]
     pub subdivide: u32,
-    /// Stop when undistributed / emitted power falls to this.
+    /// Stop when undistributed / emitted power falls to this (0.001: a thousandth of the
+    /// emitted power left unshot, which the display adds back as an ambient term).
     #[arg(long, default_value_t = radiosity_defaults().tolerance, allow_negative_numbers = true)]
     pub radiosity_tolerance: f32,
     /// Stop after exactly K shots, e.g. 16 for the course's "after the top 16 patches have
     /// shot".
     #[arg(long, value_name = "K")]
     pub radiosity_iterations: Option<u64>,
-    /// Safety cap: at most this many shots per patch before giving up, reported.
+    /// Safety cap: at most this many shots per patch before giving up, reported (1000: the
+    /// stiffest case measured, a furnace of albedo 0.999, needed 170 a patch).
     #[arg(long, default_value_t = radiosity_defaults().max_shots_per_patch)]
     pub radiosity_max_shots_per_patch: u64,
     /// Over-relaxation of each shot: auto (from how much of each shot comes back), or a
-    /// fixed ω in [1, 2), 1 being plain progressive refinement.
+    /// fixed ω in [1, 2), 1 being plain progressive refinement (auto: fewer shots on every
+    /// scene tried, for the same images).
     #[arg(long, default_value_t = radiosity_defaults().relaxation)]
     pub radiosity_relaxation: Relaxation,
     /// The solver: progressive refinement (shooting), hierarchical radiosity with
     /// clustering (links between clusters and element quadtrees, refined by the power they
-    /// carry), or auto: hierarchical above 5,000 input patches, progressive up to it.
+    /// carry), or auto: hierarchical above 5,000 input patches, progressive up to it, so that
+    /// the course's scenes keep their images and buildings get the solver whose cost grows
+    /// about linearly.
     #[arg(long, default_value_t = radiosity_defaults().solver)]
     pub radiosity_solver: SolverKind,
     /// Hierarchical: refine a link carrying more than this fraction of the largest emitted
-    /// power.
+    /// power (0.0001: smaller refines more links, for more time and memory).
     #[arg(long, default_value_t = radiosity_defaults().link_error, allow_negative_numbers = true)]
     pub link_error: f32,
-    /// Hierarchical: do not split elements smaller than this fraction of the scene's area.
+    /// Hierarchical: do not split elements smaller than this fraction of the scene's area
+    /// (0.00001: a floor, so that refinement ends however much power a link carries).
     #[arg(long, default_value_t = radiosity_defaults().min_element_area, allow_negative_numbers = true)]
     pub min_element_area: f32,
     /// Hierarchical: with more input patches than this, start linking from the root
-    /// cluster; up to it, from every pair of patches.
+    /// cluster; up to it, from every pair of patches (2000: the pairs need no cluster
+    /// estimate, but their number grows as the square of the patches).
     #[arg(long, value_name = "PATCHES", default_value_t = radiosity_defaults().cluster_above)]
     pub cluster_above: usize,
-    /// Memory for cached rows of form factors, MiB.
+    /// Memory for cached rows of form factors, MiB (1024: a bound on the cache's memory;
+    /// rows that do not fit are computed again when their patch shoots).
     #[arg(long, default_value_t = radiosity_defaults().ff_cache_mb)]
     pub ff_cache_mb: usize,
     /// Split patches whose radiance differs from a neighbour's by more than this, and solve
     /// again.
     #[arg(long, value_name = "THRESHOLD", allow_negative_numbers = true)]
     pub adaptive_subdivide: Option<f32>,
-    /// Rounds of adaptive subdivision.
+    /// Rounds of adaptive subdivision (3: each round splits and solves again, so the rounds
+    /// bound the time).
     #[arg(long, default_value_t = radiosity_defaults().adaptive_rounds)]
     pub adaptive_rounds: u32,
     /// Draw patch outlines over the radiosity image.
     #[arg(long)]
     pub wireframe: bool,
-    /// The patch whose form factors `--visualize form-factors` shows (default: the one with
-    /// the most undistributed light).
+    /// The patch whose form factors `--visualize form-factors` shows [default: the one with
+    /// the most undistributed light, which shoots next].
     #[arg(long, value_name = "PATCH")]
     pub ff_source: Option<u32>,
     /// Write one CSV line per radiosity shot: residual, wall time, rays cast.
@@ -521,8 +550,8 @@ pub struct PhotonArgs {
     #[arg(long, value_name = "BOOL", num_args = 0..=1, require_equals = true,
           default_missing_value = "true")]
     pub gather_indirect: Option<bool>,
-    /// Bounces a photon may make: a safety cap (Russian roulette ends photon paths long
-    /// before it, so that it cuts no light).
+    /// Bounces a photon may make: a safety cap (10000: Russian roulette ends photon paths
+    /// long before it, so that it cuts no light).
     #[arg(long, default_value_t = photon_defaults().max_photon_depth)]
     pub max_photon_depth: u32,
     /// Largest radius of a photon density estimate, as a fraction of the scene's diagonal
@@ -548,11 +577,11 @@ pub struct PhotonArgs {
     #[arg(long, default_value_t = photon_defaults().irradiance_cache_spacing)]
     pub irradiance_cache_spacing: u32,
     /// Write both photon maps to FILE (versioned, with a fingerprint of scene and settings)
-    /// [default: not written].
+    /// [default: not written: costs nothing unless asked].
     #[arg(long, value_name = "FILE")]
     pub save_photons: Option<PathBuf>,
     /// Read the photon maps from FILE instead of tracing them; refused if made for another
-    /// scene or other settings [default: traced].
+    /// scene or other settings [default: traced, which needs no file].
     #[arg(long, value_name = "FILE")]
     pub load_photons: Option<PathBuf>,
 }
