@@ -9,6 +9,11 @@
 //! `TRILUX_REQUIRE_SHARED=1`), a missing input fails the trial instead.
 
 mod common;
+// Beside this file rather than in `tests/`, where Cargo would build each as a test of its own.
+#[path = "shared_inputs/json.rs"]
+mod json;
+#[path = "shared_inputs/mitsuba_loader.rs"]
+mod mitsuba_loader;
 
 use std::path::{Path, PathBuf};
 
@@ -44,6 +49,7 @@ fn main() {
             GGX_SCENE,
             mitsuba_z_test_fails_on_a_ggx_roughness_off_by_5_percent,
         ),
+        mitsuba_loader_trial(),
         shared_input_trial(
             "office3_against_path_traced_references",
             "mgf-scenes/office3/office.mgf",
@@ -56,28 +62,73 @@ fn main() {
 /// A trial that runs `body` on `../shared/<input>`: ignored, saying why, when that is missing
 /// (failed instead when `TRILUX_REQUIRE_SHARED` is set).
 fn shared_input_trial(name: &'static str, input: &str, body: fn(&Path)) -> Trial {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    let path = shared(input);
+    let missing = (!path.exists()).then(|| not_found(&path));
+    trial_needing(name, missing, &["TRILUX_REQUIRE_SHARED"], move || {
+        body(&path)
+    })
+}
+
+/// Our Mitsuba reader against Mitsuba's own loader (`mitsuba_loader.rs`): ignored, saying
+/// why, without `../shared/mitsuba-tests` or without Mitsuba in `python3` (failed instead
+/// when `TRILUX_REQUIRE_MITSUBA` is set, or `TRILUX_REQUIRE_SHARED` for the scenes).
+fn mitsuba_loader_trial() -> Trial {
+    let name = "mitsuba_reader_against_mitsubas_loader";
+    let dir = shared("mitsuba-tests/tests/scenes");
+    let mut required = vec!["TRILUX_REQUIRE_MITSUBA"];
+    let missing = if !dir.exists() {
+        required.push("TRILUX_REQUIRE_SHARED");
+        Some(not_found(&dir))
+    } else {
+        let import = std::process::Command::new("python3")
+            .args(["-c", "import mitsuba"])
+            .output();
+        match import {
+            Ok(out) if out.status.success() => None,
+            _ => Some("python3 cannot import mitsuba (pip install mitsuba)".to_string()),
+        }
+    };
+    trial_needing(name, missing, &required, move || {
+        mitsuba_loader::our_reader_against_mitsubas_loader(&dir)
+    })
+}
+
+fn not_found(path: &Path) -> String {
+    format!(
+        "{} not found (reference inputs beside the checkout)",
+        path.display()
+    )
+}
+
+fn shared(input: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../shared")
-        .join(input);
-    let present = path.exists();
-    let required = std::env::var_os("TRILUX_REQUIRE_SHARED").is_some();
-    if !present && !required {
-        eprintln!(
-            "{name}: skipped: {} not found (reference inputs beside the checkout)",
-            path.display()
-        );
+        .join(input)
+}
+
+/// A trial that runs `body`, unless what it needs is `missing`: then it is ignored, saying
+/// why, or failed when one of the `required` variables is set (CI sets them).
+fn trial_needing(
+    name: &'static str,
+    missing: Option<String>,
+    required: &[&str],
+    body: impl FnOnce() + Send + 'static,
+) -> Trial {
+    let required = required.iter().any(|v| std::env::var_os(v).is_some());
+    if let (Some(why), false) = (&missing, required) {
+        eprintln!("{name}: skipped: {why}");
     }
+    let ignored = missing.is_some() && !required;
     Trial::test(name, move || {
-        if !present {
+        if let Some(why) = missing {
             return Err(Failed::from(format!(
-                "{} not found (TRILUX_REQUIRE_SHARED is set, or the trial was run with --ignored)",
-                path.display()
+                "{why} (a TRILUX_REQUIRE_ variable is set, or the trial was run with --ignored)"
             )));
         }
-        body(&path);
+        body();
         Ok(())
     })
-    .with_ignored_flag(!present && !required)
+    .with_ignored_flag(ignored)
 }
 
 /// The course's command lines, one or more per engine and every course scene (the photon
