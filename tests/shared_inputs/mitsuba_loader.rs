@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::json::Json;
+use super::json::{Fields, Json};
 use trilux::geometry::{Bounds3, Shape};
 use trilux::scene::bsdf::{Bsdf, Microfacet};
 use trilux::scene::sky::Sky;
@@ -75,7 +75,7 @@ fn mitsuba_params(files: &[PathBuf]) -> Vec<Json> {
         String::from_utf8_lossy(&run.stderr)
     );
     let text = String::from_utf8(run.stdout).expect("UTF-8");
-    let parsed = Json::parse(&text).unwrap_or_else(|e| panic!("its JSON: {e}"));
+    let parsed: Json = serde_json::from_str(&text).unwrap_or_else(|e| panic!("its JSON: {e}"));
     parsed.items().to_vec()
 }
 
@@ -125,11 +125,11 @@ pub fn our_reader_against_mitsubas_loader(dir: &Path) {
             differences: Vec::new(),
             compared: 0,
         };
-        let [lo, hi] = corners(theirs.get("bbox"));
+        let [lo, hi] = corners(theirs.field("bbox"));
         let size = (0..3).map(|i| (hi[i] - lo[i]).powi(2)).sum::<f64>().sqrt();
-        camera(&mut c, &ours, theirs.get("sensor"), size);
-        shapes(&mut c, &ours, theirs.get("shapes").items(), size);
-        emitters(&mut c, &ours, theirs.get("emitters").items(), size);
+        camera(&mut c, &ours, theirs.field("sensor"), size);
+        shapes(&mut c, &ours, theirs.field("shapes").items(), size);
+        emitters(&mut c, &ours, theirs.field("emitters").items(), size);
         println!(
             "{name}: {} values compared, {} differ",
             c.compared,
@@ -206,7 +206,7 @@ fn normalized(v: Vec<f64>) -> Vec<f64> {
 /// larger side.
 fn camera(c: &mut Compare, ours: &Scene, sensor: &Json, size: f64) {
     let camera = ours.camera.expect("the scene's camera");
-    let to_world = sensor.get("to_world");
+    let to_world = sensor.field("to_world");
     c.values(
         "camera position",
         &column(to_world, 3),
@@ -226,10 +226,10 @@ fn camera(c: &mut Compare, ours: &Scene, sensor: &Json, size: f64) {
         &camera.up.to_array(),
         VALUE_TOLERANCE,
     );
-    let [w, h] = [0, 1].map(|i| sensor.get("film_size").numbers()[i]);
+    let [w, h] = [0, 1].map(|i| sensor.field("film_size").numbers()[i]);
     let (ow, oh) = ours.render_hints.size.expect("the film's size");
     c.values("film size", &[w, h], &[ow as f32, oh as f32], 0.0);
-    let half_x = (sensor.get("x_fov").number().to_radians() / 2.0).tan();
+    let half_x = (sensor.field("x_fov").number().to_radians() / 2.0).tan();
     let larger = if w >= h { half_x } else { half_x * h / w };
     match camera.projection {
         Projection::Perspective { angle } => c.values(
@@ -255,11 +255,11 @@ fn camera(c: &mut Compare, ours: &Scene, sensor: &Json, size: f64) {
 fn shapes(c: &mut Compare, ours: &Scene, shapes: &[Json], size: f64) {
     let (mut triangle, mut analytic) = (0, 0);
     for (k, shape) in shapes.iter().enumerate() {
-        let class = shape.get("class").string();
+        let class = shape.field("class").string();
         let what = format!("shape {k} ({class})");
-        let (bounds, materials): (Bounds3, Vec<u32>) = match shape.get("faces") {
-            Json::Number(faces) => {
-                let range = triangle..triangle + *faces as usize;
+        let (bounds, materials): (Bounds3, Vec<u32>) = match shape.field("faces").as_f64() {
+            Some(faces) => {
+                let range = triangle..triangle + faces as usize;
                 triangle = range.end;
                 if range.end > ours.triangles.len() {
                     c.values(
@@ -286,7 +286,7 @@ fn shapes(c: &mut Compare, ours: &Scene, shapes: &[Json], size: f64) {
             }
             _ => panic!("{}: {what}: a shape kind this test does not match", c.scene),
         };
-        let [lo, hi] = corners(shape.get("bbox"));
+        let [lo, hi] = corners(shape.field("bbox"));
         let tolerance = PLACE_TOLERANCE * size;
         c.values(
             &format!("{what}: bbox min"),
@@ -307,12 +307,17 @@ fn shapes(c: &mut Compare, ours: &Scene, shapes: &[Json], size: f64) {
             c.scene
         );
         let m = &ours.materials[material as usize];
-        let classes: Vec<&str> = shape.get("bsdf").items().iter().map(Json::string).collect();
-        bsdf(c, &what, m, &classes, shape.get("bsdf_params"));
-        if let Some(emitter) = shape.member("area_emitter").filter(|e| **e != Json::Null) {
+        let classes: Vec<&str> = shape
+            .field("bsdf")
+            .items()
+            .iter()
+            .map(Fields::string)
+            .collect();
+        bsdf(c, &what, m, &classes, shape.field("bsdf_params"));
+        if let Some(emitter) = shape.get("area_emitter").filter(|e| !e.is_null()) {
             c.values(
                 &format!("{what}: area radiance"),
-                &emitter.get("radiance").numbers(),
+                &emitter.field("radiance").numbers(),
                 &m.emitted.to_array(),
                 VALUE_TOLERANCE,
             );
@@ -341,7 +346,7 @@ fn bsdf(c: &mut Compare, what: &str, m: &Material, classes: &[&str], params: &Js
     for (key, value) in params.members() {
         let (name, theirs) = match key.strip_suffix(".color0") {
             Some(name) => {
-                let other = params.get(&format!("{name}.color1")).numbers();
+                let other = params.field(&format!("{name}.color1")).numbers();
                 let mean = value.numbers().into_iter().zip(other);
                 (name, mean.map(|(a, b)| 0.5 * (a + b)).collect())
             }
@@ -478,9 +483,9 @@ fn parameter(m: &Material, inner: &str, name: &str) -> Option<Vec<f32>> {
 fn emitters(c: &mut Compare, ours: &Scene, emitters: &[Json], size: f64) {
     let mut delta = ours.delta_lights.iter();
     for e in emitters {
-        let class = e.get("class").string();
-        let params = e.get("params");
-        let number = |name: &str| params.get(name).numbers();
+        let class = e.field("class").string();
+        let params = e.field("params");
+        let number = |name: &str| params.field(name).numbers();
         match class {
             "ConstantBackgroundEmitter" => match &ours.sky {
                 Some(Sky::Uniform(radiance)) => c.values(
@@ -504,7 +509,7 @@ fn emitters(c: &mut Compare, ours: &Scene, emitters: &[Json], size: f64) {
                     for k in 0..3 {
                         c.values(
                             &format!("envmap to_world column {k}"),
-                            &column(params.get("to_world"), k),
+                            &column(params.field("to_world"), k),
                             &frame.col(k).to_array(),
                             VALUE_TOLERANCE,
                         );
@@ -534,7 +539,7 @@ fn emitters(c: &mut Compare, ours: &Scene, emitters: &[Json], size: f64) {
                         cutoff,
                         ..
                     } => {
-                        let to_world = params.get("to_world");
+                        let to_world = params.field("to_world");
                         c.values(
                             "spot position",
                             &column(to_world, 3),
