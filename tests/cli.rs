@@ -282,11 +282,19 @@ fn plan_says_what_the_engine_renders_of_each_mitsuba_bsdf() {
     ] {
         assert!(raytrace.contains(line), "{line:?} not in\n{raytrace}");
     }
+    // The path tracer renders all four exactly: no warning about them.
+    assert!(!warnings.contains("approximates it"), "{warnings}");
+    let (_, warnings) = plan("raytrace");
     assert!(
         warnings.contains(
-            "roughplastic: the path tracer renders it exactly; the other engines approximate it as a Lambertian base under a constant specular layer"
+            "roughplastic: the raytrace engine approximates it as a Lambertian base under a constant specular layer (the path tracer renders it exactly)"
         ),
         "{warnings}"
+    );
+    assert_eq!(
+        warnings.matches("approximates it").count(),
+        3,
+        "one warning a plugin: {warnings}"
     );
     // A course scene has no Mitsuba BSDF: nothing is said of them.
     let course = ok(&render(

@@ -229,6 +229,17 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
+    // What this engine approximates of the scene's Mitsuba BSDFs, once for each plugin in the
+    // file (materials share plugins).
+    let mut approximations: Vec<String> = Vec::new();
+    for plugin in scene.mitsuba_bsdfs.values().flat_map(|b| &b.plugins) {
+        if let Some(w) = plugin.warning(engine.name(), engine == EngineKind::Path) {
+            if !approximations.contains(&w) {
+                eprintln!("warning: {w}");
+                approximations.push(w);
+            }
+        }
+    }
     if args.camera.overrides() {
         let camera = args.camera(scene.camera())?;
         crate::scene::range::check_camera(&camera).map_err(|e| format!("the camera flags: {e}"))?;

@@ -1,12 +1,14 @@
 //! What the engines render of each Mitsuba BSDF plugin a material is made of: the one record
-//! behind the Mitsuba reader's warnings and `--plan`'s lines on materials
-//! (docs/scene-format.md's table says the same for every plugin).
+//! behind the warnings about the chosen engine's approximations and `--plan`'s lines on
+//! materials (docs/scene-format.md's table says the same for every plugin).
 
 /// A BSDF plugin as the engines render it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PluginSupport {
     /// The plugin's type as the file gives it (`roughplastic`, `mask`).
     pub kind: String,
+    /// Where the file gives it (`file:line:column`), for the warnings.
+    pub at: String,
     /// What the path tracer renders in its place; None: the plugin, exactly.
     pub path: Option<&'static str>,
     /// What the other engines render in its place; None: the plugin, exactly.
@@ -24,24 +26,20 @@ impl PluginSupport {
         }
     }
 
-    /// The reader's warning about the plugin; None when every engine renders it exactly.
-    pub fn warning(&self) -> Option<String> {
-        let kind = &self.kind;
-        match (self.path, self.others) {
-            (None, None) => None,
-            (None, Some(o)) => Some(format!(
-                "{kind}: the path tracer renders it exactly; the other engines approximate it as {o}"
-            )),
-            (Some(p), Some(o)) if p == o => {
-                Some(format!("{kind} is approximated in every engine as {p}"))
-            }
-            (Some(p), o) => Some(format!(
-                "{kind}: the path tracer approximates it as {p}; the other engines {}",
-                o.map_or("render it exactly".to_string(), |o| format!(
-                    "approximate it as {o}"
-                ))
-            )),
-        }
+    /// The warning for a render by `engine` (the path tracer when `path_tracer`); None when
+    /// that engine renders the plugin exactly. It says where the path tracer is exact, which
+    /// is what a user of another engine can switch to.
+    pub fn warning(&self, engine: &str, path_tracer: bool) -> Option<String> {
+        let how = self.approximation(path_tracer)?;
+        let exact_elsewhere = if !path_tracer && self.path.is_none() {
+            " (the path tracer renders it exactly)"
+        } else {
+            ""
+        };
+        Some(format!(
+            "{}: {}: the {engine} engine approximates it as {how}{exact_elsewhere}",
+            self.at, self.kind
+        ))
     }
 }
 
@@ -95,6 +93,7 @@ mod tests {
     ) -> PluginSupport {
         PluginSupport {
             kind: kind.into(),
+            at: "s.xml:3:5".into(),
             path,
             others,
         }
@@ -116,16 +115,17 @@ mod tests {
             m.rendering(false),
             "mask approximated as its nested BSDF, opaque; roughplastic approximated as a Lambertian base"
         );
-        assert_eq!(m.plugins[1].warning(), None);
+        assert_eq!(m.plugins[1].warning("raytrace", false), None);
+        assert_eq!(m.plugins[2].warning("path", true), None);
         assert_eq!(
-            plugin(
-                "someplugin",
-                Some("a Lambertian base"),
-                Some("a Lambertian base")
-            )
-            .warning()
-            .as_deref(),
-            Some("someplugin is approximated in every engine as a Lambertian base")
+            m.plugins[2].warning("photon", false).as_deref(),
+            Some("s.xml:3:5: roughplastic: the photon engine approximates it as a Lambertian base (the path tracer renders it exactly)")
+        );
+        assert_eq!(
+            plugin("someplugin", Some("a Lambertian base"), None)
+                .warning("path", true)
+                .as_deref(),
+            Some("s.xml:3:5: someplugin: the path engine approximates it as a Lambertian base")
         );
     }
 }

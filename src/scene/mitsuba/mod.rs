@@ -780,12 +780,10 @@ impl Builder {
         };
         let support = PluginSupport {
             kind: p.kind.clone(),
+            at: p.at.to_string(),
             path,
             others,
         };
-        if let Some(warning) = support.warning() {
-            self.warn(&p.at, warning);
-        }
         // A wrapper's nested BSDF recorded itself first: this plugin goes in front of it.
         self.bsdf_plugins.insert(first, support);
         Ok(material)
