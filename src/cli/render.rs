@@ -33,10 +33,17 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     let unused = args.unused_flags();
     if args.common.plan {
         let (_, limit) = memory_limit(args);
-        let notes: String = unused
+        let mut notes: String = unused
             .iter()
             .map(|f| format!("note: {f} is ignored: the {engine} engine does not read it\n"))
             .collect();
+        if args.common.accel.is_none() {
+            notes += &format!(
+                "note: accel {kind} is the default for a scene of {} primitives (the BVH up to {}, Embree above when built in); --accel chooses\n",
+                scene.primitive_count(),
+                accel::BVH_UP_TO_PRIMITIVES
+            );
+        }
         return emit(&format!(
             "scene: {}\n{plan}memory limit: {limit}\n{notes}",
             input.display()
