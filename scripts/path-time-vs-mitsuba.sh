@@ -2,13 +2,13 @@
 # Times our path tracer against Mitsuba 3's on the course's Cornell box with the diffuse sphere
 # (256×256, both threads), times only, in one run (BENCHMARKS.md, "The path tracer against Mitsuba 3"):
 #
-#   scripts/path-time-vs-mitsuba.sh REPEATS RENDER:ACCEL [RENDER:ACCEL ...]
+#   scripts/path-time-vs-mitsuba.sh REPEATS RENDER[:ACCEL] [RENDER[:ACCEL] ...]
 #
 # Each repetition r (seed r) renders, for 64 and 256 samples a pixel, Mitsuba's `path`
 # integrator (llvm_ad_rgb; scripts/mitsuba_time.py, which times the render after an untimed
-# one) and then each of our RENDER binaries with `--engine path --light-sampling random`
-# (light sampling by area, as Mitsuba's) and `--accel ACCEL`, so that every binary and backend
-# meets the same machine. Prints, per setting, the times, their median and the ratio of that
+# one) and then each of our RENDER binaries with `--engine path` and its default flags (light
+# points by area, as Mitsuba's; the Accel its default picks for the scene) or `--accel ACCEL`,
+# so that every binary and backend meets the same machine. Prints, per setting, the times, their median and the ratio of that
 # median to Mitsuba's.
 #
 # REFERENCE=FILE.exr (a converged image of the scene, e.g. Mitsuba at 16k spp averaged) adds
@@ -56,12 +56,13 @@ for r in $(seq "$repeats"); do
       mitsuba "mitsuba-w$width" "${samplers[0]}" "$width" "$spp" "$r"
     done
     for who in "$@"; do
-      render=${who%:*} accel=${who##*:}
+      render=${who%%:*} accel=()
+      [ "$render" = "$who" ] || accel=(--accel "${who#*:}")
       start=$(date +%s.%N)
       "$render" -input "$scene" --engine path -num_antialias_samples "$spp" \
-        --light-sampling random --accel "$accel" --seed "$r" --quiet -o "$work/ours.exr"
+        "${accel[@]}" --seed "$r" --quiet -o "$work/ours.exr"
       end=$(date +%s.%N)
-      echo "$who,$spp,$(echo "$end - $start" | bc -l),$(relmse "$work/ours.exr")" >>"$csv"
+      echo "$who,$spp,$(awk -v s="$start" -v e="$end" 'BEGIN { print e - s }'),$(relmse "$work/ours.exr")" >>"$csv"
     done
   done
 done
