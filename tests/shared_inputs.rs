@@ -427,6 +427,21 @@ const GGX_SCENE: &str =
 /// over the 48×48 image.
 const GGX_Z_TEST_SPP: u32 = 868;
 
+/// The Mitsuba test scenes of `dir` (`tests/scenes`): every `<group>/test_*.xml`, sorted.
+fn mitsuba_test_scenes(dir: &Path) -> Vec<PathBuf> {
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("the scene groups")
+        .flat_map(|group| std::fs::read_dir(group.expect("a group").path()).expect("a group"))
+        .map(|e| e.expect("an entry").path())
+        .filter(|p| {
+            let name = p.file_name().unwrap_or_default().to_string_lossy();
+            name.starts_with("test_") && name.ends_with(".xml")
+        })
+        .collect();
+    scenes.sort();
+    scenes
+}
+
 /// Every scene of Mitsuba 3's render tests rendered by our path tracer at 256 samples a
 /// pixel, against Mitsuba's reference image, by two rules:
 /// - relMSE: a scene passes when its relMSE is at most 1.5× the relMSE Mitsuba's own
@@ -443,16 +458,7 @@ fn mitsuba_render_tests_against_mitsubas_references(dir: &Path) {
     use trilux::accel::{self, AccelOptions};
     use trilux::engines::{path, RenderSettings};
 
-    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
-        .expect("the scene groups")
-        .flat_map(|group| std::fs::read_dir(group.expect("a group").path()).expect("a group"))
-        .map(|e| e.expect("an entry").path())
-        .filter(|p| {
-            let name = p.file_name().unwrap_or_default().to_string_lossy();
-            name.starts_with("test_") && name.ends_with(".xml")
-        })
-        .collect();
-    scenes.sort();
+    let scenes = mitsuba_test_scenes(dir);
     assert!(
         scenes.len() >= 23,
         "{} scenes in {}",

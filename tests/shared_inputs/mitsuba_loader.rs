@@ -46,21 +46,6 @@ const NOT_COMPARED: [(&str, &str); 4] = [
 /// above), so that a change on either side is seen. None today: every compared value agrees.
 const KNOWN_DIFFERENCES: [(&str, &str, &[f64], &[f64]); 0] = [];
 
-/// The scenes of `dir` (`tests/scenes`): every `<group>/test_*.xml`.
-fn scenes(dir: &Path) -> Vec<PathBuf> {
-    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
-        .expect("the scene groups")
-        .flat_map(|group| std::fs::read_dir(group.expect("a group").path()).expect("a group"))
-        .map(|e| e.expect("an entry").path())
-        .filter(|p| {
-            let name = p.file_name().unwrap_or_default().to_string_lossy();
-            name.starts_with("test_") && name.ends_with(".xml")
-        })
-        .collect();
-    scenes.sort();
-    scenes
-}
-
 /// What Mitsuba makes of `files`, one JSON object per file.
 fn mitsuba_params(files: &[PathBuf]) -> Vec<Json> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/mitsuba_scene_params.py");
@@ -112,7 +97,7 @@ impl Compare<'_> {
 /// the module's comment). Every difference not in `KNOWN_DIFFERENCES` fails the test, all of
 /// them listed together.
 pub fn our_reader_against_mitsubas_loader(dir: &Path) {
-    let files = scenes(dir);
+    let files = super::mitsuba_test_scenes(dir);
     assert_eq!(files.len(), 23, "Mitsuba's 23 render-test scenes");
     let params = mitsuba_params(&files);
     let mut differences = Vec::new();
