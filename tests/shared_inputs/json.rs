@@ -7,7 +7,7 @@ pub use serde_json::Value as Json;
 pub trait Fields {
     /// The member `key` of an object; panics naming the key when there is none.
     fn field(&self, key: &str) -> &Json;
-    fn members(&self) -> Vec<(&String, &Json)>;
+    fn members(&self) -> &serde_json::Map<String, Json>;
     fn items(&self) -> &[Json];
     fn number(&self) -> f64;
     fn string(&self) -> &str;
@@ -21,11 +21,9 @@ impl Fields for Json {
             .unwrap_or_else(|| panic!("no \"{key}\" in {self:?}"))
     }
 
-    fn members(&self) -> Vec<(&String, &Json)> {
+    fn members(&self) -> &serde_json::Map<String, Json> {
         self.as_object()
             .unwrap_or_else(|| panic!("expected an object, found {self:?}"))
-            .iter()
-            .collect()
     }
 
     fn items(&self) -> &[Json] {

@@ -41,11 +41,6 @@ const NOT_COMPARED: [(&str, &str); 4] = [
     ),
 ];
 
-/// Where our reader stores something otherwise than Mitsuba: (scene, what, Mitsuba's value,
-/// ours), as measured. Each must still be found, with these values (to the tolerances
-/// above), so that a change on either side is seen. None today: every compared value agrees.
-const KNOWN_DIFFERENCES: [(&str, &str, &[f64], &[f64]); 0] = [];
-
 /// What Mitsuba makes of `files`, one JSON object per file.
 fn mitsuba_params(files: &[PathBuf]) -> Vec<Json> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/mitsuba_scene_params.py");
@@ -94,8 +89,7 @@ impl Compare<'_> {
 }
 
 /// Reads `dir`'s Mitsuba scenes with our reader and with Mitsuba's, and compares them (see
-/// the module's comment). Every difference not in `KNOWN_DIFFERENCES` fails the test, all of
-/// them listed together.
+/// the module's comment). Every difference fails the test, all of them listed together.
 pub fn our_reader_against_mitsubas_loader(dir: &Path) {
     let files = super::mitsuba_test_scenes(dir);
     assert_eq!(files.len(), 23, "Mitsuba's 23 render-test scenes");
@@ -123,50 +117,18 @@ pub fn our_reader_against_mitsubas_loader(dir: &Path) {
         compared += c.compared;
         differences.extend(c.differences);
     }
-    let known = |(scene, what, _, _): &(String, String, Vec<f64>, Vec<f64>)| {
-        KNOWN_DIFFERENCES
-            .iter()
-            .find(|(s, w, _, _)| s == scene && w == what)
-    };
-    let mut failures = Vec::new();
-    for d in &differences {
-        let (scene, what, theirs, ours) = d;
-        match known(d) {
-            Some((_, _, t, o)) if same(t, theirs) && same(o, ours) => {
-                println!("known difference: {scene}: {what}: Mitsuba {theirs:?}, ours {ours:?}")
-            }
-            _ => failures.push(format!(
-                "{scene}: {what}: Mitsuba {theirs:?}, ours {ours:?}"
-            )),
-        }
-    }
-    for (scene, what, _, _) in KNOWN_DIFFERENCES {
-        if !differences
-            .iter()
-            .any(|(s, w, _, _)| s == scene && w == what)
-        {
-            failures.push(format!(
-                "{scene}: {what}: a known difference no longer found"
-            ));
-        }
-    }
-    println!(
-        "{} scenes, {compared} values compared, {} known differences",
-        files.len(),
-        KNOWN_DIFFERENCES.len()
-    );
+    println!("{} scenes, {compared} values compared", files.len());
+    let failures: Vec<String> = differences
+        .iter()
+        .map(|(scene, what, theirs, ours)| {
+            format!("{scene}: {what}: Mitsuba {theirs:?}, ours {ours:?}")
+        })
+        .collect();
     assert!(
         failures.is_empty(),
         "our reader and Mitsuba's loader differ:\n{}",
         failures.join("\n")
     );
-}
-
-fn same(a: &[f64], b: &[f64]) -> bool {
-    a.len() == b.len()
-        && a.iter()
-            .zip(b)
-            .all(|(x, y)| (x - y).abs() <= VALUE_TOLERANCE)
 }
 
 fn corners(b: &Json) -> [Vec<f64>; 2] {
