@@ -283,6 +283,11 @@ fn the_module_graph_has_no_cycle() {
         "{:?}",
         g["scene::sky"]
     );
+    assert!(
+        g["scene::volume_grid"].contains("image_io"),
+        "{:?}",
+        g["scene::volume_grid"]
+    );
 }
 
 /// The layers of docs/architecture.md, bottom up, by top-level module (`""` is lib.rs).

@@ -359,8 +359,8 @@ fn henyey_greenstein(g: f32, cos: f32) -> f32 {
 mod tests {
     use super::*;
     use crate::geometry::vec3;
+    use crate::image_io::VolumeGrid;
     use crate::sampling::Rng;
-    use crate::scene::volume_grid::VolumeGrid;
     use glam::{DMat4, DVec3};
 
     fn fog(sigma_a: Color, sigma_s: Color, g: f32) -> Medium {

@@ -34,11 +34,12 @@ use super::bsdf_support::{MitsubaBsdf, PluginSupport};
 use super::bsdf_texture::{BsdfParameter, TexturedParameter};
 use super::medium::{Albedo, Heterogeneous, Medium};
 use super::sky::{Sky, SkyMap};
-use super::volume_grid::{GridVolume, VolumeGrid};
+use super::volume_grid::GridVolume;
 use super::{DeltaKind, DeltaLight, Material, Scene, SceneError, ShadingTilt, ShapePrim, Texture};
 use crate::camera::{Camera, Projection};
 use crate::color::Color;
 use crate::geometry::{SphereShape, Vec2, Vec3};
+use crate::image_io::read_volume_grid;
 
 /// Segments around a `disk` or a `cylinder` (their triangles' shading normals are smooth).
 const ROUND_SEGMENTS: u32 = 128;
@@ -1269,7 +1270,7 @@ fn grid_volume(v: &Plugin) -> Result<GridVolume, SceneError> {
         return Err(v.at.error("a gridvolume needs its \"filename\""));
     };
     let grid =
-        VolumeGrid::load(&file).map_err(|why| at.error(format!("cannot read the grid: {why}")))?;
+        read_volume_grid(&file).map_err(|why| at.error(format!("cannot read the grid: {why}")))?;
     let to_world = v.transform("to_world")?;
     let use_grid_bbox = v.boolean("use_grid_bbox", false)?;
     GridVolume::new(grid, to_world, use_grid_bbox).ok_or_else(|| {
