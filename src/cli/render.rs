@@ -277,7 +277,8 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
 /// (final gathering included: its gather rays cross the media); radiosity takes a sky and a
 /// fog, not a medium inside glass (behind a specular boundary its form factors do not cross);
 /// SPPM takes a sky, not media (its visible points are on surfaces only). A heterogeneous
-/// medium is the path tracer's alone.
+/// medium, a medium around the camera other than the fog and a shape's exterior medium are
+/// the path tracer's alone.
 fn refuse_unrendered_media(
     args: &RenderArgs,
     input: &Path,
@@ -299,6 +300,21 @@ fn refuse_unrendered_media(
             "{}:{}: the scene has a heterogeneous medium (Mitsuba's heterogeneous), which only the path tracer renders so far (--engine path); the {engine} engine would leave it out",
             input.display(),
             m.line
+        ));
+    }
+    let beyond_fog = scene
+        .camera_medium
+        .into_iter()
+        .chain(scene.materials.iter().filter_map(|m| m.exterior_medium))
+        .next();
+    if let (Some(k), false) = (
+        beyond_fog,
+        matches!(engine, EngineKind::Path | EngineKind::Raycast),
+    ) {
+        return Err(format!(
+            "{}:{}: the medium there surrounds the camera or the outside of a shape (Mitsuba's sensor medium or a shape's exterior), which only the path tracer follows so far (--engine path); the {engine} engine would leave it out",
+            input.display(),
+            scene.media[k].line
         ));
     }
     let radiosity_indirect = args.ray_trace.indirect == engines::IndirectKind::Radiosity;

@@ -54,6 +54,9 @@ pub struct Material {
     /// The medium that fills the inside of the closed objects of this material
     /// (`interior_medium K`, default none): light refracted into them travels in it.
     pub interior_medium: Option<usize>,
+    /// The medium outside the closed objects of this material (Mitsuba's `exterior`; default
+    /// none: the fog), which a ray leaving them through their back travels in.
+    pub exterior_medium: Option<usize>,
     /// A pattern that gives the albedo in place of `diffuse` (`texture_procedural`).
     pub procedural: Option<procedural::ProceduralTexture>,
     /// A bump map that tilts the shading normal (`bump_procedural`, `bump_file`).
@@ -100,6 +103,7 @@ impl Default for Material {
             ior: 1.5,
             roughness: 0.0,
             interior_medium: None,
+            exterior_medium: None,
             procedural: None,
             bump: None,
             bsdf: None,
@@ -254,6 +258,9 @@ pub struct Scene {
     pub media: Vec<medium::Medium>,
     /// The medium that fills the space outside closed objects, where the camera is (`fog K`).
     pub fog: Option<usize>,
+    /// The medium the camera is in where it is not the fog (Mitsuba's sensor `medium`;
+    /// default none: the fog).
+    pub camera_medium: Option<usize>,
     /// The sky that lights the scene (`sky_color`, `sky_gradient`; None: the background,
     /// which lights nothing).
     pub sky: Option<sky::Sky>,
@@ -527,7 +534,11 @@ impl Scene {
         // Only scenes with media or a sky hash them: the other scenes keep the hash (and the
         // saved solutions and photon maps) they had before there were either.
         if self.fog.is_some() || self.sky.is_some() || !self.media.is_empty() {
-            let _ = write!(h, "{:?}{:?}{:?}", self.media, self.fog, self.sky);
+            let _ = write!(
+                h,
+                "{:?}{:?}{:?}{:?}",
+                self.media, self.fog, self.camera_medium, self.sky
+            );
         }
         for t in self.textures.iter().chain(&self.height_maps) {
             let _ = write!(h, "texture {}x{}", t.width, t.height);
@@ -540,9 +551,21 @@ impl Scene {
         h.finish()
     }
 
-    /// The medium inside the closed objects of material `m` (`interior_medium`), if any.
-    pub fn interior_medium(&self, m: &Material) -> Option<&medium::Medium> {
-        m.interior_medium.map(|k| &self.media[k])
+    /// The medium a ray travels in after passing through a boundary of material `m`: into
+    /// its closed objects from the front (their `interior_medium`), or out of them from the
+    /// back (their `exterior_medium`, else the fog); None for empty space.
+    pub fn medium_beyond(&self, m: &Material, into_front: bool) -> Option<&medium::Medium> {
+        let k = if into_front {
+            m.interior_medium
+        } else {
+            m.exterior_medium.or(self.fog)
+        };
+        k.map(|k| &self.media[k])
+    }
+
+    /// The medium the camera's rays start in: `camera_medium`, else the fog.
+    pub fn camera_medium(&self) -> Option<&medium::Medium> {
+        self.camera_medium.or(self.fog).map(|k| &self.media[k])
     }
 
     /// What a ray leaving the scene along `direction` shows: the sky where the scene has one,
@@ -565,9 +588,15 @@ impl Scene {
                 .any(|(m, used)| used && m.is_emissive())
     }
 
-    /// Whether light travels through a medium anywhere: fog, or a material's interior.
+    /// Whether light travels through a medium anywhere: fog, a material's interior or
+    /// exterior, or the camera's.
     pub fn has_media(&self) -> bool {
-        self.fog.is_some() || self.materials.iter().any(|m| m.interior_medium.is_some())
+        self.fog.is_some()
+            || self.camera_medium.is_some()
+            || self
+                .materials
+                .iter()
+                .any(|m| m.interior_medium.is_some() || m.exterior_medium.is_some())
     }
 
     pub fn bounds(&self) -> Bounds3 {

@@ -529,10 +529,9 @@ impl PathTracer<'_> {
             bsdf_pdf: None,
             in_medium: false,
         };
-        // The medium the path is in: the fog (where the camera is) until it passes into a
-        // closed object through a glass boundary, the object's `interior_medium` inside.
-        let fog = self.scene.fog.map(|k| &self.scene.media[k]);
-        let mut medium = fog;
+        // The medium the path is in: the camera's until it passes through a glass or
+        // index-matched boundary (`Scene::medium_beyond`).
+        let mut medium = self.scene.camera_medium();
         // The background is what a ray leaving the scene shows, seen directly or through
         // mirrors and glass; it does not light diffuse surfaces (as in the course program and
         // the other engines, which take light from the emitters only).
@@ -627,11 +626,9 @@ impl PathTracer<'_> {
                     _ => false,
                 };
             if passes {
-                if ray.direction.dot(s.geometric_normal) < 0.0 {
-                    medium = self.scene.interior_medium(m);
-                } else {
-                    medium = fog;
-                }
+                medium = self
+                    .scene
+                    .medium_beyond(m, ray.direction.dot(s.geometric_normal) < 0.0);
                 ray = s.spawn_ray(ray.direction);
                 counts.secondary += 1;
                 samples.prepare();
@@ -687,11 +684,7 @@ impl PathTracer<'_> {
                 };
                 diffuse_bounce = true;
                 if sampled.dot(s.geometric_normal) * ray.direction.dot(s.geometric_normal) > 0.0 {
-                    medium = if front {
-                        self.scene.interior_medium(m)
-                    } else {
-                        fog
-                    };
+                    medium = self.scene.medium_beyond(m, front);
                 }
                 dir = sampled;
             } else {
@@ -781,11 +774,7 @@ impl PathTracer<'_> {
                     // Through the boundary (n faces the side the ray came from): into a closed
                     // object from its front, out of it from its back.
                     if dir.dot(n) < 0.0 {
-                        medium = if front {
-                            self.scene.interior_medium(m)
-                        } else {
-                            fog
-                        };
+                        medium = self.scene.medium_beyond(m, front);
                     }
                 }
             }
@@ -874,17 +863,12 @@ impl PathTracer<'_> {
         }
         at.wi = wi;
         // The medium on the side a direction leaves into: a transmitted direction is in the
-        // object's interior (from its front) or out in the fog (from its back).
-        let fog = self.scene.fog.map(|k| &self.scene.media[k]);
+        // object's interior (from its front) or outside it (from its back).
         let front = s.geometric_normal.dot(incoming) < 0.0;
         let m = &self.scene.materials[s.material as usize];
         let medium_towards = |dir: Vec3| {
             if dir.dot(s.geometric_normal) * incoming.dot(s.geometric_normal) > 0.0 {
-                if front {
-                    self.scene.interior_medium(m)
-                } else {
-                    fog
-                }
+                self.scene.medium_beyond(m, front)
             } else {
                 medium
             }
@@ -986,8 +970,7 @@ impl PathTracer<'_> {
     }
 
     /// The transmittance along a shadow ray that starts in `medium`, crossing index-matched
-    /// boundaries and thin sheets (each into its material's interior medium from the front,
-    /// out to the fog from the back; a sheet lets through what `straight_transmission` says)
+    /// boundaries and thin sheets (each into the medium `Scene::medium_beyond` says; a sheet lets through what `straight_transmission` says)
     /// and multiplying the media's transmittance over each stretch (a heterogeneous medium's
     /// estimated from `samples`); 0 where any other surface is in the way, or after
     /// `MAX_CROSSINGS` boundaries.
@@ -998,7 +981,6 @@ impl PathTracer<'_> {
         samples: &mut PathSamples,
         counts: &mut Counts,
     ) -> Color {
-        let fog = self.scene.fog.map(|k| &self.scene.media[k]);
         let mut medium = medium;
         let scale = ray.direction.length();
         let direction = ray.direction / scale;
@@ -1027,11 +1009,9 @@ impl PathTracer<'_> {
                 return transmittance * through;
             };
             transmittance *= straight * through;
-            medium = if ray.direction.dot(hit.geometric_normal) < 0.0 {
-                self.scene.interior_medium(m)
-            } else {
-                fog
-            };
+            medium = self
+                .scene
+                .medium_beyond(m, ray.direction.dot(hit.geometric_normal) < 0.0);
             let next = hit.spawn_ray(ray.direction);
             ray = Ray::with_range(next.origin, ray.direction, 0.0, ray.t_max - hit.t);
         }

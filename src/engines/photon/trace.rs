@@ -531,8 +531,8 @@ fn follow(
             let dir = Dielectric::at(m, front, ray.direction, n)
                 .sample(ray.direction, n, || rng.next_f32());
             if dir.dot(n) < 0.0 {
-                // Refracted: into an object (its interior medium), or out of one (the fog).
-                medium = if front { scene.interior_medium(m) } else { fog };
+                // Refracted: into an object (its interior medium), or out of one.
+                medium = scene.medium_beyond(m, front);
                 radiance_scale = if front { (m.ior * m.ior).recip() } else { 1.0 };
             }
             dir

@@ -191,6 +191,10 @@ impl Builder {
             self.scene.render_hints.samples = Some(positive(sampler, "sample_count", 4)?);
             let _ = sampler.integer("seed", 0)?;
         }
+        // Mitsuba takes a sensor's medium child, under any name, as the medium it is in.
+        if let Some(medium) = p.children_tagged("medium").next() {
+            self.scene.camera_medium = Some(self.medium(&medium.plugin)?);
+        }
         let origin = to_world.transform_point3(DVec3::ZERO);
         let forward = to_world.transform_vector3(DVec3::Z);
         let up = to_world.transform_vector3(DVec3::Y);
@@ -448,7 +452,7 @@ impl Builder {
     }
 
     /// The material of a shape: its BSDF (Mitsuba's default, diffuse 0.5, without one), with
-    /// its area emitter's radiance, and the medium inside it.
+    /// its area emitter's radiance, and the media inside and outside it.
     fn shape_material(&mut self, p: &Plugin) -> Result<u32, SceneError> {
         let bsdf = p.children_tagged("bsdf").next().map(|c| c.plugin.clone());
         let emitter = p
@@ -456,14 +460,8 @@ impl Builder {
             .next()
             .map(|c| c.plugin.clone());
         let interior = p.child_named("interior").cloned();
-        if let Some(exterior) = p.child_named("exterior") {
-            exterior.mark_used();
-            self.warn(
-                &exterior.at,
-                "exterior media are not supported: the space outside shapes is empty",
-            );
-        }
-        let plain = emitter.is_none() && interior.is_none();
+        let exterior = p.child_named("exterior").cloned();
+        let plain = emitter.is_none() && interior.is_none() && exterior.is_none();
         if let (true, Some(b)) = (plain, &bsdf) {
             if let Some(&k) = self.materials.get(&Rc::as_ptr(b)) {
                 return Ok(k);
@@ -495,6 +493,9 @@ impl Builder {
                     "a medium inside an opaque shape: light never reaches it",
                 );
             }
+        }
+        if let Some(m) = &exterior {
+            material.exterior_medium = Some(self.medium(m)?);
         }
         let k = self.scene.materials.len() as u32;
         self.scene.materials.push(material);
