@@ -160,17 +160,40 @@ fn errors_name_the_file_line_and_column() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Unknown entities warn once per name, at the file and line where each first appears, and
+/// a material that reflects more than all the light is named where it is defined: in the
+/// included file, not the scene's.
 #[test]
-fn unknown_entities_warn_once_per_name() {
+fn unknown_entities_and_bright_materials_are_named_where_they_are() {
     let dir = common::temp_dir("unknown");
-    let text = format!("{SQUARE}0 0 0\n0 1 1\nfoo 1\nf a b c d\n");
+    let text = format!("{SQUARE}0 0 0\n0 1 1\nfoo 1\nf a b c d\ni part.mgf\n");
+    let part = format!("# a part\n\nm bright =\n rd 0.9\n rs 0.5 0\n{SQUARE}bar 2\nf a b c d\n");
+    write(&dir, "part.mgf", &part);
     let scene = Scene::load(&write(&dir, "u.mgf", &text)).expect("loads");
+    let at = |file: &str, line: u32| format!("{}:{line}: ", dir.join(file).display());
     let unknown: Vec<&String> = scene
         .warnings
         .iter()
         .filter(|w| w.contains("not supported"))
         .collect();
-    assert_eq!(unknown.len(), 2, "{unknown:?}");
+    assert_eq!(unknown.len(), 3, "{unknown:?}");
+    for (file, line, name) in [
+        ("u.mgf", 9, "0"),
+        ("u.mgf", 11, "foo"),
+        ("part.mgf", 14, "bar"),
+    ] {
+        let expected = format!("{}MGF entity `{name}`", at(file, line));
+        assert!(
+            unknown.iter().any(|w| w.starts_with(&expected)),
+            "{expected:?} in {unknown:?}"
+        );
+    }
+    let bright = format!("{}material `bright` reflects", at("part.mgf", 3));
+    assert!(
+        scene.warnings.iter().any(|w| w.starts_with(&bright)),
+        "{bright:?} in {:?}",
+        scene.warnings
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -11,7 +11,7 @@
 //! negative components clipped; `ed E` is radiance E / (183.07 π) per unit of the colour's RGB
 //! (183.07 lm/W, RenderPark's luminous efficacy of white). Errors name file:line:column.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use super::{Material, Quad, Scene, SceneError};
@@ -49,7 +49,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         current_scene_material: None,
         transforms: Vec::new(),
         including: Vec::new(),
-        unknown: HashSet::new(),
+        unknown: BTreeMap::new(),
         ignored: HashSet::new(),
         faces: 0,
         degenerate: 0,
@@ -75,15 +75,11 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             path.display()
         ));
     }
-    if !reader.unknown.is_empty() {
-        let mut names: Vec<&String> = reader.unknown.iter().collect();
-        names.sort();
-        for name in names {
-            reader.scene.warnings.push(format!(
-                "{}: MGF entity `{name}` is not supported; its lines were ignored",
-                path.display()
-            ));
-        }
+    for (name, (file, line)) in &reader.unknown {
+        reader.scene.warnings.push(format!(
+            "{}:{line}: MGF entity `{name}` is not supported; its lines (this the first) were ignored",
+            file.display()
+        ));
     }
     Ok(reader.scene)
 }
@@ -261,6 +257,8 @@ struct MaterialDef {
     ts: (f32, Chroma, f32),
     ed: (f32, Chroma),
     ior: f32,
+    /// Where it is defined: the file (the scene's or one it includes) and the line.
+    file: std::rc::Rc<PathBuf>,
     line: u32,
 }
 
@@ -272,6 +270,7 @@ impl Default for MaterialDef {
             ts: (0.0, Chroma::WHITE, 0.0),
             ed: (0.0, Chroma::WHITE),
             ior: 1.5,
+            file: Default::default(),
             line: 0,
         }
     }
@@ -384,7 +383,8 @@ struct Reader {
     transforms: Vec<Affine>,
     /// Files being read (include cycle check).
     including: Vec<PathBuf>,
-    unknown: HashSet<String>,
+    /// Entities of unknown names, each with where it first appears (file and line).
+    unknown: BTreeMap<String, (std::rc::Rc<PathBuf>, u32)>,
     /// Entities read but not rendered (`td`, `sides`).
     ignored: HashSet<String>,
     faces: usize,
@@ -650,7 +650,9 @@ impl Reader {
             "xf" => Ok(()), // a closing `xf` whose block was run above; or an empty one
             "o" => Ok(()),
             name => {
-                self.unknown.insert(name.to_string());
+                self.unknown
+                    .entry(name.to_string())
+                    .or_insert_with(|| (e.file.clone(), head.line));
                 Ok(())
             }
         }
@@ -725,7 +727,11 @@ impl Reader {
         self.current_scene_material = None;
         match (e.words.get(1), e.words.get(2).map(|w| w.text.as_str())) {
             (None, _) => {
-                self.material = MaterialDef::default();
+                self.material = MaterialDef {
+                    file: e.file.clone(),
+                    line: e.words[0].line,
+                    ..MaterialDef::default()
+                };
                 self.material_name.clear();
             }
             (Some(name), Some("=")) => {
@@ -737,6 +743,7 @@ impl Reader {
                         None => MaterialDef::default(),
                     };
                 self.material = MaterialDef {
+                    file: e.file.clone(),
                     line: name.line,
                     ..def
                 };
@@ -787,7 +794,7 @@ impl Reader {
             if sum > 1.0 + 1e-3 {
                 self.scene.warnings.push(format!(
                     "{}:{}: material `{}` reflects {sum:.3} of the light in one channel; its reflectances are scaled by {f:.3} to conserve energy",
-                    self.scene.path.display(),
+                    self.material.file.display(),
                     self.material.line,
                     self.material_name
                 ));
