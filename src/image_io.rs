@@ -26,6 +26,12 @@ pub struct Image {
 /// Reads an image as linear radiance by its extension: `.pfm` and `.exr` as stored, any other
 /// (PNG, JPEG, PPM) as 8-bit values decoded from sRGB.
 pub fn read_radiance(path: &Path) -> Result<Image, String> {
+    read_image(path, srgb_to_linear)
+}
+
+/// Reads an image by its extension: `.pfm` and `.exr` as stored (they hold linear values),
+/// any other as 8-bit values mapped through `decode` (see `read_8bit`).
+pub fn read_image(path: &Path, decode: fn(f32) -> f32) -> Result<Image, String> {
     let is = |ext: &str| {
         path.extension()
             .is_some_and(|e| e.eq_ignore_ascii_case(ext))
@@ -35,7 +41,7 @@ pub fn read_radiance(path: &Path) -> Result<Image, String> {
     } else if is("exr") {
         read_exr(path)
     } else {
-        read_8bit(path, srgb_to_linear)
+        read_8bit(path, decode)
     }
 }
 
@@ -122,9 +128,17 @@ pub fn read_pfm(path: &Path) -> Result<Image, String> {
     let height: u32 = fields[2].parse().map_err(|_| bad())?;
     let scale: f32 = fields[3].parse().map_err(|_| bad())?;
     let n = width as usize * height as usize;
-    let data = bytes
-        .get(pos..pos + 12 * n)
-        .ok_or_else(|| format!("{}: truncated PFM data", path.display()))?;
+    // The header's size is checked against the file's bytes before anything is allocated.
+    let data = 12usize
+        .checked_mul(n)
+        .and_then(|len| bytes.get(pos..pos.checked_add(len)?))
+        .ok_or_else(|| {
+            format!(
+                "{}: truncated PFM data (a {width}×{height} image needs {} bytes)",
+                path.display(),
+                12 * n as u128
+            )
+        })?;
     let value = |k: usize| {
         let b = [
             data[4 * k],
@@ -276,6 +290,31 @@ mod tests {
         bytes
     }
 
+    /// A PFM whose header promises more pixels than its bytes hold, up to sizes whose byte
+    /// count overflows, is refused before anything is allocated; one that holds them is read,
+    /// bottom row first.
+    #[test]
+    fn a_pfm_is_read_only_as_far_as_its_bytes_go() {
+        let dir = std::env::temp_dir().join(format!("trilux-pfm-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a temporary folder");
+        let path = dir.join("image.pfm");
+        let mut good = b"PF\n1 2\n-1\n".to_vec();
+        for v in [0.0f32, 0.0, 0.0, 1.5, 2.5, 3.5] {
+            good.extend(v.to_le_bytes());
+        }
+        std::fs::write(&path, &good).expect("writes");
+        let image = read_pfm(&path).expect("reads");
+        assert_eq!(image.pixels[0], Color::new(1.5, 2.5, 3.5));
+        for header in ["PF\n4294967295 4294967295\n-1\n", "PF\n1 3\n-1\n"] {
+            let mut bytes = header.as_bytes().to_vec();
+            bytes.extend(&good[good.len() - 24..]);
+            std::fs::write(&path, &bytes).expect("writes");
+            let why = read_pfm(&path).expect_err(header);
+            assert!(why.contains("truncated PFM data"), "{why}");
+        }
+        std::fs::remove_dir_all(&dir).expect("removes the folder");
+    }
+
     #[test]
     fn reads_a_volume_grid_as_the_file_lays_it_out() {
         let values: Vec<f32> = (0..24).map(|v| v as f32).collect();
@@ -288,7 +327,7 @@ mod tests {
     }
 
     #[test]
-    fn refuses_bad_files_saying_what_it_expected() {
+    fn refuses_bad_volume_grids_saying_what_it_expected() {
         let good = vol_file([2, 2, 1], 1, &[0.0; 4]);
         let cases: [(Vec<u8>, &str); 7] = [
             (

@@ -34,14 +34,16 @@ impl From<Image> for Texture {
 }
 
 impl Texture {
-    /// Reads an 8-bit image (PNG, JPEG, PPM): values are sRGB-encoded and converted to linear.
+    /// Reads a colour image: an 8-bit one (PNG, JPEG, PPM) decoded from sRGB to linear, an
+    /// EXR or PFM as stored.
     pub fn load(path: &Path) -> Result<Texture, String> {
-        image_io::read_8bit(path, srgb_to_linear).map(Texture::from)
+        image_io::read_image(path, srgb_to_linear).map(Texture::from)
     }
 
-    /// Reads a height image (`bump_file`): 8-bit values v are heights v/255, not colours.
+    /// Reads an image of values that are not colours (`bump_file` heights, Mitsuba's `raw`
+    /// bitmaps): 8-bit values v as v/255, an EXR or PFM as stored.
     pub fn load_heights(path: &Path) -> Result<Texture, String> {
-        image_io::read_8bit(path, |v| v).map(Texture::from)
+        image_io::read_image(path, |v| v).map(Texture::from)
     }
 
     /// Mitsuba's `checkerboard`: `color0` where u and v (Mitsuba's, whose v runs down the
@@ -142,6 +144,32 @@ mod tests {
     /// down the image): away from the wrap, the gradient in (s, t) is the climb times the
     /// texels per unit, (0.25·8, 0.125·4); through a `to_uv` that doubles s and shifts, twice
     /// the first.
+    /// An EXR texture keeps its linear values, above 1 too; an 8-bit PNG is decoded from
+    /// sRGB as a colour and taken as it is as heights.
+    #[test]
+    fn exr_textures_keep_their_values_and_8_bit_ones_are_decoded() {
+        let dir = std::env::temp_dir().join(format!("trilux-texture-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a temporary folder");
+        let values = [[2.5f32, 0.1, 0.0], [0.25, 7.0, 1.0]];
+        let exr = image::Rgb32FImage::from_fn(2, 1, |x, _| image::Rgb(values[x as usize]));
+        let exr_path = dir.join("hdr.exr");
+        exr.save(&exr_path).expect("writes an EXR");
+        for texture in [Texture::load(&exr_path), Texture::load_heights(&exr_path)] {
+            let texels = texture.expect("reads the EXR").texels;
+            assert_eq!(texels, values.map(Vec3::from_array).to_vec());
+        }
+        let png = image::RgbImage::from_pixel(1, 1, image::Rgb([128, 0, 255]));
+        let png_path = dir.join("ldr.png");
+        png.save(&png_path).expect("writes a PNG");
+        let colour = Texture::load(&png_path).expect("reads the PNG").texels[0];
+        assert_eq!(colour, Vec3::new(srgb_to_linear(128.0 / 255.0), 0.0, 1.0));
+        let heights = Texture::load_heights(&png_path)
+            .expect("reads the PNG")
+            .texels[0];
+        assert_eq!(heights, Vec3::new(128.0 / 255.0, 0.0, 1.0));
+        std::fs::remove_dir_all(&dir).expect("removes the folder");
+    }
+
     #[test]
     fn the_gradient_of_a_ramp_is_its_slope() {
         let (width, height) = (8u32, 4u32);
