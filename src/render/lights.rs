@@ -98,12 +98,15 @@ impl Parallelogram {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightShape {
     Parallelogram(Parallelogram),
-    /// A triangle `v0 + u·e1 + v·e2` (u + v ≤ 1), emitting on both sides.
+    /// A triangle `v0 + u·e1 + v·e2` (u + v ≤ 1), emitting from the side its `normal`
+    /// (e1 × e2) faces, or from both with `two_sided`: as it is seen (`Scene::sees_emission`)
+    /// and as radiosity's patches emit.
     Triangle {
         v0: Vec3,
         e1: Vec3,
         e2: Vec3,
         normal: Vec3,
+        two_sided: bool,
     },
     /// An analytic shape, emitting outwards.
     Shape(AnalyticShape),
@@ -160,6 +163,7 @@ impl Light {
                         e1: b - a,
                         e2: c - a,
                         normal: n.normalize_or_zero(),
+                        two_sided: scene.two_sided_quads,
                     },
                     emitted: e,
                     area: 0.5 * n.length(),
@@ -194,10 +198,16 @@ impl Light {
     pub fn centre(&self, towards: Vec3) -> LightPoint {
         match self.shape {
             LightShape::Parallelogram(q) => q.sample(0.5, 0.5),
-            LightShape::Triangle { v0, e1, e2, normal } => LightPoint {
+            LightShape::Triangle {
+                v0,
+                e1,
+                e2,
+                normal,
+                two_sided,
+            } => LightPoint {
                 point: v0 + (e1 + e2) * (1.0 / 3.0),
                 normal,
-                one_sided: false,
+                one_sided: !two_sided,
             },
             LightShape::Shape(shape) => {
                 let (point, normal) = shape.point_towards(towards);
@@ -214,7 +224,13 @@ impl Light {
     pub fn sample(&self, u: f32, v: f32) -> LightPoint {
         match self.shape {
             LightShape::Parallelogram(q) => q.sample(u, v),
-            LightShape::Triangle { v0, e1, e2, normal } => {
+            LightShape::Triangle {
+                v0,
+                e1,
+                e2,
+                normal,
+                two_sided,
+            } => {
                 // Fold the unit square onto the triangle.
                 let (a, b) = if u + v > 1.0 {
                     (1.0 - u, 1.0 - v)
@@ -224,7 +240,7 @@ impl Light {
                 LightPoint {
                     point: v0 + e1 * a + e2 * b,
                     normal,
-                    one_sided: false,
+                    one_sided: !two_sided,
                 }
             }
             LightShape::Shape(shape) => {
