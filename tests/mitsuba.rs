@@ -684,3 +684,158 @@ fn exterior_and_sensor_media_attenuate_by_the_length_travelled_in_them() {
         assert!(!image.exists(), "{engine}: an image was written");
     }
 }
+
+/// A rectangle emitter whose `radiance` is a `checkerboard` (red 1 and 0.1, `to_uv` doubling
+/// u), as Mitsuba defines it on its `rectangle` (u = (x + 1)/2, v = (y + 1)/2 in the shape's
+/// own coordinates; `color0` where u mod ½ and v mod ½ fall in the same half), placed by
+/// `to_world`, with `extra` shapes beside it, seen by an orthographic camera from z = 5 over
+/// [−`half`, `half`]².
+fn checker_emitter(to_world: &str, half: f32, extra: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="2"/></integrator>
+    <sensor type="orthographic">
+        <transform name="to_world"><scale value="{half}"/><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
+    </sensor>
+    <shape type="rectangle">
+        <transform name="to_world">{to_world}</transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+        <emitter type="area">
+            <texture type="checkerboard" name="radiance">
+                <rgb name="color0" value="1, 0.5, 0.25"/>
+                <rgb name="color1" value="0.1, 0.1, 0.1"/>
+                <transform name="to_uv"><scale x="2" y="1"/></transform>
+            </texture>
+        </emitter>
+    </shape>
+    {extra}
+</scene>"#
+    )
+}
+
+/// The red radiance of `checker_emitter`'s checkerboard at the rectangle's own (x, y).
+fn checker_red(x: f64, y: f64) -> f64 {
+    let (u, v) = (2.0 * (x + 1.0) / 2.0, (y + 1.0) / 2.0);
+    let upper = |t: f64| t - t.floor() > 0.5;
+    if upper(u) == upper(v) {
+        1.0
+    } else {
+        0.1
+    }
+}
+
+/// A textured area light (Mitsuba's `area` with a `checkerboard` radiance), in the path
+/// tracer with both Accels. Seen face on, each pixel (whose edges the checks' and the
+/// rectangle's fall on) shows its check's radiance exactly (Mitsuba 3 renders the same
+/// pattern, blurred by its Gaussian pixel filter). Lighting a white floor (ρ = ½) from a
+/// height of 1, it gives the floor ρ/π ∫ Le(x, y) / r⁴ dA, integrated here over the
+/// rectangle on a 100 × 100 grid and over each pixel at 2 × 2 points. Over the pixels clear
+/// of the rectangle, at 1,024 paths a pixel: the mean within 1% of the integral's, and the
+/// relMSE against it (measured 7.2e-4, the noise) under an eighth of the relMSE between the
+/// integral and the floor a light of the checkerboard's mean radiance gives (1.2e-2).
+/// Mitsuba 3's image of the same floor: relMSE 6.8e-5 against ours, means 0.1% apart.
+#[test]
+fn a_textured_area_light_emits_its_texture_where_it_is_seen_and_sampled() {
+    let direct = checker_emitter(r#"<translate x="0.25" y="-0.25"/>"#, 1.0, "");
+    let file = write("texture-emitter", &[("direct.xml", direct.as_bytes())]);
+    let scene = Scene::load(&file).expect("loads");
+    for film in path_films(&scene, &backends(), (16, 16), 16) {
+        for row in 0..16 {
+            for col in 0..16 {
+                let (x, y) = (
+                    -1.0 + (col as f64 + 0.5) / 8.0,
+                    1.0 - (row as f64 + 0.5) / 8.0,
+                );
+                let (lx, ly) = (x - 0.25, y + 0.25);
+                let expected = if lx.abs() < 1.0 && ly.abs() < 1.0 {
+                    checker_red(lx, ly)
+                } else {
+                    0.0
+                };
+                let red = film.pixels[row * 16 + col].x as f64;
+                assert!(
+                    (red - expected).abs() < 1e-6,
+                    "pixel ({col}, {row}): {red}, expected {expected}"
+                );
+            }
+        }
+    }
+
+    // The rectangle at z = 1 facing down (its y turned over), the floor its light reaches.
+    let floor = checker_emitter(
+        r#"<rotate x="1" angle="180"/><translate z="1"/>"#,
+        3.0,
+        r#"<shape type="rectangle">
+        <transform name="to_world"><scale value="3"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>
+    </shape>"#,
+    );
+    let file = write("texture-emitter-floor", &[("floor.xml", floor.as_bytes())]);
+    let scene = Scene::load(&file).expect("loads");
+    let cells = 100;
+    let h = 2.0 / cells as f64;
+    let irradiance = |px: f64, py: f64, le: &dyn Fn(f64, f64) -> f64| {
+        let mut sum = 0.0;
+        for i in 0..cells {
+            for j in 0..cells {
+                let (x, y) = (-1.0 + (i as f64 + 0.5) * h, -1.0 + (j as f64 + 0.5) * h);
+                // The rectangle's (x, y) is the world's (x, −y) at height 1.
+                let r2 = (x - px).powi(2) + (-y - py).powi(2) + 1.0;
+                sum += le(x, y) / (r2 * r2);
+            }
+        }
+        sum * h * h
+    };
+    let pixel = 6.0 / 16.0;
+    let radiance = |col: usize, row: usize, le: &dyn Fn(f64, f64) -> f64| {
+        let (x0, y0) = (-3.0 + col as f64 * pixel, 3.0 - row as f64 * pixel);
+        let mut sum = 0.0;
+        for (a, b) in [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)] {
+            sum += irradiance(x0 + a * pixel, y0 - b * pixel, le);
+        }
+        0.5 / std::f64::consts::PI * sum / 4.0
+    };
+    let mean_red = (1.0 + 0.1) / 2.0;
+    let clear: Vec<(usize, usize)> = (0..16)
+        .flat_map(|row| (0..16).map(move |col| (col, row)))
+        .filter(|&(col, row)| {
+            let (x0, y0) = (-3.0 + col as f64 * pixel, 3.0 - row as f64 * pixel);
+            x0 >= 1.0 || x0 + pixel <= -1.0 || y0 <= -1.0 || y0 - pixel >= 1.0
+        })
+        .collect();
+    let truth: Vec<f64> = clear
+        .iter()
+        .map(|&(c, r)| radiance(c, r, &checker_red))
+        .collect();
+    let flat: Vec<f64> = clear
+        .iter()
+        .map(|&(c, r)| radiance(c, r, &|_, _| mean_red))
+        .collect();
+    // The squared relative difference from `reference`, averaged over the clear pixels.
+    let rel_mse = |image: &[f64], reference: &[f64]| {
+        image
+            .iter()
+            .zip(reference)
+            .map(|(a, b)| (a / b - 1.0).powi(2))
+            .sum::<f64>()
+            / image.len() as f64
+    };
+    let apart = rel_mse(&flat, &truth);
+    for film in path_films(&scene, &backends(), (16, 16), 1024) {
+        let ours: Vec<f64> = clear
+            .iter()
+            .map(|&(c, r)| film.pixels[r * 16 + c].x as f64)
+            .collect();
+        let (to_truth, to_flat) = (rel_mse(&ours, &truth), rel_mse(&ours, &flat));
+        let mean = ours.iter().sum::<f64>() / truth.iter().sum::<f64>();
+        assert!(
+            (mean - 1.0).abs() < 0.01,
+            "the floor's mean: {mean} of the integral's"
+        );
+        assert!(
+            to_truth < apart / 8.0 && to_flat > apart / 2.0,
+            "relMSE against the integral {to_truth}, against the flat light's {to_flat}, between them {apart}"
+        );
+    }
+}

@@ -43,8 +43,13 @@ pub struct Material {
     pub texture_nearest: bool,
     /// Perfect-mirror reflectance.
     pub reflective: Color,
-    /// Emitted radiance (W·sr⁻¹·m⁻²).
+    /// Emitted radiance (W·sr⁻¹·m⁻²); with an `emission_texture`, its mean.
     pub emitted: Color,
+    /// Index into `Scene::textures` of the emitted radiance across the surface (Mitsuba's
+    /// textured `radiance`, on triangles; default none: `emitted` everywhere). The path
+    /// tracer reads it where a path meets the surface and where it samples it; the other
+    /// engines emit its mean, `emitted`.
+    pub emission_texture: Option<usize>,
     /// Specular transmittance.
     pub transmitted: Color,
     /// Index of refraction for `transmitted`; default 1.5.
@@ -99,6 +104,7 @@ impl Default for Material {
             texture_nearest: false,
             reflective: Vec3::ZERO,
             emitted: Vec3::ZERO,
+            emission_texture: None,
             transmitted: Vec3::ZERO,
             ior: 1.5,
             roughness: 0.0,

@@ -3,7 +3,7 @@
 //! two backends give bit-identical surfaces whenever they agree on the primitive.
 
 use super::procedural::{bumped_normal, Bump, BumpSource};
-use super::{PrimKind, PrimRef, Scene};
+use super::{Color, PrimKind, PrimRef, Scene};
 use crate::geometry::{
     faces_ray, intersect_quad, point_error, spawn_ray, vec2, Bounds3, Ray, Shape, Vec2, Vec3,
 };
@@ -229,14 +229,56 @@ impl Scene {
                 Some(tc) => bilinear(tc, u, v),
                 None => vec2(u, v),
             },
-            PrimKind::Triangle if !self.triangles.tex_coords.is_empty() => {
-                let mesh = &self.triangles;
-                let [a, b, c] = mesh.indices[i].map(|k| mesh.tex_coords[k as usize]);
-                let b0 = 1.0 - u - v;
-                vec2(a.x * b0 + b.x * u + c.x * v, a.y * b0 + b.y * u + c.y * v)
-            }
-            PrimKind::Triangle | PrimKind::Shape => vec2(u, v),
+            PrimKind::Triangle => self.triangle_tex_coords(i, u, v),
+            PrimKind::Shape => vec2(u, v),
         }
+    }
+
+    /// The texture coordinates of triangle `i` at the point of barycentric parameters
+    /// (u, v) (the point a + u·(b − a) + v·(c − a)): its vertices' interpolated where the
+    /// mesh has them, else (u, v).
+    fn triangle_tex_coords(&self, i: usize, u: f32, v: f32) -> Vec2 {
+        let mesh = &self.triangles;
+        if mesh.tex_coords.is_empty() {
+            return vec2(u, v);
+        }
+        let [a, b, c] = mesh.indices[i].map(|k| mesh.tex_coords[k as usize]);
+        let b0 = 1.0 - u - v;
+        vec2(a.x * b0 + b.x * u + c.x * v, a.y * b0 + b.y * u + c.y * v)
+    }
+
+    /// The radiance the surface at a hit emits: its material's `emission_texture` there, or
+    /// its `emitted`.
+    pub fn emitted(&self, hit: &SurfaceHit) -> Color {
+        let m = &self.materials[hit.material as usize];
+        match m.emission_texture {
+            Some(k) => self.textures[k].lookup(self.tex_coords(hit)),
+            None => m.emitted,
+        }
+    }
+
+    /// The radiance emitted at `point`, a point on the emitting primitive `prim` (a light
+    /// sample): as `emitted` gives it at a hit there. Only triangles carry an
+    /// `emission_texture` (the Mitsuba reader gives it to meshes alone).
+    pub fn emitted_at(&self, prim: PrimRef, point: Vec3) -> Color {
+        let m = &self.materials[self.material_of(prim) as usize];
+        let (Some(k), PrimKind::Triangle) = (m.emission_texture, prim.kind) else {
+            return m.emitted;
+        };
+        let i = prim.index as usize;
+        let [a, b, c] = self.triangles.vertices(i);
+        // The point's barycentric parameters, from the normal equations of
+        // point − a = u·e1 + v·e2.
+        let (e1, e2, w) = (b - a, c - a, point - a);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let (w1, w2) = (w.dot(e1), w.dot(e2));
+        let det = d11 * d22 - d12 * d12;
+        let (u, v) = if det > 0.0 {
+            ((d22 * w1 - d12 * w2) / det, (d11 * w2 - d12 * w1) / det)
+        } else {
+            (0.0, 0.0)
+        };
+        self.textures[k].lookup(self.triangle_tex_coords(i, u, v))
     }
 
     /// The size of a primitive: the longest side of its bounding box.

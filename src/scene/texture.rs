@@ -34,6 +34,13 @@ impl From<Image> for Texture {
 }
 
 impl Texture {
+    /// The mean of its texels: its mean over the surface where the surface's texture
+    /// coordinates cover the unit square evenly.
+    pub fn mean(&self) -> Vec3 {
+        let sum: Vec3 = self.texels.iter().copied().sum();
+        sum / self.texels.len().max(1) as f32
+    }
+
     /// Reads a colour image: an 8-bit one (PNG, JPEG, PPM) decoded from sRGB to linear, an
     /// EXR or PFM as stored.
     pub fn load(path: &Path) -> Result<Texture, String> {

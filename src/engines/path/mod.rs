@@ -267,7 +267,7 @@ impl PathTracer<'_> {
         let distance = to_light.length();
         let phase = medium.phase(travel, to_light / distance);
         let light_pdf = self.selection_probability(k) * d.pdf;
-        light.emitted
+        self.scene.emitted_at(light.prim, d.point)
             * self.shadow_transmittance(
                 &shadow_ray(x, d.point),
                 distance,
@@ -362,7 +362,9 @@ impl PathTracer<'_> {
         };
         Some(ShadowedSample {
             shadow_ray: shadow_ray(origin, d.point),
-            radiance: light.emitted * transmittance * (value * mis / self.selection_probability(k)),
+            radiance: self.scene.emitted_at(light.prim, d.point)
+                * transmittance
+                * (value * mis / self.selection_probability(k)),
             medium,
         })
     }
@@ -472,7 +474,7 @@ impl PathTracer<'_> {
             }
             _ => 1.0,
         };
-        throughput * self.scene.materials[s.material as usize].emitted * weight
+        throughput * self.scene.emitted(s) * weight
     }
 
     /// The lobe a path scatters in at `s`, each chosen in proportion to its largest albedo
@@ -896,7 +898,10 @@ impl PathTracer<'_> {
                             samples,
                             counts,
                         );
-                        light += emitter.emitted * f * seen * (mis / light_pdf);
+                        light += self.scene.emitted_at(emitter.prim, d.point)
+                            * f
+                            * seen
+                            * (mis / light_pdf);
                     }
                 }
             }

@@ -36,7 +36,8 @@ struct Path {
 
 impl PathTracer<'_> {
     /// Whether `radiance_batch` follows this tracer's paths: no medium, no sky, and every
-    /// material reflects only diffusely (or not at all), without a bump map.
+    /// material reflects only diffusely (or not at all), without a bump map, and emits the
+    /// same radiance all over (the lanes take a light's `emitted`).
     pub(super) fn wavefront_applies(&self) -> bool {
         let scene = self.scene;
         scene.media.is_empty()
@@ -48,6 +49,7 @@ impl PathTracer<'_> {
                     && m.transmitted.max_element() <= 0.0
                     && m.bump.is_none()
                     && m.bsdf.is_none()
+                    && m.emission_texture.is_none()
                     && m.opacity.is_none()
                     && m.tilt.is_none()
             })

@@ -483,7 +483,29 @@ impl Builder {
                     e.kind
                 )));
             }
-            material.emitted = self.colour(e, "radiance", 1.0, SpectrumUse::Emission)?;
+            match e.child_named("radiance").cloned() {
+                Some(t) => {
+                    t.mark_used();
+                    if p.kind == "sphere" {
+                        return Err(t.at.error(
+                            "a textured radiance on a sphere is not supported: give a colour, or a mesh",
+                        ));
+                    }
+                    let k = self.emission_texture(&t)?;
+                    material.emitted = self.scene.textures[k].mean();
+                    material.emission_texture = Some(k);
+                    self.warn(
+                        &t.at,
+                        format!(
+                            "a {} radiance: the engines but the path tracer emit its mean, {}",
+                            t.kind, material.emitted
+                        ),
+                    );
+                }
+                None => {
+                    material.emitted = self.colour(e, "radiance", 1.0, SpectrumUse::Emission)?;
+                }
+            }
         }
         if let Some(m) = &interior {
             material.interior_medium = Some(self.medium(m)?);
@@ -879,6 +901,32 @@ impl Builder {
                 return Err(t.at.error(format!(
                     "a {} opacity is not supported: give a number or a bitmap",
                     t.kind
+                )))
+            }
+        };
+        self.scene.textures.push(texture);
+        Ok(self.scene.textures.len() - 1)
+    }
+
+    /// An area emitter's textured radiance, a `bitmap` (decoded from sRGB unless `raw`) or a
+    /// `checkerboard`, added to the scene's textures: its index.
+    fn emission_texture(&mut self, t: &Plugin) -> Result<usize, SceneError> {
+        let texture = match t.kind.as_str() {
+            "bitmap" => {
+                let (file, at) = t
+                    .file("filename")?
+                    .ok_or_else(|| t.at.error("bitmap needs a filename"))?;
+                let raw = t.boolean("raw", false)?;
+                bitmap(t, &file, at, raw)?
+            }
+            "checkerboard" => {
+                let a = self.colour(t, "color0", 0.4, SpectrumUse::Emission)?;
+                let b = self.colour(t, "color1", 0.2, SpectrumUse::Emission)?;
+                Texture::checkerboard(a, b, to_uv(t)?)
+            }
+            other => {
+                return Err(t.at.error(format!(
+                    "a {other} radiance is not supported: expected a colour, a bitmap or a checkerboard"
                 )))
             }
         };
