@@ -1,21 +1,33 @@
-//! trilux's own BVH: a binary tree built by binned SAH (in parallel near the root), then
-//! collapsed into an 8-wide tree whose nodes hold their children's boxes side by side, so that
-//! one ray is tested against four at a time (glam's `Vec4`). Traversal is iterative and
-//! ordered: the children a ray enters are taken nearest first. On the 1M-triangle terrain a
-//! ray's time goes mostly to waiting for nodes and leaves from memory; each halving of the
-//! depth paid (the terrain with `bench-accel`: 4-wide nodes about +15% over the binary tree, 8-wide
-//! about +25% over 4-wide; no `std::arch` beyond SSE, which would need `unsafe`). Leaves hold
-//! copies of their primitives in leaf order, so a leaf's primitives are read from consecutive
-//! memory: triangles in packs of four tested at once (`tri4`), quads and analytic shapes one
-//! by one. Batched occlusion walks packets of eight rays together (a box tested against all
-//! of them at once, a quad against four of them where they share their axes), down to where
-//! two or fewer of a packet's rays still go on, which then go on alone: on the course's
-//! Cornell box (seven primitives under one node, where a ray's own work is all) that took
-//! camera occlusion from 0.8 to 1.3 times Embree's packets (`bench-accel`). The
-//! batched queries run through `pulp`'s run-time dispatch, so that the walk inlined into them
-//! is compiled for the processor's widest instructions; with the leaf tests inlined too
-//! (`LeafVisit`), the Cornell box's batched closest hits gained 16–21% on camera and shadow
-//! rays and its path tracer took 0.96× the time.
+//! trilux's own BVH: a binary tree built by binned SAH, then collapsed into an 8-wide tree
+//! whose nodes hold their children's boxes side by side, so that one ray is tested against
+//! four at a time (glam's `Vec4`). Traversal is iterative and ordered: the children a ray
+//! enters are taken nearest first. On the 1M-triangle terrain a ray's time goes mostly to
+//! waiting for nodes and leaves from memory; each halving of the depth paid (the terrain with
+//! `bench-accel`: 4-wide nodes about +15% over the binary tree, 8-wide about +25% over 4-wide;
+//! no `std::arch` beyond SSE, which would need `unsafe`). Leaves hold copies of their
+//! primitives in leaf order, so a leaf's primitives are read from consecutive memory:
+//! triangles in packs of four tested at once (`tri4`), quads and analytic shapes one by one.
+//! Batched occlusion walks packets of eight rays together (a box tested against all of them
+//! at once, a quad against four of them where they share their axes), down to where two or
+//! fewer of a packet's rays still go on, which then go on alone: on the course's Cornell box
+//! (seven primitives under one node, where a ray's own work is all) that took camera
+//! occlusion from 0.8 to 1.3 times Embree's packets (`bench-accel`). The batched queries run
+//! through `pulp`'s run-time dispatch, so that the walk inlined into them is compiled for the
+//! processor's widest instructions; with the leaf tests inlined too (`LeafVisit`), the
+//! Cornell box's batched closest hits gained 16–21% on camera and shadow rays and its path
+//! tracer took 0.96× the time. The single-ray queries dispatched so as well measured no
+//! faster on the terrain (0.81–0.82 of Embree's closest hits against 0.82–0.84 without, five
+//! interleaved runs each; its time is the loads of nodes and leaves, `perf annotate`), nor did
+//! a pack of four triangles priced as one triangle test, Embree's ratio of traversal to
+//! intersection (28% fewer nodes; 0.83 against 0.82 of Embree, eight runs each).
+//!
+//! The build holds each primitive as its box's two corners in `Vec4`s (its reference in a
+//! spare lane) and makes two passes over a node's primitives, as Embree's builders do: one
+//! binning them along all three axes at once, one partitioning them while gathering each
+//! side's box of centres (the sides' boxes are the bins'). Nodes of many primitives are binned
+//! on every thread, subtrees built in parallel. Against one pass for the node's boxes, one
+//! binning pass an axis and one partitioning pass, the 1M-triangle terrain's build on one
+//! thread went from 0.73–0.75 to 0.43–0.47 s (`bench-accel`, interleaved).
 
 use std::cell::OnceCell;
 
@@ -1488,6 +1500,11 @@ fn build_node(
                 return leaf;
             }
             let (split, left_centres, right_centres) = partition(prims, |c| map.bin(c, axis) <= b);
+            debug_assert_eq!(
+                split as u64,
+                bins.counts[axis][..=b].iter().sum::<u64>() & u64::from(u32::MAX),
+                "partition and binning put the primitives apart alike"
+            );
             let side = |range, centres: Extents| {
                 let (lower, upper) = bins.union(axis, range);
                 Extents {
