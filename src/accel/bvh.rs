@@ -1,21 +1,33 @@
-//! trilux's own BVH: a binary tree built by binned SAH (in parallel near the root), then
-//! collapsed into an 8-wide tree whose nodes hold their children's boxes side by side, so that
-//! one ray is tested against four at a time (glam's `Vec4`). Traversal is iterative and
-//! ordered: the children a ray enters are taken nearest first. On the 1M-triangle terrain a
-//! ray's time goes mostly to waiting for nodes and leaves from memory; each halving of the
-//! depth paid (the terrain with `bench-accel`: 4-wide nodes about +15% over the binary tree, 8-wide
-//! about +25% over 4-wide; no `std::arch` beyond SSE, which would need `unsafe`). Leaves hold
-//! copies of their primitives in leaf order, so a leaf's primitives are read from consecutive
-//! memory: triangles in packs of four tested at once (`tri4`), quads and analytic shapes one
-//! by one. Batched occlusion walks packets of eight rays together (a box tested against all
-//! of them at once, a quad against four of them where they share their axes), down to where
-//! two or fewer of a packet's rays still go on, which then go on alone: on the course's
-//! Cornell box (seven primitives under one node, where a ray's own work is all) that took
-//! camera occlusion from 0.8 to 1.3 times Embree's packets (`bench-accel`). The
-//! batched queries run through `pulp`'s run-time dispatch, so that the walk inlined into them
-//! is compiled for the processor's widest instructions; with the leaf tests inlined too
-//! (`LeafVisit`), the Cornell box's batched closest hits gained 16–21% on camera and shadow
-//! rays and its path tracer took 0.96× the time.
+//! trilux's own BVH: a binary tree built by binned SAH, then collapsed into an 8-wide tree
+//! whose nodes hold their children's boxes side by side, so that one ray is tested against
+//! four at a time (glam's `Vec4`). Traversal is iterative and ordered: the children a ray
+//! enters are taken nearest first. On the 1M-triangle terrain a ray's time goes mostly to
+//! waiting for nodes and leaves from memory; each halving of the depth paid (the terrain with
+//! `bench-accel`: 4-wide nodes about +15% over the binary tree, 8-wide about +25% over 4-wide;
+//! no `std::arch` beyond SSE, which would need `unsafe`). Leaves hold copies of their
+//! primitives in leaf order, so a leaf's primitives are read from consecutive memory:
+//! triangles in packs of four tested at once (`tri4`), quads and analytic shapes one by one.
+//! Batched occlusion walks packets of eight rays together (a box tested against all of them
+//! at once, a quad against four of them where they share their axes), down to where two or
+//! fewer of a packet's rays still go on, which then go on alone: on the course's Cornell box
+//! (seven primitives under one node, where a ray's own work is all) that took camera
+//! occlusion from 0.8 to 1.3 times Embree's packets (`bench-accel`). The batched queries run
+//! through `pulp`'s run-time dispatch, so that the walk inlined into them is compiled for the
+//! processor's widest instructions; with the leaf tests inlined too (`LeafVisit`), the
+//! Cornell box's batched closest hits gained 16–21% on camera and shadow rays and its path
+//! tracer took 0.96× the time. The single-ray queries dispatched so as well measured no
+//! faster on the terrain (0.81–0.82 of Embree's closest hits against 0.82–0.84 without, five
+//! interleaved runs each; its time is the loads of nodes and leaves, `perf annotate`), nor did
+//! a pack of four triangles priced as one triangle test, Embree's ratio of traversal to
+//! intersection (28% fewer nodes; 0.83 against 0.82 of Embree, eight runs each).
+//!
+//! The build holds each primitive as its box's two corners in `Vec4`s (its reference in a
+//! spare lane) and makes two passes over a node's primitives, as Embree's builders do: one
+//! binning them along all three axes at once, one partitioning them while gathering each
+//! side's box of centres (the sides' boxes are the bins'). Nodes of many primitives are binned
+//! on every thread, subtrees built in parallel. Against one pass for the node's boxes, one
+//! binning pass an axis and one partitioning pass, the 1M-triangle terrain's build on one
+//! thread went from 0.73–0.75 to 0.43–0.47 s (`bench-accel`, interleaved).
 
 use std::cell::OnceCell;
 
@@ -39,6 +51,8 @@ const MAX_LEAF: usize = 8;
 const MAX_DEPTH: usize = 60;
 /// Subtrees with more primitives than this are built on two threads.
 const PARALLEL_THRESHOLD: usize = 8192;
+/// Nodes with more primitives than this are binned on every thread.
+const PARALLEL_BINNING: usize = 1 << 16;
 /// Relative cost of visiting a node against intersecting one triangle.
 const TRAVERSAL_COST: f32 = 1.0;
 
@@ -334,23 +348,47 @@ pub struct Bvh {
     arch: pulp::Arch,
 }
 
-/// A primitive during the build: 28 bytes, its centroid computed where it is needed (the
-/// build's passes over a million of these are bound by memory).
+/// A primitive during the build: the corners of its box in two `Vec4`s, so that binning and
+/// partitioning take a primitive in two SIMD loads, and its packed reference in the lower
+/// corner's fourth lane (no reference's bits are a NaN: its two top bits, the kind, are never
+/// both set).
 #[derive(Clone, Copy)]
 struct BuildPrim {
-    bounds: Bounds3,
-    prim: PackedPrim,
+    lower: Vec4,
+    upper: Vec4,
 }
 
 impl BuildPrim {
+    fn new(bounds: Bounds3, prim: PackedPrim) -> BuildPrim {
+        BuildPrim {
+            lower: bounds.min.extend(f32::from_bits(prim.raw())),
+            upper: bounds.max.extend(0.0),
+        }
+    }
+
     #[inline(always)]
-    fn centroid(&self) -> Vec3 {
-        self.bounds.centre()
+    fn prim(&self) -> PackedPrim {
+        bytemuck::cast(self.lower.w.to_bits())
+    }
+
+    #[inline(always)]
+    fn bounds(&self) -> Bounds3 {
+        Bounds3 {
+            min: self.lower.truncate(),
+            max: self.upper.truncate(),
+        }
+    }
+
+    /// Twice the box's centre (its corners' sum; the fourth lane means nothing): binning needs
+    /// only the centres' order, and the halving would be one more operation a primitive.
+    #[inline(always)]
+    fn centroid2(&self) -> Vec4 {
+        self.lower + self.upper
     }
 
     #[inline(always)]
     fn is_triangle(&self) -> bool {
-        self.prim.kind() == PrimKind::Triangle
+        self.prim().kind() == PrimKind::Triangle
     }
 }
 
@@ -382,13 +420,18 @@ impl Bvh {
         }
         // Made on every thread, as the leaves' copies below (the two together: the 1M-triangle
         // terrain's build on two threads 0.917 → 0.842 s, medians of interleaved rounds).
-        let build_prim = |bounds: Bounds3, kind: PrimKind, index: usize| BuildPrim {
-            bounds,
-            prim: PackedPrim::new(PrimRef {
-                kind,
-                index: index as u32,
-            }),
+        let build_prim = |bounds: Bounds3, kind: PrimKind, index: usize| {
+            BuildPrim::new(
+                bounds,
+                PackedPrim::new(PrimRef {
+                    kind,
+                    index: index as u32,
+                }),
+            )
         };
+        // Primitives with non-finite bounds can never be hit; leaving them out keeps every
+        // box finite.
+        let finite = |p: &BuildPrim| p.bounds().min.is_finite() && p.bounds().max.is_finite();
         let mut build: Vec<BuildPrim> = Vec::with_capacity(total);
         build.par_extend(
             scene
@@ -411,11 +454,15 @@ impl Bvh {
                 .enumerate()
                 .map(|(i, s)| build_prim(s.shape.bounds(), PrimKind::Shape, i)),
         );
-        // Primitives with non-finite bounds can never be hit; leaving them out keeps every
-        // box finite.
-        build.retain(|p| p.bounds.min.is_finite() && p.bounds.max.is_finite());
+        // Looked for on every thread first: the filter's pass is serial, and seldom needed
+        // (filtered in the parallel loops, the primitives were gathered into lists of parts
+        // and copied).
+        if !build.par_iter().all(finite) {
+            build.retain(finite);
+        }
 
-        let root = build_node(&mut build, 0, 0);
+        let extents = Extents::of_parallel(&build);
+        let root = build_node(&mut build, 0, 0, &extents, &mut Bins::new());
         let mut nodes = Vec::with_capacity(build.len() / 4 + 1);
         let mut leaves = Vec::new();
         if build.is_empty() {
@@ -1138,19 +1185,19 @@ fn prim_bounds(scene: &Scene, prim: PrimRef) -> Bounds3 {
     }
 }
 
-/// Writes a leaf's contents into `out` (as many items as `leaf_shape` counts): its triangles
+/// Writes a leaf's contents into `out` (as many items as `leaf_items` counts): its triangles
 /// in packs of four, then its other primitives.
 fn write_leaf_items(scene: &Scene, leaf: &[BuildPrim], out: &mut [LeafItem]) {
     let mut out = out.iter_mut();
-    let mut pack = [([Vec3::ZERO; 3], leaf[0].prim); 4];
+    let mut pack = [([Vec3::ZERO; 3], leaf[0].prim()); 4];
     let mut in_pack = 0;
     let mut write_pack = |pack: &[([Vec3; 3], PackedPrim)]| {
         let item = out.next().expect("the leaf's items were counted");
         *item = LeafItem::triangles(Tri4::new(pack));
     };
     for p in leaf.iter().filter(|p| p.is_triangle()) {
-        let vertices = scene.triangles.vertices(p.prim.index() as usize);
-        pack[in_pack] = (vertices, p.prim);
+        let vertices = scene.triangles.vertices(p.prim().index() as usize);
+        pack[in_pack] = (vertices, p.prim());
         in_pack += 1;
         if in_pack == 4 {
             write_pack(&pack);
@@ -1161,8 +1208,8 @@ fn write_leaf_items(scene: &Scene, leaf: &[BuildPrim], out: &mut [LeafItem]) {
         write_pack(&pack[..in_pack]);
     }
     for p in leaf {
-        let i = p.prim.index() as usize;
-        let (v, normal) = match p.prim.kind() {
+        let i = p.prim().index() as usize;
+        let (v, normal) = match p.prim().kind() {
             PrimKind::Triangle => continue,
             PrimKind::Quad => (scene.quads[i].vertices, scene.quads[i].normal),
             PrimKind::Shape => ([Vec3::ZERO; 4], Vec3::ZERO),
@@ -1171,131 +1218,232 @@ fn write_leaf_items(scene: &Scene, leaf: &[BuildPrim], out: &mut [LeafItem]) {
         *item = LeafItem::single(&LeafPrim {
             v,
             normal,
-            prim: p.prim,
+            prim: p.prim(),
         });
     }
 }
 
-/// How many items `write_leaf_items` makes of a leaf, and the leaf's cost.
-fn leaf_shape(leaf: &[BuildPrim]) -> (usize, f32) {
+/// How many items `write_leaf_items` makes of a leaf.
+fn leaf_items(leaf: &[BuildPrim]) -> usize {
     let triangles = leaf.iter().filter(|p| p.is_triangle()).count();
-    let singles = leaf.len() - triangles;
-    (
-        triangles.div_ceil(4) + singles,
-        leaf_cost(triangles as u32, singles as u32),
-    )
+    triangles.div_ceil(4) + leaf.len() - triangles
 }
 
-fn union_bounds(prims: &[BuildPrim]) -> (Bounds3, Bounds3) {
-    prims
-        .iter()
-        .fold((Bounds3::EMPTY, Bounds3::EMPTY), |(b, c), p| {
-            (b.union(p.bounds), c.union_point(p.centroid()))
-        })
+/// The box of some primitives and the box of their centres (doubled, as `centroid2`), each
+/// as its corners (the fourth lanes mean nothing).
+#[derive(Clone, Copy)]
+struct Extents {
+    lower: Vec4,
+    upper: Vec4,
+    centre_lower: Vec4,
+    centre_upper: Vec4,
 }
 
-/// Builds the subtree over `prims`, which start at `offset` in the final primitive order.
-fn build_node(prims: &mut [BuildPrim], offset: usize, depth: usize) -> BuildNode {
-    let (bounds, centroids) = union_bounds(prims);
-    let n = prims.len();
-    let leaf = BuildNode::Leaf {
-        bounds,
-        first: offset,
-        count: n,
+impl Extents {
+    const EMPTY: Extents = Extents {
+        lower: Vec4::INFINITY,
+        upper: Vec4::NEG_INFINITY,
+        centre_lower: Vec4::INFINITY,
+        centre_upper: Vec4::NEG_INFINITY,
     };
-    if n <= 1 || depth >= MAX_DEPTH {
-        return leaf;
+
+    #[inline(always)]
+    fn add(&mut self, p: &BuildPrim) {
+        self.lower = self.lower.min(p.lower);
+        self.upper = self.upper.max(p.upper);
+        self.add_centre(p.centroid2());
     }
-    let split = match best_split(prims, &bounds, &centroids) {
-        Some((axis, bin, cost)) => {
-            if n <= MAX_LEAF && cost >= leaf_shape(prims).1 {
-                return leaf;
-            }
-            let scale = BINS as f32 / (centroids.max[axis] - centroids.min[axis]);
-            let lo = centroids.min[axis];
-            partition(prims, |p| bin_of(p.centroid()[axis], lo, scale) <= bin)
+
+    #[inline(always)]
+    fn add_centre(&mut self, c: Vec4) {
+        self.centre_lower = self.centre_lower.min(c);
+        self.centre_upper = self.centre_upper.max(c);
+    }
+
+    fn union(self, o: Extents) -> Extents {
+        Extents {
+            lower: self.lower.min(o.lower),
+            upper: self.upper.max(o.upper),
+            centre_lower: self.centre_lower.min(o.centre_lower),
+            centre_upper: self.centre_upper.max(o.centre_upper),
         }
-        // All centroids coincide: split by count so that no leaf grows without bound.
-        None if n <= MAX_LEAF => return leaf,
-        None => n / 2,
-    };
-    let split = if split == 0 || split == n {
-        n / 2
-    } else {
-        split
-    };
-    let (left, right) = prims.split_at_mut(split);
-    let (l, r) = if n > PARALLEL_THRESHOLD {
-        rayon::join(
-            || build_node(left, offset, depth + 1),
-            || build_node(right, offset + split, depth + 1),
-        )
-    } else {
-        (
-            build_node(left, offset, depth + 1),
-            build_node(right, offset + split, depth + 1),
-        )
-    };
-    BuildNode::Interior {
-        bounds,
-        children: Box::new([l, r]),
+    }
+
+    fn of(prims: &[BuildPrim]) -> Extents {
+        let mut e = Extents::EMPTY;
+        prims.iter().for_each(|p| e.add(p));
+        e
+    }
+
+    /// `of`, over parts of `prims` on every thread.
+    fn of_parallel(prims: &[BuildPrim]) -> Extents {
+        prims
+            .par_chunks(PARALLEL_THRESHOLD)
+            .map(Extents::of)
+            .reduce(|| Extents::EMPTY, Extents::union)
+    }
+
+    fn bounds(&self) -> Bounds3 {
+        Bounds3 {
+            min: self.lower.truncate(),
+            max: self.upper.truncate(),
+        }
     }
 }
 
-#[inline]
-fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
-    (((c - lo) * scale) as usize).min(BINS - 1)
+/// Half the surface area of the box between `lower` and `upper` (the SAH compares ratios of
+/// areas).
+#[inline(always)]
+fn half_area(lower: Vec4, upper: Vec4) -> f32 {
+    let e = (upper - lower).truncate();
+    e.x * e.y + e.y * e.z + e.z * e.x
 }
 
-/// The cheapest SAH split: (axis, last bin of the left side, cost relative to one triangle
-/// intersection). None when all centroids coincide.
-fn best_split(
-    prims: &[BuildPrim],
-    bounds: &Bounds3,
-    centroids: &Bounds3,
-) -> Option<(usize, usize, f32)> {
-    let extent = centroids.extent();
-    let parent_area = bounds.area().max(f32::MIN_POSITIVE);
+/// Where binning puts a centre: per axis, bin `⌊(c − lo)·scale⌋` of `bins` (the last one
+/// also holding the highest centre); an axis along which the centres do not spread has
+/// scale 0, every primitive in its first bin.
+#[derive(Clone, Copy)]
+struct BinMap {
+    lo: Vec4,
+    scale: Vec4,
+    bins: usize,
+}
+
+impl BinMap {
+    fn new(e: &Extents, bins: usize) -> BinMap {
+        let extent = e.centre_upper - e.centre_lower;
+        let scale = Vec4::splat(bins as f32) / extent;
+        BinMap {
+            lo: e.centre_lower,
+            scale: Vec4::select(extent.cmpgt(Vec4::ZERO), scale, Vec4::ZERO),
+            bins,
+        }
+    }
+
+    /// The bins of centre `c` along the three axes.
+    #[inline(always)]
+    fn bins(&self, c: Vec4) -> [usize; 3] {
+        let f = ((c - self.lo) * self.scale).to_array();
+        [0, 1, 2].map(|a| (f[a] as usize).min(self.bins - 1))
+    }
+
+    /// The bin of centre `c` along `axis`: the same number as `bins` finds (the same
+    /// operations on the same lane).
+    #[inline(always)]
+    fn bin(&self, c: Vec4, axis: usize) -> usize {
+        (((c[axis] - self.lo[axis]) * self.scale[axis]) as usize).min(self.bins - 1)
+    }
+}
+
+/// Per axis and bin the box of the primitives whose centres fall in it, and their counts
+/// (primitives in the low 32 bits, those of them that are not triangles in the high ones:
+/// one addition counts both).
+#[derive(Clone)]
+struct Bins {
+    lower: [[Vec4; BINS]; 3],
+    upper: [[Vec4; BINS]; 3],
+    counts: [[u64; BINS]; 3],
+}
+
+impl Bins {
+    fn new() -> Box<Bins> {
+        Box::new(Bins {
+            lower: [[Vec4::INFINITY; BINS]; 3],
+            upper: [[Vec4::NEG_INFINITY; BINS]; 3],
+            counts: [[0; BINS]; 3],
+        })
+    }
+
+    /// Empties the first `bins` bins of each axis, those `fill` will use.
+    fn clear(&mut self, bins: usize) {
+        for a in 0..3 {
+            self.lower[a][..bins].fill(Vec4::INFINITY);
+            self.upper[a][..bins].fill(Vec4::NEG_INFINITY);
+            self.counts[a][..bins].fill(0);
+        }
+    }
+
+    /// Adds `prims` to the bins `map` puts them in (all three axes in one pass).
+    fn fill(&mut self, prims: &[BuildPrim], map: &BinMap) {
+        for p in prims {
+            let count = 1 | (!p.is_triangle() as u64) << 32;
+            let bins = map.bins(p.centroid2());
+            for (a, &b) in bins.iter().enumerate() {
+                self.lower[a][b] = self.lower[a][b].min(p.lower);
+                self.upper[a][b] = self.upper[a][b].max(p.upper);
+                self.counts[a][b] += count;
+            }
+        }
+    }
+
+    /// Adds the first `bins` bins of `o` to those of `self`.
+    fn merge(mut self: Box<Bins>, o: Box<Bins>, bins: usize) -> Box<Bins> {
+        for a in 0..3 {
+            for b in 0..bins {
+                self.lower[a][b] = self.lower[a][b].min(o.lower[a][b]);
+                self.upper[a][b] = self.upper[a][b].max(o.upper[a][b]);
+                self.counts[a][b] += o.counts[a][b];
+            }
+        }
+        self
+    }
+
+    /// The box of bins `range` along `axis`.
+    fn union(&self, axis: usize, range: std::ops::Range<usize>) -> (Vec4, Vec4) {
+        range.fold((Vec4::INFINITY, Vec4::NEG_INFINITY), |(lo, hi), b| {
+            (lo.min(self.lower[axis][b]), hi.max(self.upper[axis][b]))
+        })
+    }
+}
+
+/// What `leaf_cost` makes of a bin count (`Bins::counts`).
+fn counted_cost(count: u64) -> f32 {
+    let (prims, singles) = (count as u32, (count >> 32) as u32);
+    leaf_cost(prims - singles, singles)
+}
+
+/// Bins for a node of `n` primitives: fewer for small nodes (as Embree's builders), whose
+/// bins would mostly stay empty and whose time goes to clearing and sweeping them.
+fn bin_count(n: usize) -> usize {
+    (4 + n / 2).min(BINS)
+}
+
+/// The cheapest SAH split of the binned primitives: (axis, last bin of the left side, cost
+/// relative to one triangle intersection). None when no bin boundary has primitives on both
+/// sides (all centres coincide).
+fn best_split(bins: &Bins, map: &BinMap, parent_area: f32) -> Option<(usize, usize, f32)> {
+    let n = map.bins;
+    let parent_area = parent_area.max(f32::MIN_POSITIVE);
     let mut best: Option<(usize, usize, f32)> = None;
     for axis in 0..3 {
-        // Extents are finite (primitives with non-finite bounds are left out).
-        if extent[axis] <= 0.0 {
+        if map.scale[axis] == 0.0 {
             continue;
         }
-        let lo = centroids.min[axis];
-        let scale = BINS as f32 / extent[axis];
-        let mut counts = [0u32; BINS];
-        let mut triangles = [0u32; BINS];
-        let mut boxes = [Bounds3::EMPTY; BINS];
-        for p in prims {
-            let b = bin_of(p.centroid()[axis], lo, scale);
-            counts[b] += 1;
-            triangles[b] += p.is_triangle() as u32;
-            boxes[b] = boxes[b].union(p.bounds);
+        // Sweep from the right (each boundary's right side's area times its cost), then
+        // from the left.
+        let mut right = [0f32; BINS];
+        let (mut lo, mut hi, mut count) = (Vec4::INFINITY, Vec4::NEG_INFINITY, 0u64);
+        for b in (1..n).rev() {
+            lo = lo.min(bins.lower[axis][b]);
+            hi = hi.max(bins.upper[axis][b]);
+            count += bins.counts[axis][b];
+            right[b] = if count as u32 == 0 {
+                f32::NAN
+            } else {
+                half_area(lo, hi) * counted_cost(count)
+            };
         }
-        // Sweep from the right, then from the left.
-        let mut right_area = [0f32; BINS];
-        let mut acc = Bounds3::EMPTY;
-        for b in (1..BINS).rev() {
-            acc = acc.union(boxes[b]);
-            right_area[b] = acc.area();
-        }
-        let (mut left_box, mut left_count, mut left_triangles) = (Bounds3::EMPTY, 0u32, 0u32);
-        let total = prims.len() as u32;
-        let total_triangles: u32 = triangles.iter().sum();
-        for b in 0..BINS - 1 {
-            left_box = left_box.union(boxes[b]);
-            left_count += counts[b];
-            left_triangles += triangles[b];
-            let right_count = total - left_count;
-            if left_count == 0 || right_count == 0 {
+        let (mut lo, mut hi, mut count) = (Vec4::INFINITY, Vec4::NEG_INFINITY, 0u64);
+        for b in 0..n - 1 {
+            lo = lo.min(bins.lower[axis][b]);
+            hi = hi.max(bins.upper[axis][b]);
+            count += bins.counts[axis][b];
+            // An empty side (NaN on the right) is no split.
+            if count as u32 == 0 || right[b + 1].is_nan() {
                 continue;
             }
-            let right_triangles = total_triangles - left_triangles;
-            let left_cost = leaf_cost(left_triangles, left_count - left_triangles);
-            let right_cost = leaf_cost(right_triangles, right_count - right_triangles);
             let cost = TRAVERSAL_COST
-                + (left_box.area() * left_cost + right_area[b + 1] * right_cost) / parent_area;
+                + (half_area(lo, hi) * counted_cost(count) + right[b + 1]) / parent_area;
             if best.is_none_or(|(_, _, c)| cost < c) {
                 best = Some((axis, b, cost));
             }
@@ -1304,16 +1452,140 @@ fn best_split(
     best
 }
 
-/// Moves the elements for which `left` holds to the front; returns how many there are.
-fn partition(prims: &mut [BuildPrim], left: impl Fn(&BuildPrim) -> bool) -> usize {
-    let mut i = 0;
-    for j in 0..prims.len() {
-        if left(&prims[j]) {
-            prims.swap(i, j);
+/// Bins `prims` with `map` into `bins` (cleared here), on every thread when they are many:
+/// the top nodes of the tree are otherwise each binned by one thread alone.
+fn bin(prims: &[BuildPrim], map: &BinMap, bins: &mut Box<Bins>) {
+    if prims.len() > PARALLEL_BINNING {
+        *bins = prims
+            .par_chunks(PARALLEL_BINNING / 2)
+            .map(|part| {
+                let mut b = Bins::new();
+                b.fill(part, map);
+                b
+            })
+            .reduce_with(|a, b| a.merge(b, map.bins))
+            .expect("a node has primitives");
+    } else {
+        bins.clear(map.bins);
+        bins.fill(prims, map);
+    }
+}
+
+/// Builds the subtree over `prims` (whose boxes and centres `extents` holds), which start at
+/// `offset` in the final primitive order; `bins` is working space, cleared for each node
+/// rather than made anew.
+fn build_node(
+    prims: &mut [BuildPrim],
+    offset: usize,
+    depth: usize,
+    extents: &Extents,
+    bins: &mut Box<Bins>,
+) -> BuildNode {
+    let n = prims.len();
+    let bounds = extents.bounds();
+    let leaf = BuildNode::Leaf {
+        bounds,
+        first: offset,
+        count: n,
+    };
+    if n <= 1 || depth >= MAX_DEPTH {
+        return leaf;
+    }
+    let map = BinMap::new(extents, bin_count(n));
+    bin(prims, &map, bins);
+    let (split, left, right) = match best_split(bins, &map, half_area(extents.lower, extents.upper))
+    {
+        Some((axis, b, cost)) => {
+            if n <= MAX_LEAF && cost >= counted_cost(bins.counts[0][..map.bins].iter().sum()) {
+                return leaf;
+            }
+            let (split, left_centres, right_centres) = partition(prims, |c| map.bin(c, axis) <= b);
+            debug_assert_eq!(
+                split as u64,
+                bins.counts[axis][..=b].iter().sum::<u64>() & u64::from(u32::MAX),
+                "partition and binning put the primitives apart alike"
+            );
+            let side = |range, centres: Extents| {
+                let (lower, upper) = bins.union(axis, range);
+                Extents {
+                    lower,
+                    upper,
+                    ..centres
+                }
+            };
+            (
+                split,
+                side(0..b + 1, left_centres),
+                side(b + 1..map.bins, right_centres),
+            )
+        }
+        // All centres coincide: split by count so that no leaf grows without bound.
+        None if n <= MAX_LEAF => return leaf,
+        None => {
+            let split = n / 2;
+            let (l, r) = prims.split_at(split);
+            (split, Extents::of(l), Extents::of(r))
+        }
+    };
+    let (left_prims, right_prims) = prims.split_at_mut(split);
+    let (l, r) = if n > PARALLEL_THRESHOLD {
+        rayon::join(
+            || build_node(left_prims, offset, depth + 1, &left, bins),
+            || {
+                build_node(
+                    right_prims,
+                    offset + split,
+                    depth + 1,
+                    &right,
+                    &mut Bins::new(),
+                )
+            },
+        )
+    } else {
+        (
+            build_node(left_prims, offset, depth + 1, &left, bins),
+            build_node(right_prims, offset + split, depth + 1, &right, bins),
+        )
+    };
+    BuildNode::Interior {
+        bounds,
+        children: Box::new([l, r]),
+    }
+}
+
+/// Moves the primitives whose centre `left` takes to the front; returns how many there are,
+/// and the boxes of the centres on each side (`Extents`' centre corners; its box corners
+/// unset).
+fn partition(prims: &mut [BuildPrim], left: impl Fn(Vec4) -> bool) -> (usize, Extents, Extents) {
+    let (mut l, mut r) = (Extents::EMPTY, Extents::EMPTY);
+    let (mut i, mut j) = (0, prims.len());
+    loop {
+        while i < j {
+            let c = prims[i].centroid2();
+            if !left(c) {
+                break;
+            }
+            l.add_centre(c);
             i += 1;
         }
+        while i < j {
+            let c = prims[j - 1].centroid2();
+            if left(c) {
+                break;
+            }
+            r.add_centre(c);
+            j -= 1;
+        }
+        if i == j {
+            return (i, l, r);
+        }
+        // prims[i] goes right, prims[j - 1] left.
+        prims.swap(i, j - 1);
+        l.add_centre(prims[i].centroid2());
+        r.add_centre(prims[j - 1].centroid2());
+        i += 1;
+        j -= 1;
     }
-    i
 }
 
 /// The binary tree collapsed into wide nodes, and the leaves' ranges of the build's
@@ -1366,7 +1638,7 @@ impl Collapse<'_> {
     /// Lists a leaf; returns where its items will start and how many there are.
     fn leaf(&mut self, range: std::ops::Range<usize>) -> (u32, u32) {
         let first = self.item_count;
-        let count = leaf_shape(&self.prims[range.clone()]).0;
+        let count = leaf_items(&self.prims[range.clone()]);
         self.leaves.push((range, count));
         self.item_count += count;
         (first as u32, count as u32)
