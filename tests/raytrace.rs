@@ -465,6 +465,33 @@ fn a_glass_prism_refracts_by_snells_law_and_reflects_totally_past_the_critical_a
     }
 }
 
+/// An OBJ scene (through its MTL, as a user writes one) of one triangle light of radiance
+/// `le` and a floor of albedo `rho` 100 units wide at y = 0, on a black background.
+fn triangle_light_over_a_floor(name: &str, triangle: [[f64; 3]; 3], le: f64, rho: f64) -> Scene {
+    let dir = common::temp_dir(name);
+    std::fs::write(
+        dir.join("tri.mtl"),
+        format!("newmtl light\nKd 0 0 0\nKe {le} {le} {le}\nnewmtl floor\nKd {rho} {rho} {rho}\n"),
+    )
+    .unwrap();
+    let v = |p: [f64; 3]| format!("v {} {} {}\n", p[0], p[1], p[2]);
+    std::fs::write(
+        dir.join("tri.obj"),
+        format!(
+            "mtllib tri.mtl\n{}{}{}v -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\n\
+             usemtl light\nf 1 2 3\nusemtl floor\nf 4 5 6\nf 4 6 7\n",
+            v(triangle[0]),
+            v(triangle[1]),
+            v(triangle[2])
+        ),
+    )
+    .unwrap();
+    let mut scene = Scene::load(&dir.join("tri.obj")).expect("the OBJ loads");
+    std::fs::remove_dir_all(&dir).ok();
+    scene.background = Vec3::ZERO;
+    scene
+}
+
 /// Lights that are not quads, against closed forms, in the ray tracer and the path tracer.
 /// A sphere of radius R and radiance Le whose centre is at distance d, at angle θ from a
 /// surface's normal, and wholly above its horizon, gives irradiance π Le (R/d)² cos θ: a
@@ -497,30 +524,10 @@ fn sphere_and_triangle_lights_give_the_closed_form_irradiance() {
     // The triangle faces down (its vertices counter-clockwise seen from below); the floor
     // is seen at (1.5, 0, 0), beside it, where the camera's ray does not meet it first.
     let triangle = [[-1.0, 1.0, -0.5], [1.0, 1.0, -0.5], [0.0, 1.0, 1.0]];
-    let dir = common::temp_dir("triangle-light");
-    std::fs::write(
-        dir.join("tri.mtl"),
-        format!("newmtl light\nKd 0 0 0\nKe {LE_LIGHT} {LE_LIGHT} {LE_LIGHT}\nnewmtl floor\nKd {RHO_FLOOR} {RHO_FLOOR} {RHO_FLOOR}\n"),
-    )
-    .unwrap();
-    let v = |p: [f64; 3]| format!("v {} {} {}\n", p[0], p[1], p[2]);
-    std::fs::write(
-        dir.join("tri.obj"),
-        format!(
-            "mtllib tri.mtl\n{}{}{}v -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\n\
-             usemtl light\nf 1 2 3\nusemtl floor\nf 4 5 6\nf 4 6 7\n",
-            v(triangle[0]),
-            v(triangle[1]),
-            v(triangle[2])
-        ),
-    )
-    .unwrap();
-    let mut tri = Scene::load(&dir.join("tri.obj")).expect("the OBJ loads");
+    let mut tri = triangle_light_over_a_floor("triangle-light", triangle, LE_LIGHT, RHO_FLOOR);
     tri.camera = Some(camera_at(1.5));
-    tri.background = Vec3::ZERO;
     let tri_truth =
         RHO_FLOOR * LE_LIGHT * polygon_irradiance([1.5, 0.0, 0.0], [0.0, 1.0, 0.0], &triangle) / PI;
-    std::fs::remove_dir_all(&dir).ok();
     for (name, scene, truth) in [
         ("sphere", &sphere, sphere_truth),
         ("triangle", &tri, tri_truth),
@@ -573,26 +580,8 @@ fn a_triangle_light_lights_the_side_it_faces() {
     const RHO_FLOOR: f64 = 0.5;
     // Counter-clockwise seen from above: it faces up, away from the floor at y = 0.
     let triangle = [[-1.0, 1.0, -0.5], [0.0, 1.0, 1.0], [1.0, 1.0, -0.5]];
-    let dir = common::temp_dir("triangle-light-side");
-    std::fs::write(
-        dir.join("tri.mtl"),
-        format!("newmtl light\nKd 0 0 0\nKe {LE_LIGHT} {LE_LIGHT} {LE_LIGHT}\nnewmtl floor\nKd {RHO_FLOOR} {RHO_FLOOR} {RHO_FLOOR}\n"),
-    )
-    .unwrap();
-    let v = |p: [f64; 3]| format!("v {} {} {}\n", p[0], p[1], p[2]);
-    std::fs::write(
-        dir.join("tri.obj"),
-        format!(
-            "mtllib tri.mtl\n{}{}{}v -50 0 -50\nv -50 0 50\nv 50 0 50\nv 50 0 -50\n\
-             usemtl light\nf 1 2 3\nusemtl floor\nf 4 5 6\nf 4 6 7\n",
-            v(triangle[0]),
-            v(triangle[1]),
-            v(triangle[2])
-        ),
-    )
-    .unwrap();
-    let mut scene = Scene::load(&dir.join("tri.obj")).expect("the OBJ loads");
-    std::fs::remove_dir_all(&dir).ok();
+    let mut scene =
+        triangle_light_over_a_floor("triangle-light-side", triangle, LE_LIGHT, RHO_FLOOR);
     // The floor at (1.5, 0, 0), beside the light, straight down.
     scene.camera = Some(trilux::scene::Camera {
         position: trilux::geometry::vec3(1.5, 5.0, 0.0),
@@ -600,7 +589,6 @@ fn a_triangle_light_lights_the_side_it_faces() {
         up: trilux::geometry::vec3(0.0, 0.0, -1.0),
         projection: trilux::scene::Projection::Orthographic { size: 1e-4 },
     });
-    scene.background = Vec3::ZERO;
     let truth =
         RHO_FLOOR * LE_LIGHT * polygon_irradiance([1.5, 0.0, 0.0], [0.0, 1.0, 0.0], &triangle) / PI;
     use trilux::engines::EngineKind;

@@ -285,34 +285,28 @@ fn refuse_unrendered_media(
     engine: EngineKind,
     scene: &Scene,
 ) -> Result<(), String> {
-    if !scene.delta_lights.is_empty() && !matches!(engine, EngineKind::Path | EngineKind::Raycast) {
+    let path_tracer = matches!(engine, EngineKind::Path | EngineKind::Raycast);
+    if !scene.delta_lights.is_empty() && !path_tracer {
         return Err(format!(
             "{}: the scene has lights without area (Mitsuba's point, spot or directional lights), which only the path tracer renders so far (--engine path); the {engine} engine would leave them out",
             input.display()
         ));
     }
-    let heterogeneous = scene.media.iter().find(|m| m.heterogeneous.is_some());
-    if let (Some(m), false) = (
-        heterogeneous,
-        matches!(engine, EngineKind::Path | EngineKind::Raycast),
-    ) {
-        return Err(format!(
-            "{}:{}: the scene has a heterogeneous medium (Mitsuba's heterogeneous), which only the path tracer renders so far (--engine path); the {engine} engine would leave it out",
-            input.display(),
-            m.line
-        ));
-    }
+    // Media only the path tracer follows: the first, by its line, and what it is.
+    let heterogeneous = scene
+        .media
+        .iter()
+        .position(|m| m.heterogeneous.is_some())
+        .map(|k| (k, "a heterogeneous medium (Mitsuba's heterogeneous)"));
     let beyond_fog = scene
         .camera_medium
         .into_iter()
         .chain(scene.materials.iter().filter_map(|m| m.exterior_medium))
-        .next();
-    if let (Some(k), false) = (
-        beyond_fog,
-        matches!(engine, EngineKind::Path | EngineKind::Raycast),
-    ) {
+        .next()
+        .map(|k| (k, "a medium around the camera or outside a shape (Mitsuba's sensor medium or a shape's exterior)"));
+    if let (Some((k, what)), false) = (heterogeneous.or(beyond_fog), path_tracer) {
         return Err(format!(
-            "{}:{}: the medium there surrounds the camera or the outside of a shape (Mitsuba's sensor medium or a shape's exterior), which only the path tracer follows so far (--engine path); the {engine} engine would leave it out",
+            "{}:{}: the scene has {what}, which only the path tracer renders so far (--engine path); the {engine} engine would leave it out",
             input.display(),
             scene.media[k].line
         ));
