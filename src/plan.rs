@@ -32,8 +32,11 @@ pub struct Plan {
     /// The Mitsuba BSDF of each used material that has one and what the engine renders of
     /// it (`material 3 "coat" twosided(roughplastic): roughplastic approximated as …`).
     pub bsdfs: Vec<String>,
-    /// The media inside glass objects ("material 6: medium 1"), one per material that has one.
-    pub interiors: Vec<String>,
+    /// The media on either side of boundaries ("material 6: medium 1 inside", "… medium 0
+    /// outside"), one per material that has either, and the camera's where it is not the fog.
+    pub boundary_media: Vec<String>,
+    /// The materials whose emitted radiance is a texture, and what the engine emits of it.
+    pub emission_textures: Vec<String>,
     /// The sky that lights the render ("uniform …", "gradient …"), None without one.
     pub sky: Option<String>,
     /// What the engine builds beyond the image and the Accel, by name, and "no" for what
@@ -108,11 +111,20 @@ impl Plan {
                     m.g
                 )
             }),
-            interiors: scene
+            boundary_media: boundary_media(scene),
+            emission_textures: scene
                 .materials
                 .iter()
                 .enumerate()
-                .filter_map(|(i, m)| m.interior_medium.map(|k| format!("material {i}: medium {k}")))
+                .filter(|(_, m)| m.emission_texture.is_some())
+                .map(|(i, m)| {
+                    let what = if engine == EngineKind::Path {
+                        "read where paths meet it and where they sample it".to_string()
+                    } else {
+                        format!("its mean, {}, everywhere", m.emitted)
+                    };
+                    format!("material {i}: {what}")
+                })
                 .collect(),
             sky: scene.sky.as_ref().map(|sky| {
                 let v = |c: crate::geometry::Vec3| format!("{} {} {}", c.x, c.y, c.z);
@@ -229,6 +241,31 @@ pub fn default_max_memory() -> u64 {
     total_kib.map_or(8 << 30, |k| k * 1024 / 10 * 8)
 }
 
+/// `Plan::boundary_media`: each material's media inside and outside, and the camera's.
+fn boundary_media(scene: &Scene) -> Vec<String> {
+    let sides = |i: usize, m: &crate::scene::Material| {
+        let side = |k: Option<usize>, side: &str| k.map(|k| format!("medium {k} {side}"));
+        let both: Vec<String> = [
+            side(m.interior_medium, "inside"),
+            side(m.exterior_medium, "outside"),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        (!both.is_empty()).then(|| format!("material {i}: {}", both.join(", ")))
+    };
+    let camera = scene
+        .camera_medium
+        .map(|k| format!("the camera in medium {k}"));
+    scene
+        .materials
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| sides(i, m))
+        .chain(camera)
+        .collect()
+}
+
 fn shape_counts(scene: &Scene) -> Vec<(&'static str, usize)> {
     let mut counts: Vec<(&'static str, usize)> = Vec::new();
     for s in &scene.shapes {
@@ -316,8 +353,15 @@ impl fmt::Display for Plan {
         writeln!(f, "emitters: {}", self.emitters)?;
         // Nothing of media or skies is built or traced for a scene without them.
         writeln!(f, "fog: {}", self.fog.as_deref().unwrap_or("none"))?;
-        if !self.interiors.is_empty() {
-            writeln!(f, "interior media: {}", self.interiors.join("; "))?;
+        if !self.boundary_media.is_empty() {
+            writeln!(f, "media at boundaries: {}", self.boundary_media.join("; "))?;
+        }
+        if !self.emission_textures.is_empty() {
+            writeln!(
+                f,
+                "textured radiance: {}",
+                self.emission_textures.join("; ")
+            )?;
         }
         writeln!(f, "sky: {}", self.sky.as_deref().unwrap_or("none"))?;
         for (name, what) in &self.structures {

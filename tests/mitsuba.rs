@@ -633,6 +633,7 @@ fn medium_around_a_hollow_sphere(sigma: f64, box_half: f64, camera_medium: bool)
 /// outside the unit box sees exp(−σ·(2 − 1)) through the box of medium with the hollow sphere
 /// in it (exp(−σ·½) if leaving the sphere were taken as empty space); the camera inside a
 /// box [−10, 10]³ of medium sees exp(−σ·(15 − 1)) (exp(−σ·9.5) if it started in empty space).
+/// `--plan` says which medium is on which side of which boundary, and where the camera is.
 /// The other engines refuse such a scene, naming the medium's line.
 #[test]
 fn exterior_and_sensor_media_attenuate_by_the_length_travelled_in_them() {
@@ -647,6 +648,22 @@ fn exterior_and_sensor_media_attenuate_by_the_length_travelled_in_them() {
         );
         let scene = Scene::load(&file).expect("loads");
         assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        let plan = std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+            .args(["-input", file.to_str().unwrap(), "--plan"])
+            .output()
+            .expect("runs");
+        let camera = if camera_medium {
+            "; the camera in medium 0"
+        } else {
+            ""
+        };
+        let media = format!(
+            "media at boundaries: material 0: medium 0 inside; material 1: medium 0 outside{camera}\n"
+        );
+        assert!(
+            String::from_utf8_lossy(&plan.stdout).contains(&media),
+            "{name}: --plan does not say {media:?}"
+        );
         let expected = (-sigma * length).exp();
         for mean in path_means(&file, 256) {
             // Each path survives the absorption or not: 98,304 of them give a standard
