@@ -1775,16 +1775,27 @@ impl RadiositySolver for Hierarchical {
                 break;
             }
             // Refine the links that now carry too much (their sources have brightened).
-            let (keep, again): (Vec<Link>, Vec<Link>) =
-                links.iter().partition(|l| link_error(&h, l) <= threshold);
             // Refining links whose errors add up to less than the tolerance cannot move the
             // solution by more than the tolerance.
-            let pending: f32 = again.iter().map(|l| link_error(&h, l)).sum();
-            if !again.is_empty() && pending > limits.tolerance * total_emitted {
+            let again = |l: &Link| link_error(&h, l) > threshold;
+            let (count, pending) = links
+                .iter()
+                .filter(|l| again(l))
+                .fold((0usize, 0.0f32), |(n, sum), l| {
+                    (n + 1, sum + link_error(&h, l))
+                });
+            if count > 0 && pending > limits.tolerance * total_emitted {
                 // The links as the leaf scales last took them, for their values kept.
                 scales.before_refinement(&links, std::mem::take(&mut starts));
-                links = keep;
-                let candidates = again.iter().map(|l| (l.receiver, l.source)).collect();
+                // The links to refine leave as pairs of nodes; the rest stay in place, in
+                // their order (no second copy of the links at the peak of the solve).
+                let mut candidates = Vec::with_capacity(count);
+                candidates.extend(
+                    (links.iter())
+                        .filter(|l| again(l))
+                        .map(|l| (l.receiver, l.source)),
+                );
+                links.retain(|l| !again(l));
                 capped |= self.refine(&mut h, sampler, candidates, rule, &mut links);
                 emission = h.emission();
                 starts = receiver_starts(h.nodes.len(), &links);
