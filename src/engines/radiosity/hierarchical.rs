@@ -1827,13 +1827,22 @@ impl RadiositySolver for Hierarchical {
             scales.update(&h, &links, &starts, &emission, true);
         }
 
+        // The links (counted) and the centre form factors are done with: freed before the
+        // solution is made, so that its making is not the peak of the solve.
+        let clustered = links
+            .iter()
+            .filter(|l| h.node(l.receiver).is_cluster() || h.node(l.source).is_cluster())
+            .count();
+        let link_count = links.len();
+        drop((links, starts));
+        let scales = scales.scales;
         // What came straight from the emitters: one gather of the emission alone.
         let none = vec![Vec3::ZERO; h.nodes.len()];
         let gathered = Gathered {
             direct: &direct,
             reflected: &none,
         };
-        let (incident_direct, _) = sweep(&h, &scales.scales, &gathered);
+        let (incident_direct, _) = sweep(&h, &scales, &gathered);
         light.radiance = h.radiance[..patches.len()].to_vec();
         light.incident = incident[..patches.len()].to_vec();
         light.incident_direct = incident_direct[..patches.len()].to_vec();
@@ -1846,15 +1855,11 @@ impl RadiositySolver for Hierarchical {
             .iter()
             .filter(|e| !e.is_cluster() && e.children == NONE)
             .count();
-        let clustered = links
-            .iter()
-            .filter(|l| h.node(l.receiver).is_cluster() || h.node(l.source).is_cluster())
-            .count();
-        let link_bytes = links.len() * std::mem::size_of::<Link>();
+        let link_bytes = link_count * std::mem::size_of::<Link>();
         let warning = capped.then(|| format!(
             "hierarchical refinement stopped at the memory budget ({} of --max-memory left after the rest of the render) with {} links: the solution is coarser than --link-error asks",
             crate::bytes::human_bytes(self.memory_budget),
-            links.len()
+            link_count
         ));
         Solved {
             light,
@@ -1864,7 +1869,7 @@ impl RadiositySolver for Hierarchical {
                 ("clusters", h.clusters.len() as u64),
                 ("elements", elements as u64),
                 ("leaves", leaves as u64),
-                ("links", links.len() as u64),
+                ("links", link_count as u64),
                 ("cluster links", clustered as u64),
                 ("link bytes", link_bytes as u64),
                 ("sweeps", sweeps),
@@ -1876,7 +1881,7 @@ impl RadiositySolver for Hierarchical {
                 h.clusters.len(),
                 elements,
                 leaves,
-                links.len(),
+                link_count,
                 clustered,
                 link_bytes as f64 / (1 << 20) as f64,
                 sweeps,
