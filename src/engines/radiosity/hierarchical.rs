@@ -811,8 +811,8 @@ impl Carried {
 /// A link into a cluster as the leaves below the cluster take it: the direction towards its
 /// source from the cluster's centre, and its form factor there onto a surface facing that
 /// way, so that a leaf of normal n takes cos⁺(n, dir) of what it carries (see
-/// `update_leaf_scales`). 16 bytes, one for each of the hospital array's 12 million links
-/// into clusters: what it carries is taken from its source's weights when it is added.
+/// `update_leaf_scales`). What it carries is taken from its source's weights as it is added:
+/// 16 bytes a link into a cluster (12 million of them in sixteen hospitals) rather than 40.
 struct IntoCluster {
     dir: Vec3,
     /// The form factor onto a surface facing `dir`, visibility included.
@@ -1179,8 +1179,8 @@ fn update_leaf_scales(
                 }
                 out.push((e, carried.scale(&above), begins));
             });
-            // Kept until the next update: without the slack of its growth (a third more on
-            // average, the most of the hospital's solve).
+            // Kept until the next update: without the slack of its growth (up to as much
+            // again as its values).
             kept.shrink_to_fit();
             out
         })
