@@ -975,8 +975,8 @@ impl PathTracer<'_> {
     }
 
     /// The transmittance along a shadow ray that starts in `medium`, crossing index-matched
-    /// boundaries and thin sheets (each into the medium `Scene::medium_beyond` says; a sheet lets through what `straight_transmission` says)
-    /// and multiplying the media's transmittance over each stretch (a heterogeneous medium's
+    /// boundaries and thin sheets (each into the medium `Scene::medium_beyond` says; a sheet
+    /// lets through what `straight_transmission` says) and multiplying the media's transmittance over each stretch (a heterogeneous medium's
     /// estimated from `samples`); 0 where any other surface is in the way, or after
     /// `MAX_CROSSINGS` boundaries.
     fn crossing_transmittance(

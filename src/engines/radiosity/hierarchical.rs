@@ -877,25 +877,15 @@ struct CentreFormFactors {
 
 /// The links at the last update, as a refinement left them (see `CentreFormFactors`).
 struct Previous {
-    /// A bit per link: whether the refinement kept it.
-    kept: Vec<u64>,
+    /// A bit per link: whether the refinement took it out to split it.
+    refined: Vec<u64>,
     /// Their receivers' starts (`receiver_starts`).
     starts: Vec<u32>,
 }
 
 impl Previous {
-    fn new(links: &[Link], starts: Vec<u32>, kept: impl Fn(&Link) -> bool) -> Previous {
-        let mut bits = vec![0u64; links.len().div_ceil(64)];
-        for (j, l) in links.iter().enumerate() {
-            if kept(l) {
-                bits[j / 64] |= 1 << (j % 64);
-            }
-        }
-        Previous { kept: bits, starts }
-    }
-
     fn was_kept(&self, j: usize) -> bool {
-        self.kept[j / 64] >> (j % 64) & 1 == 1
+        !bit(&self.refined, j)
     }
 
     /// Where the links of receiver `a` were.
@@ -941,7 +931,7 @@ impl CentreFormFactors {
         let previous = self
             .previous
             .as_ref()
-            .map_or(0, |p| 8 * p.kept.len() + 4 * p.starts.len());
+            .map_or(0, |p| 8 * p.refined.len() + 4 * p.starts.len());
         let held = links.len() * LINK_BYTES + h.nodes.len() * NODE_BYTES + previous;
         self.keep = self.keep && values * 4 <= budget.saturating_sub(held as u64);
         if !self.keep {
@@ -989,17 +979,12 @@ impl LeafScales {
         );
     }
 
-    /// Notes the links and their receivers' starts the last update took, and which of them
-    /// a refinement is about to keep (see `CentreFormFactors::previous`).
-    fn before_refinement(
-        &mut self,
-        links: &[Link],
-        starts: Vec<u32>,
-        kept: impl Fn(&Link) -> bool,
-    ) {
+    /// Notes the receivers' starts of the links the last update took, and which of those
+    /// links a refinement takes out, a bit each (see `CentreFormFactors::previous`).
+    fn before_refinement(&mut self, starts: Vec<u32>, refined: Vec<u64>) {
         // Not needed once the values are no longer kept.
         if self.centre_form_factors.keep {
-            self.centre_form_factors.previous = Some(Previous::new(links, starts, kept));
+            self.centre_form_factors.previous = Some(Previous { refined, starts });
         }
     }
 }
@@ -1430,6 +1415,11 @@ fn link_error(h: &Hierarchy, l: &Link) -> f32 {
     h.node(l.receiver).area * varies * h.radiance[l.source as usize].max_element()
 }
 
+/// Whether bit `j` of the bit set `bits` is set.
+fn bit(bits: &[u64], j: usize) -> bool {
+    bits[j / 64] >> (j % 64) & 1 == 1
+}
+
 /// The pairs that replace (r, s) when node `n` (one of them, its children made) is split; a
 /// node linked to itself becomes every pair of its children.
 fn split_pair(h: &Hierarchy, r: u32, s: u32, n: u32, out: &mut Vec<(u32, u32)>) {
@@ -1797,25 +1787,35 @@ impl RadiositySolver for Hierarchical {
             // Refine the links that now carry too much (their sources have brightened).
             // Refining links whose errors add up to less than the tolerance cannot move the
             // solution by more than the tolerance.
-            let again = |l: &Link| link_error(&h, l) > threshold;
-            let (count, pending) = links
-                .iter()
-                .filter(|l| again(l))
-                .fold((0usize, 0.0f32), |(n, sum), l| {
-                    (n + 1, sum + link_error(&h, l))
-                });
+            // Each link's error is found once (its nodes and source are read from all over
+            // memory): a bit per link says whether it is refined.
+            let mut refined = vec![0u64; links.len().div_ceil(64)];
+            let (mut count, mut pending) = (0usize, 0.0f32);
+            for (j, l) in links.iter().enumerate() {
+                let error = link_error(&h, l);
+                if error > threshold {
+                    refined[j / 64] |= 1 << (j % 64);
+                    count += 1;
+                    pending += error;
+                }
+            }
             if count > 0 && pending > limits.tolerance * total_emitted {
-                // The links as the leaf scales last took them, for their values kept.
-                scales.before_refinement(&links, std::mem::take(&mut starts), |l| !again(l));
                 // The links to refine leave as pairs of nodes; the rest stay in place, in
                 // their order (no second copy of the links at the peak of the solve).
                 let mut candidates = Vec::with_capacity(count);
                 candidates.extend(
-                    (links.iter())
-                        .filter(|l| again(l))
-                        .map(|l| (l.receiver, l.source)),
+                    (links.iter().enumerate())
+                        .filter(|&(j, _)| bit(&refined, j))
+                        .map(|(_, l)| (l.receiver, l.source)),
                 );
-                links.retain(|l| !again(l));
+                // `retain` visits the links once each, in order.
+                let mut j = 0;
+                links.retain(|_| {
+                    j += 1;
+                    !bit(&refined, j - 1)
+                });
+                // The links as the leaf scales last took them, for their values kept.
+                scales.before_refinement(std::mem::take(&mut starts), refined);
                 capped |= self.refine(&mut h, sampler, candidates, rule, &mut links);
                 emission = h.emission();
                 starts = receiver_starts(h.nodes.len(), &links);
