@@ -46,6 +46,18 @@ fn faces_become_quads_or_triangles() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A quad planar in the file stays a quad wherever a transform puts it: a millimetre square
+/// arrayed 300 units along x (as a building arrayed along a street) is rounded to f32 off its
+/// plane by more than a thousandth of its size, which is no reason to split it in two.
+#[test]
+fn a_small_quad_far_from_the_origin_stays_a_quad() {
+    let dir = common::temp_dir("far");
+    let text = format!("{SQUARE}xf -s 0.001 -ry 17 -t 0 3.3 7.7 -a 16 -t 20 0 0\nf a b c d\nxf\n");
+    let scene = Scene::load(&write(&dir, "far.mgf", &text)).expect("loads");
+    assert_eq!((scene.quads.len(), scene.triangles.len()), (16, 0));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn transforms_arrays_mirrors_and_includes_place_vertices_where_used() {
     let dir = common::temp_dir("xf");

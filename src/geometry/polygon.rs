@@ -167,6 +167,27 @@ pub fn quad_normal(v: &[Vec3; 4]) -> Vec3 {
     (v[2] - v[0]).cross(v[3] - v[1])
 }
 
+/// How far off its plane quad `v` (of unit normal `unit` and diagonal `size`) is, when it is
+/// too far to count as planar: None when no vertex lies farther off the plane through its
+/// centre than a thousandth of its size (the course dialect's tolerance) or than rounding its
+/// coordinates to f32 can put it, whichever is larger. Without the second, a small quad far
+/// from the origin is planar in its file's numbers but not in f32's: a hospital arrayed 300 m
+/// along an axis (MGF's `xf -a 16 -t 20 0 0`) lost 70% of its quads in its last copies, each
+/// split into two triangles.
+pub fn quad_off_plane(v: &[Vec3; 4], unit: Vec3, size: f32) -> Option<f32> {
+    let centre = (v[0] + v[1] + v[2] + v[3]) * 0.25;
+    let reach = v
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0.0f32, f32::max);
+    let tolerance = (1e-3 * size).max(4.0 * f32::EPSILON * reach);
+    let off_plane = v
+        .iter()
+        .map(|&p| (p - centre).dot(unit).abs())
+        .fold(0.0f32, f32::max);
+    (off_plane > tolerance).then_some(off_plane)
+}
+
 /// Whether a one-sided surface with front normal `n` can be hit by a ray going along `dir`.
 /// Embree's quad filter in `sys/shim.c` makes the same test with the same arithmetic.
 #[inline]

@@ -10,7 +10,9 @@ use super::sky::{Sky, SkyMap};
 use super::{Material, Quad, Scene, ShapePrim};
 use crate::camera::{Camera, Projection};
 use crate::color::srgb_to_linear;
-use crate::geometry::{quad_normal, vec2, vec3, RingShape, SphereShape, Vec2, Vec3};
+use crate::geometry::{
+    quad_normal, quad_off_plane, vec2, vec3, RingShape, SphereShape, Vec2, Vec3,
+};
 use std::sync::Arc;
 
 /// Whether `text` is in the course dialect: some line starts with one of the dialect's own
@@ -678,12 +680,7 @@ fn check_quad(p: &Parser, tok: Token, v: &[Vec3; 4]) -> Result<(), SceneError> {
         return Err(p.invalid(tok, "degenerate quad: its area is zero".into()));
     }
     let unit = n * area2.recip();
-    let centre = (v[0] + v[1] + v[2] + v[3]) * 0.25;
-    let off_plane = v
-        .iter()
-        .map(|&x| (x - centre).dot(unit).abs())
-        .fold(0.0f32, f32::max);
-    if off_plane > 1e-3 * size {
+    if let Some(off_plane) = quad_off_plane(v, unit, size) {
         return Err(p.invalid(
             tok,
             format!("non-planar quad: a vertex lies {off_plane} off the quad's plane"),

@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 
 use super::{Material, Quad, Scene, SceneError};
 use crate::color::Color;
-use crate::geometry::{quad_normal, vec3, Vec3};
+use crate::geometry::{quad_normal, quad_off_plane, vec3, Vec3};
 
 /// Divisions of a full circle in the tessellated primitives (RenderPark: 4 per quarter).
 const CIRCLE_DIVISIONS: usize = 16;
@@ -1113,11 +1113,7 @@ fn convex_planar_quad(v: &[Vec3; 4]) -> bool {
         return false;
     }
     let unit = n * len.recip();
-    let centre = (v[0] + v[1] + v[2] + v[3]) * 0.25;
-    // The course dialect's tolerance for a quad's planarity.
-    let planar = v
-        .iter()
-        .all(|&p| (p - centre).dot(unit).abs() <= 1e-3 * size);
+    let planar = quad_off_plane(v, unit, size).is_none();
     let convex = (0..4).all(|k| {
         let (a, b, c) = (v[k], v[(k + 1) % 4], v[(k + 2) % 4]);
         (b - a).cross(c - b).dot(unit) > 0.0
