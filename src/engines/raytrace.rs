@@ -518,7 +518,10 @@ impl Tracer<'_> {
                     // copied out of the light, held in registers: read through `light` the
                     // normal was re-read for every ray, and the read stalled on store
                     // forwarding (perf: a fifth of `shade`).
+                    // The numbers are drawn even where the light's side facing the point
+                    // does not emit, so that the next light's are the same either way.
                     (LightShape::Parallelogram(quad), None) => {
+                        let facing = quad.normal_towards(s.point);
                         let mut samples = self.light_strata.samples(rng);
                         let (mut u, mut v) = ([0.0; LANES], [0.0; LANES]);
                         let mut left = count;
@@ -527,7 +530,9 @@ impl Tracer<'_> {
                             for (i, (ui, vi)) in samples.by_ref().take(m).enumerate() {
                                 (u[i], v[i]) = (ui, vi);
                             }
-                            batch.push_block(&quad.sample_block(&u, &v), quad.normal(), m);
+                            if let Some(normal) = facing {
+                                batch.push_block(&quad.sample_block(&u, &v), normal, m);
+                            }
                             left -= m;
                         }
                     }
@@ -594,8 +599,8 @@ impl ShadowBatch<'_> {
         }
     }
 
-    /// `push` for the first `m` points of a block on a one-sided planar light of unit normal
-    /// `normal`: the geometric terms lane by lane (vector instructions, the same arithmetic
+    /// `push` for the first `m` points of a block on a planar light whose side of unit normal
+    /// `normal` emits: the geometric terms lane by lane (vector instructions, the same arithmetic
     /// as `geometric_term`), then the rays of the lanes that face each other.
     #[inline(always)]
     fn push_block(&mut self, p: &PointBlock, normal: Vec3, m: usize) {
@@ -753,19 +758,22 @@ mod tests {
 
     /// The block path gives the same rays and weights, bit for bit, as point-by-point
     /// `push` (the per-point path every other light takes), including the points that face
-    /// away and are left out: a 2×0.5 light, tilted, above surface points on every side of it.
+    /// away and are left out: a 2×0.5 light, tilted, one-sided and then two-sided, above
+    /// surface points on every side of it.
     #[test]
     fn block_of_light_samples_matches_point_by_point() {
         let text = "material\ndiffuse 0 0 0\nemitted 1 1 1\n\
                     m 0\nv -1 1 0.2\nv -1 1.3 -0.3\nv 1 1.3 -0.3\nv 1 1 0.2\nf 1 2 3 4\n";
-        let scene = Scene::parse_dialect(std::path::Path::new("t.obj"), text).expect("parses");
-        let light = Light::collect(&scene)[0];
-        let LightShape::Parallelogram(quad) = light.shape else {
-            panic!("a quad light");
-        };
+        let mut scene = Scene::parse_dialect(std::path::Path::new("t.obj"), text).expect("parses");
         let mut rng = Rng::new(11, 0, 0);
         let (mut kept, mut tried) = (0, 0);
-        for _ in 0..200 {
+        for round in 0..400 {
+            // One-sided, then two-sided (`--two-sided`: the back emits too).
+            scene.two_sided_quads = round >= 200;
+            let light = Light::collect(&scene)[0];
+            let LightShape::Parallelogram(quad) = light.shape else {
+                panic!("a quad light");
+            };
             let x = vec3(
                 4.0 * rng.next_f32() - 2.0,
                 2.0 * rng.next_f32(),
@@ -796,7 +804,9 @@ mod tests {
                     one_by_one.push(quad.sample(u[i], v[i]));
                 }
                 let mut block = batch(&mut rays_b[..], &mut weights_b[..]);
-                block.push_block(&quad.sample_block(&u, &v), quad.normal(), m);
+                if let Some(normal) = quad.normal_towards(x) {
+                    block.push_block(&quad.sample_block(&u, &v), normal, m);
+                }
                 assert_eq!(one_by_one.len, block.len);
                 let len = block.len;
                 (kept, tried) = (kept + len, tried + m);

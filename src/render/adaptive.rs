@@ -27,8 +27,8 @@ const UNTRACED: u8 = 0;
 const SEES: u8 = 1;
 const HIDDEN: u8 = 2;
 
-/// The form factor from the point `x` (unit normal `n`) to the parts of the one-sided light
-/// `quad` that it sees, refined `depth` levels where corners disagree. `sees(p)` traces the
+/// The form factor from the point `x` (unit normal `n`) to the parts of the light `quad` that
+/// it sees (none from behind a one-sided light), refined `depth` levels where corners disagree. `sees(p)` traces the
 /// shadow ray to the light point `p`; `scratch` holds the corners' states between calls (its
 /// allocation is reused). Multiplied by the light's radiance, this is the reflected radiance
 /// over the albedo.
@@ -41,7 +41,7 @@ pub fn visible_form_factor(
     mut sees: impl FnMut(Vec3) -> bool,
 ) -> f32 {
     // Behind a one-sided light, nothing to see and no ray to trace.
-    if (x - quad.sample(0.0, 0.0).point).dot(quad.normal()) <= 0.0 {
+    if quad.normal_towards(x).is_none() {
         return 0.0;
     }
     let cells = 1usize << depth.min(MAX_DEPTH);
@@ -108,6 +108,7 @@ mod tests {
             vec3(1.0, 0.0, 0.0),
             vec3(0.0, 0.0, 1.0),
             vec3(0.0, -1.0, 0.0),
+            false,
         )
     }
 

@@ -17,28 +17,39 @@ pub struct PointBlock {
 /// Points in a `PointBlock`.
 pub const LANES: usize = 8;
 
-/// A planar parallelogram `origin + u·edge_u + v·edge_v`, emitting on its front side; the
-/// first sampling axis runs along the longer edge (`swap_axes`: that is `edge_v`), for N×1
-/// strata.
+/// A planar parallelogram `origin + u·edge_u + v·edge_v`, emitting on its front side (on both
+/// with `two_sided`); the first sampling axis runs along the longer edge (`swap_axes`: that
+/// is `edge_v`), for N×1 strata.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Parallelogram {
     origin: Vec3,
     edge_u: Vec3,
     edge_v: Vec3,
     normal: Vec3,
+    /// It emits from its back too (`--two-sided`, as the quad is seen to glow and as
+    /// radiosity's back patches emit).
+    two_sided: bool,
     swap_axes: bool,
     /// The edges are perpendicular: the light can be sampled by solid angle.
     rectangle: bool,
 }
 
 impl Parallelogram {
-    /// The parallelogram `origin + u·edge_u + v·edge_v` emitting towards its unit `normal`.
-    pub fn new(origin: Vec3, edge_u: Vec3, edge_v: Vec3, normal: Vec3) -> Parallelogram {
+    /// The parallelogram `origin + u·edge_u + v·edge_v` emitting towards its unit `normal`,
+    /// and away from it too if `two_sided`.
+    pub fn new(
+        origin: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        normal: Vec3,
+        two_sided: bool,
+    ) -> Parallelogram {
         Parallelogram {
             origin,
             edge_u,
             edge_v,
             normal,
+            two_sided,
             swap_axes: edge_v.length() > edge_u.length(),
             rectangle: edge_u.dot(edge_v).abs() <= 1e-5 * edge_u.length() * edge_v.length(),
         }
@@ -51,7 +62,7 @@ impl Parallelogram {
         LightPoint {
             point: self.origin + self.edge_u * u + self.edge_v * v,
             normal: self.normal,
-            one_sided: true,
+            one_sided: !self.two_sided,
         }
     }
 
@@ -70,21 +81,29 @@ impl Parallelogram {
         p
     }
 
-    /// The unit normal of the emitting side.
-    pub fn normal(&self) -> Vec3 {
-        self.normal
+    /// The unit normal of the side that faces `x`, if that side emits: the front's, or the
+    /// back's (the front's negated) on a two-sided light; None where `x` lies in its plane or
+    /// behind a one-sided light (it sends `x` nothing).
+    #[inline]
+    pub fn normal_towards(&self, x: Vec3) -> Option<Vec3> {
+        let side = (x - self.origin).dot(self.normal);
+        if side > 0.0 {
+            Some(self.normal)
+        } else if side < 0.0 && self.two_sided {
+            Some(-self.normal)
+        } else {
+            None
+        }
     }
 
     /// The light as a spherical rectangle seen from `x`, to be sampled by solid angle; None
-    /// when `x` is behind it or in its plane (it sends `x` nothing), when its edges are not
+    /// when the side `x` is on does not emit (`normal_towards`), when its edges are not
     /// perpendicular (a parallelogram that is no rectangle: sampled by area), or when it
     /// subtends less than `MIN_SOLID_ANGLE`. The first sampling axis runs along the longer
     /// edge, as in `sample`.
     #[inline]
     pub fn spherical_rectangle(&self, x: Vec3) -> Option<SphericalRectangle> {
-        if (x - self.origin).dot(self.normal) <= 0.0 {
-            return None;
-        }
+        self.normal_towards(x)?;
         if !self.rectangle {
             return None;
         }
@@ -145,6 +164,7 @@ impl Light {
                         v1 - v0,
                         v3 - v0,
                         q.normal,
+                        scene.two_sided_quads,
                     )),
                     emitted: e,
                     area: q.area(),
