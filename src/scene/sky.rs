@@ -262,7 +262,10 @@ impl SkyMap {
     /// The texel at (column, row), the column periodic and the row clamped.
     fn texel(&self, column: usize, row: usize) -> Color {
         let (w, h) = (self.width as usize, self.height as usize);
-        self.texels[row.min(h - 1) * w + column % w]
+        // Columns come in [0, w] (a bilinear lookup's right neighbour): the division of `%`
+        // only for the one past the end.
+        let column = if column < w { column } else { column % w };
+        self.texels[row.min(h - 1) * w + column]
     }
 
     /// A cell's mean radiance (unscaled): its texel in our layout; in Mitsuba's the mean of
