@@ -485,6 +485,59 @@ fn an_instanced_scene_renders_as_its_shapes_placed_directly() {
     );
 }
 
+/// The other engines take instanced triangles as world triangles where they need them (the
+/// radiosity mesh a patch per instanced triangle, the lights, the plan): each renders the
+/// instanced scene as the shapes placed directly, to float precision (the radiosity mesh's
+/// patches are the same, in the same order), and `--plan` says how many triangles are stored
+/// and how many instanced.
+#[test]
+fn every_engine_renders_instances_as_shapes_placed_directly() {
+    use trilux::engines::{render, EngineKind};
+    let load = |name: &str, instanced: bool| {
+        let text = instanced_scene(instanced);
+        Scene::load(&write(name, &[(&format!("{name}.xml"), text.as_bytes())])).expect("loads")
+    };
+    let (scene, flat) = (
+        load("engines-instanced", true),
+        load("engines-flattened", false),
+    );
+    let settings = RenderSettings {
+        width: 32,
+        height: 24,
+        num_antialias_samples: 4,
+        quiet: true,
+        ..RenderSettings::default()
+    };
+    let per_group = scene.instancing.stored_triangle_count();
+    let plan = trilux::plan::Plan::new(&scene, EngineKind::Radiosity, AccelKind::Bvh, &settings);
+    let expected = format!(
+        "instancing: 4 instances of 1 shapegroup: {per_group} triangles stored, {} triangles instanced",
+        4 * per_group
+    );
+    assert!(plan.to_string().contains(&expected), "{plan}");
+    for kind in [
+        EngineKind::Raycast,
+        EngineKind::Raytrace,
+        EngineKind::Radiosity,
+    ] {
+        let mean = |scene: &Scene| {
+            let accel = accel::build(scene, AccelKind::Bvh, &AccelOptions::default()).unwrap();
+            let film = render(kind, scene, accel.as_ref(), &settings)
+                .expect("renders")
+                .film;
+            film.pixels
+                .iter()
+                .map(|p| p.x as f64 + p.y as f64 + p.z as f64)
+                .sum::<f64>()
+                / film.pixels.len() as f64
+        };
+        let (a, b) = (mean(&scene), mean(&flat));
+        println!("{kind:?}: {a:.6} instanced, {b:.6} placed directly");
+        assert!(b > 0.01, "{kind:?} renders something: {b}");
+        assert!((a - b).abs() <= 1e-4 * b, "{kind:?}: {a} against {b}");
+    }
+}
+
 /// Mitsuba refuses emitters in a shapegroup, and nested instancing: so does trilux, naming
 /// the file and line.
 #[test]
