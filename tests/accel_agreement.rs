@@ -492,8 +492,9 @@ fn as_flattened(hit: Option<trilux::accel::PrimHit>) -> Option<trilux::accel::Pr
 /// the same triangle at the same t (`same_hit`'s tolerance: the instanced test runs on the
 /// ray taken into the group's space, rounded otherwise). A ray through an edge two triangles
 /// share may find the other one where the rounding differs: such a ray must still meet it at
-/// the same t, and be rare. Occlusion: the same answers. The BVH's invariants hold, and the
-/// group's triangles are stored once.
+/// the same t, and be rare. Occlusion: the same answers. Embree also with `--embree-exact`
+/// off (its own test deciding, its instance hits reported through `instID`). The BVH's
+/// invariants hold, and the group's triangles are stored once.
 #[test]
 fn every_backend_matches_brute_force_on_an_instanced_scene() {
     let (scene, flat) = instanced_and_flattened();
@@ -518,8 +519,21 @@ fn every_backend_matches_brute_force_on_an_instanced_scene() {
         instanced_hits > 5_000,
         "{instanced_hits} rays of {hits} hit instances"
     );
-    for kind in backends() {
-        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+    // Embree also with its own test deciding (`--embree-exact` off): its instance hits then
+    // come back through `instID`.
+    let inexact = AccelOptions {
+        embree_exact: false,
+        ..AccelOptions::default()
+    };
+    let mut runs: Vec<_> = backends()
+        .into_iter()
+        .map(|k| (k, AccelOptions::default()))
+        .collect();
+    if cfg!(feature = "embree") {
+        runs.push((accel::AccelKind::Embree, inexact));
+    }
+    for (kind, options) in runs {
+        let accel = accel::build(&scene, kind, &options).expect("builds");
         let mut got = vec![None; rays.len()];
         accel.intersect_batch(&rays, &mut got);
         let (mut wrong, mut edge) = (0, 0);
@@ -552,8 +566,9 @@ fn every_backend_matches_brute_force_on_an_instanced_scene() {
             .filter(|(a, b)| a != b)
             .count();
         println!(
-            "{}: {wrong} wrong, {edge} other triangle at the same t, {occlusion_wrong} occlusion answers differ in {} rays ({hits} hits, {instanced_hits} on instances)",
+            "{} (exact {}): {wrong} wrong, {edge} other triangle at the same t, {occlusion_wrong} occlusion answers differ in {} rays ({hits} hits, {instanced_hits} on instances)",
             accel.name(),
+            options.embree_exact,
             rays.len()
         );
         assert_eq!(wrong, 0, "{}", accel.name());
