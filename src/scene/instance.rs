@@ -116,21 +116,21 @@ impl Instancing {
 
     /// Places group `group` by `to_world`. An error (for the reader to name the file and line
     /// with) when the transform cannot be inverted, or the instanced triangles would number
-    /// more than 2³² .
+    /// more than 2³² (the BVH takes at most 2³⁰ primitives: `AccelError::TooLarge`).
     pub fn add_instance(&mut self, group: u32, to_world: DMat4) -> Result<(), String> {
         let to_group = to_world.inverse();
         if !(to_world.is_finite() && to_group.is_finite() && to_world.determinant() != 0.0) {
             return Err("an instance's to_world must be invertible".into());
         }
         let count = self.groups[group as usize].mesh.len();
-        let first = u32::try_from(self.triangle_count())
-            .ok()
-            .filter(|&f| f.checked_add(count as u32).is_some() && count <= u32::MAX as usize)
-            .ok_or("the instances hold more than 2³² triangles")?;
+        let first = self.triangle_count();
+        if first + count > u32::MAX as usize {
+            return Err("the instances place more than 2³² triangles".into());
+        }
         let linear = DMat3::from_mat4(to_world);
         self.instances.push(Instance {
             group,
-            first,
+            first: first as u32,
             to_world,
             to_group: to_group.as_mat4(),
             normal_matrix: linear.inverse().transpose(),
