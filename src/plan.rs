@@ -17,6 +17,9 @@ pub struct Plan {
     pub quads: usize,
     pub one_sided_quads: bool,
     pub triangles: usize,
+    /// Instancing (Mitsuba's shapegroups and instances), when the scene has instances:
+    /// instances, groups, triangles the groups store, triangles the instances place.
+    pub instancing: Option<(usize, usize, usize, usize)>,
     /// Analytic shapes by kind name ("sphere"), in the order the kinds first appear.
     pub shapes: Vec<(&'static str, usize)>,
     /// Textures decoded: those of materials some primitive uses.
@@ -90,6 +93,15 @@ impl Plan {
             quads: scene.quads.len(),
             one_sided_quads: !scene.two_sided_quads,
             triangles: scene.triangles.len(),
+            instancing: (!scene.instancing.instances.is_empty()).then(|| {
+                let i = &scene.instancing;
+                (
+                    i.instances.len(),
+                    i.groups.len(),
+                    i.stored_triangle_count(),
+                    i.triangle_count(),
+                )
+            }),
             shapes: shape_counts(scene),
             textures: scene.textures.len(),
             height_maps: scene.height_maps.len(),
@@ -211,7 +223,12 @@ fn image_and_accel_memory(scene: &Scene, settings: &RenderSettings) -> Vec<(&'st
         .saturating_mul(h)
         .saturating_mul(FILM_BYTES_PER_PIXEL)
         .saturating_add(in_flight.saturating_mul(SAMPLE_BYTES_IN_FLIGHT * cores.min(h.max(1))));
-    let accel = (scene.primitive_count() as u64).saturating_mul(ACCEL_BYTES_PER_PRIMITIVE);
+    // An instanced group's tree is built once; each instance is one primitive of the top tree.
+    let instancing = &scene.instancing;
+    let primitives = scene.primitive_count() - instancing.triangle_count()
+        + instancing.stored_triangle_count()
+        + instancing.instances.len();
+    let accel = (primitives as u64).saturating_mul(ACCEL_BYTES_PER_PRIMITIVE);
     vec![("image", image), ("acceleration structure", accel)]
 }
 
@@ -316,6 +333,16 @@ impl fmt::Display for Plan {
             )?;
         } else {
             writeln!(f, "triangle geometry: none")?;
+        }
+        if let Some((instances, groups, stored, placed)) = self.instancing {
+            writeln!(
+                f,
+                "instancing: {} of {}: {} stored, {} instanced",
+                plural(instances, "instance", "instances"),
+                plural(groups, "shapegroup", "shapegroups"),
+                plural(stored, "triangle", "triangles"),
+                plural(placed, "triangle", "triangles"),
+            )?;
         }
         let mut user = Vec::new();
         for &(name, count) in &self.shapes {

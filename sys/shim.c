@@ -69,6 +69,8 @@ typedef struct TxExact {
   TxBoundsFn bounds;
   TxIntersectFn exact;
   unsigned int key_base;
+  /* For a group's triangles in place of `exact`: they are decided on the query's own ray. */
+  TxInstancedFn instanced;
 } TxExact;
 
 struct TxScene {
@@ -92,6 +94,10 @@ typedef struct TxBest {
   unsigned int key;
   unsigned int geom;
   unsigned int prim;
+  unsigned int inst;
+  /* The ray as the query asked it: an instanced triangle's filter sees Embree's ray in the
+   * group's space, and decides on this one instead (see TxInstancedFn). */
+  TxRay ray;
 } TxBest;
 
 /* The context of a query: Embree's, extended (as its documentation allows) with the rays'
@@ -235,20 +241,34 @@ static float room(const TxBest* best) {
   return r < best->limit ? r : best->limit;
 }
 
-/* Runs the exact routine of geometry g on lane i's candidate (primitive prim) and makes it
- * the ray's best if it is hit before `cap`, nearer than the best, or as near with a smaller
- * key. */
-static int offer(const TxExact* g, unsigned int geom, unsigned int prim,
-                 const struct RTCRayN* ray, unsigned int N, unsigned int i, TxBest* best,
-                 float cap) {
-  TxRay r = load_ray(ray, N, i);
+/* The ray a candidate of geometry g is decided on: lane i of Embree's, or for a group's
+ * triangle the query's own (Embree's is then in the group's space). */
+static TxRay candidate_ray(const TxExact* g, const struct RTCRayN* ray, unsigned int N,
+                           unsigned int i, const TxBest* best) {
+  return g->instanced ? best->ray : load_ray(ray, N, i);
+}
+
+/* Runs geometry g's exact routine on candidate `prim` (of the instance of geometry id `inst`,
+ * or TX_INVALID_ID) for ray r, over r's range; writes t, u, v and the key. */
+static int run_exact(const TxExact* g, unsigned int inst, unsigned int prim, const TxRay* r,
+                     float* t, float* u, float* v, unsigned int* key) {
+  if (g->instanced) return g->instanced(g->user, inst, prim, r, t, u, v, key);
+  *key = g->key_base | prim;
+  return g->exact(g->user, prim, r, t, u, v);
+}
+
+/* Runs the exact routine of geometry g on a candidate (primitive prim, in instance inst or
+ * TX_INVALID_ID) on ray r and makes it the ray's best if it is hit before `cap`, nearer than
+ * the best, or as near with a smaller key. */
+static int offer(const TxExact* g, unsigned int geom, unsigned int inst, unsigned int prim,
+                 TxRay r, TxBest* best, float cap) {
   r.tnear = best->near;
   /* Up to the best's t inclusive (a tie may win on its key); before any, the range. */
   const float upto = best->key == TX_INVALID_ID ? best->limit : nextafterf(best->t, INFINITY);
   r.tfar = cap < upto ? cap : upto;
   float t, u, v;
-  if (!g->exact(g->user, prim, &r, &t, &u, &v)) return 0;
-  const unsigned int key = g->key_base | prim;
+  unsigned int key;
+  if (!run_exact(g, inst, prim, &r, &t, &u, &v, &key)) return 0;
   if (best->key != TX_INVALID_ID && !(t < best->t || key < best->key)) return 0;
   best->t = t;
   best->u = u;
@@ -256,17 +276,23 @@ static int offer(const TxExact* g, unsigned int geom, unsigned int prim,
   best->key = key;
   best->geom = geom;
   best->prim = prim;
+  best->inst = inst;
   return 1;
 }
 
-/* Whether lane i's candidate is hit by the exact routine within the query's range. */
-static int exact_occludes(const TxExact* g, unsigned int prim, const struct RTCRayN* ray,
-                          unsigned int N, unsigned int i, const TxBest* best) {
-  TxRay r = load_ray(ray, N, i);
+/* Whether a candidate is hit by the exact routine on ray r within the query's range. */
+static int exact_occludes(const TxExact* g, unsigned int inst, unsigned int prim, TxRay r,
+                          const TxBest* best) {
   r.tnear = best->near;
   r.tfar = best->limit;
   float t, u, v;
-  return g->exact(g->user, prim, &r, &t, &u, &v);
+  unsigned int key;
+  return run_exact(g, inst, prim, &r, &t, &u, &v, &key);
+}
+
+/* The instance a filter's candidate lies in (TX_INVALID_ID outside instances). */
+static unsigned int instance_of(const struct RTCFilterFunctionNArguments* args) {
+  return args->context->instID[0];
 }
 
 /* Embree's candidate hits on quads and triangles, decided by the exact routine. */
@@ -278,8 +304,9 @@ static void exact_intersect_filter(const struct RTCFilterFunctionNArguments* arg
     TxBest* best = best_of(args->context, args->ray, N, i);
     const unsigned int geom = TX_HITN_U(args->hit, N, i, HIT_GEOM);
     const unsigned int prim = TX_HITN_U(args->hit, N, i, HIT_PRIM);
+    const TxRay r = candidate_ray(g, args->ray, N, i, best);
     /* The ray's tfar is Embree's own t for this candidate here: no bound for the exact t. */
-    if (offer(g, geom, prim, args->ray, N, i, best, INFINITY)) {
+    if (offer(g, geom, instance_of(args), prim, r, best, INFINITY)) {
       TX_RAYN_F(args->ray, N, i, RAY_TFAR) = room(best);
     } else {
       args->valid[i] = 0;
@@ -293,8 +320,9 @@ static void exact_occluded_filter(const struct RTCFilterFunctionNArguments* args
   for (unsigned int i = 0; i < N; i++) {
     if (args->valid[i] != -1) continue;
     const unsigned int prim = TX_HITN_U(args->hit, N, i, HIT_PRIM);
-    if (!exact_occludes(g, prim, args->ray, N, i, best_of(args->context, args->ray, N, i)))
-      args->valid[i] = 0;
+    const TxBest* best = best_of(args->context, args->ray, N, i);
+    const TxRay r = candidate_ray(g, args->ray, N, i, best);
+    if (!exact_occludes(g, instance_of(args), prim, r, best)) args->valid[i] = 0;
   }
 }
 
@@ -370,6 +398,7 @@ static TxExact* add_exact(TxScene* s, const void* user, TxBoundsFn bounds, TxInt
   g->bounds = bounds;
   g->exact = exact;
   g->key_base = key_base;
+  g->instanced = NULL;
   return g;
 }
 
@@ -436,14 +465,14 @@ unsigned int tx_scene_add_quads(TxScene* s, const float* vertices, unsigned int 
   return attach(s, geom);
 }
 
-unsigned int tx_scene_add_triangles(TxScene* s, const float* vertices,
-                                    const unsigned int* indices, unsigned int n_triangles,
-                                    const void* user, TxIntersectFn exact,
-                                    unsigned int key_base) {
+/* A triangle geometry of the mesh, its vertices enlarged one triangle at a time in an exact
+ * scene; NULL on failure. */
+static RTCGeometry triangle_geometry(TxScene* s, const float* vertices,
+                                     const unsigned int* indices, unsigned int n_triangles) {
   RTCDevice device = rtcGetSceneDevice(s->scene);
   RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcReleaseDevice(device);
-  if (!geom) return TX_INVALID_ID;
+  if (!geom) return NULL;
   size_t n_vertices = 0;
   for (size_t i = 0; i < 3 * (size_t)n_triangles; i++)
     if (indices[i] + 1 > n_vertices) n_vertices = indices[i] + 1;
@@ -456,12 +485,12 @@ unsigned int tx_scene_add_triangles(TxScene* s, const float* vertices,
       geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned int), n_triangles);
   if (!vb || !ib) {
     rtcReleaseGeometry(geom);
-    return TX_INVALID_ID;
+    return NULL;
   }
   if (!s->exact) {
     memcpy(vb, vertices, 3 * sizeof(float) * n_vertices);
     memcpy(ib, indices, 3 * sizeof(unsigned int) * (size_t)n_triangles);
-    return attach(s, geom);
+    return geom;
   }
   const float margin = margin_for(magnitude(vertices, n_vertices));
   for (size_t t = 0; t < n_triangles; t++) {
@@ -471,7 +500,46 @@ unsigned int tx_scene_add_triangles(TxScene* s, const float* vertices,
     enlarge(corners, vb + 9 * t, 3, margin);
   }
   for (size_t i = 0; i < 3 * (size_t)n_triangles; i++) ib[i] = (unsigned int)i;
+  return geom;
+}
+
+unsigned int tx_scene_add_triangles(TxScene* s, const float* vertices,
+                                    const unsigned int* indices, unsigned int n_triangles,
+                                    const void* user, TxIntersectFn exact,
+                                    unsigned int key_base) {
+  RTCGeometry geom = triangle_geometry(s, vertices, indices, n_triangles);
+  if (!geom) return TX_INVALID_ID;
+  if (!s->exact) return attach(s, geom);
   return attach_decided(s, geom, user, exact, key_base);
+}
+
+unsigned int tx_scene_add_group_triangles(TxScene* s, const float* vertices,
+                                          const unsigned int* indices, unsigned int n_triangles,
+                                          const void* user, TxInstancedFn exact) {
+  RTCGeometry geom = triangle_geometry(s, vertices, indices, n_triangles);
+  if (!geom) return TX_INVALID_ID;
+  if (!s->exact) return attach(s, geom);
+  TxExact* g = add_exact(s, user, NULL, NULL, 0);
+  if (!g) {
+    rtcReleaseGeometry(geom);
+    return TX_INVALID_ID;
+  }
+  g->instanced = exact;
+  rtcSetGeometryUserData(geom, g);
+  rtcSetGeometryIntersectFilterFunction(geom, exact_intersect_filter);
+  rtcSetGeometryOccludedFilterFunction(geom, exact_occluded_filter);
+  return attach(s, geom);
+}
+
+unsigned int tx_scene_add_instance(TxScene* s, const TxScene* group, const float* to_world) {
+  RTCDevice device = rtcGetSceneDevice(s->scene);
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+  rtcReleaseDevice(device);
+  if (!geom) return TX_INVALID_ID;
+  rtcSetGeometryInstancedScene(geom, group->scene);
+  rtcSetGeometryTimeStepCount(geom, 1);
+  rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, to_world);
+  return attach(s, geom);
 }
 
 /* ---- user geometry ----------------------------------------------------------------------- */
@@ -499,7 +567,8 @@ static void user_intersect(const struct RTCIntersectFunctionNArguments* args) {
     /* In a scene that is not exact, Embree's nearest hit so far (on a quad or triangle, which
      * the bests do not see) is the ray's tfar, and bounds the exact t; in an exact one the
      * tfar is the bests' room, above it. */
-    if (offer(u, args->geomID, args->primID, ray, N, i, best, TX_RAYN_F(ray, N, i, RAY_TFAR))) {
+    if (offer(u, args->geomID, TX_INVALID_ID, args->primID, load_ray(ray, N, i), best,
+              TX_RAYN_F(ray, N, i, RAY_TFAR))) {
       TX_RAYN_F(ray, N, i, RAY_TFAR) = room(best);
       TX_HITN_F(hit, N, i, HIT_NG_X) = 0.0f;
       TX_HITN_F(hit, N, i, HIT_NG_Y) = 0.0f;
@@ -526,7 +595,7 @@ static void user_occluded(const struct RTCOccludedFunctionNArguments* args) {
   const unsigned int N = args->N;
   for (unsigned int i = 0; i < N; i++) {
     if (args->valid[i] != -1) continue;
-    if (exact_occludes(u, args->primID, args->ray, N, i,
+    if (exact_occludes(u, TX_INVALID_ID, args->primID, load_ray(args->ray, N, i),
                        best_of(args->context, args->ray, N, i))) {
       TX_RAYN_F(args->ray, N, i, RAY_TFAR) = -INFINITY;
     } else {
@@ -616,7 +685,7 @@ static void init_ray(struct RTCRay* ray, const TxRay* r) {
  * (`tnear`, `tfar`: Embree's ray's, n of them), which in an exact scene is then widened by
  * TX_RANGE_SLACK for Embree. */
 static void start_query(const TxScene* s, TxQuery* q, TxBest* best, float* tnear, float* tfar,
-                        size_t n) {
+                        size_t n, const TxRay* rays, size_t count) {
 #if TX_EMBREE_MAJOR >= 4
   rtcInitRayQueryContext(&q->context);
 #else
@@ -629,6 +698,9 @@ static void start_query(const TxScene* s, TxQuery* q, TxBest* best, float* tnear
     best[k].t = tfar[k];
     best[k].key = TX_INVALID_ID;
     best[k].geom = TX_INVALID_ID;
+    best[k].inst = TX_INVALID_ID;
+    /* Lanes beyond the rays given (an unused lane of a packet) keep the last. */
+    best[k].ray = rays[k < count ? k : count - 1];
     if (s->exact && tfar[k] >= tnear[k]) {
       tnear[k] = fmaxf(tnear[k] - fabsf(tnear[k]) * TX_RANGE_SLACK, 0.0f);
       tfar[k] += fabsf(tfar[k]) * TX_RANGE_SLACK;
@@ -686,6 +758,7 @@ static void write_hit(TxHit* hit, const TxBest* best) {
   hit->v = best->v;
   hit->geom = best->geom;
   hit->prim = best->prim;
+  hit->inst = best->inst;
 }
 
 void tx_intersect1(const TxScene* s, const TxRay* r, TxHit* hit) {
@@ -693,7 +766,7 @@ void tx_intersect1(const TxScene* s, const TxRay* r, TxHit* hit) {
   init_rayhit(&rh, r);
   TxQuery q;
   TxBest best;
-  start_query(s, &q, &best, &rh.ray.tnear, &rh.ray.tfar, 1);
+  start_query(s, &q, &best, &rh.ray.tnear, &rh.ray.tfar, 1, r, 1);
   rtc_intersect1(s->scene, &q, &rh);
   if (s->exact) {
     write_hit(hit, &best);
@@ -703,6 +776,7 @@ void tx_intersect1(const TxScene* s, const TxRay* r, TxHit* hit) {
     hit->v = rh.hit.v;
     hit->geom = rh.hit.geomID;
     hit->prim = rh.hit.primID;
+    hit->inst = rh.hit.instID[0];
   }
 }
 
@@ -711,7 +785,7 @@ int tx_occluded1(const TxScene* s, const TxRay* r) {
   init_ray(&ray, r);
   TxQuery q;
   TxBest best;
-  start_query(s, &q, &best, &ray.tnear, &ray.tfar, 1);
+  start_query(s, &q, &best, &ray.tnear, &ray.tfar, 1, r, 1);
   rtc_occluded1(s->scene, &q, &ray);
   return ray.tfar < 0.0f;
 }
@@ -764,7 +838,7 @@ void tx_intersect_batch(const TxScene* s, const TxRay* rays, size_t n, TxHit* hi
     size_t count = n - base < 8 ? n - base : 8;
     load_packet(&rh.ray, valid, rays + base, count);
     init_hit_packet(&rh.hit);
-    start_query(s, &q, best, rh.ray.tnear, rh.ray.tfar, 8);
+    start_query(s, &q, best, rh.ray.tnear, rh.ray.tfar, 8, rays + base, count);
     rtc_intersect8(valid, s->scene, &q, &rh);
     for (size_t k = 0; k < count; k++) {
       TxHit* h = &hits[base + k];
@@ -776,6 +850,7 @@ void tx_intersect_batch(const TxScene* s, const TxRay* rays, size_t n, TxHit* hi
         h->v = rh.hit.v[k];
         h->geom = rh.hit.geomID[k];
         h->prim = rh.hit.primID[k];
+        h->inst = rh.hit.instID[0][k];
       }
     }
   }
@@ -789,7 +864,7 @@ void tx_occluded_batch(const TxScene* s, const TxRay* rays, size_t n, unsigned c
   for (size_t base = 0; base < n; base += 8) {
     size_t count = n - base < 8 ? n - base : 8;
     load_packet(&ray, valid, rays + base, count);
-    start_query(s, &q, best, ray.tnear, ray.tfar, 8);
+    start_query(s, &q, best, ray.tnear, ray.tfar, 8, rays + base, count);
     rtc_occluded8(valid, s->scene, &q, &ray);
     for (size_t k = 0; k < count; k++) hits[base + k] = ray.tfar[k] < 0.0f;
   }
@@ -804,7 +879,7 @@ size_t tx_baseline_intersect1(const TxScene* s, const TxRay* rays, size_t n) {
     init_rayhit(&rh, &rays[i]);
     TxQuery q;
     TxBest best;
-    start_query(s, &q, &best, &rh.ray.tnear, &rh.ray.tfar, 1);
+    start_query(s, &q, &best, &rh.ray.tnear, &rh.ray.tfar, 1, &rays[i], 1);
     rtc_intersect1(s->scene, &q, &rh);
     count += (s->exact ? best.geom : rh.hit.geomID) != TX_INVALID_ID;
   }
@@ -818,7 +893,7 @@ size_t tx_baseline_occluded1(const TxScene* s, const TxRay* rays, size_t n) {
     init_ray(&ray, &rays[i]);
     TxQuery q;
     TxBest best;
-    start_query(s, &q, &best, &ray.tnear, &ray.tfar, 1);
+    start_query(s, &q, &best, &ray.tnear, &ray.tfar, 1, &rays[i], 1);
     rtc_occluded1(s->scene, &q, &ray);
     count += ray.tfar < 0.0f;
   }
@@ -835,7 +910,7 @@ size_t tx_baseline_intersect8(const TxScene* s, const TxRay* rays, size_t n) {
     init_hit_packet(&rh.hit);
     TxQuery q;
     TxBest best[8];
-    start_query(s, &q, best, rh.ray.tnear, rh.ray.tfar, 8);
+    start_query(s, &q, best, rh.ray.tnear, rh.ray.tfar, 8, rays + base, m);
     rtc_intersect8(valid, s->scene, &q, &rh);
     for (size_t k = 0; k < m; k++)
       count += (s->exact ? best[k].geom : rh.hit.geomID[k]) != TX_INVALID_ID;
@@ -852,7 +927,7 @@ size_t tx_baseline_occluded8(const TxScene* s, const TxRay* rays, size_t n) {
     load_packet(&ray, valid, rays + base, m);
     TxQuery q;
     TxBest best[8];
-    start_query(s, &q, best, ray.tnear, ray.tfar, 8);
+    start_query(s, &q, best, ray.tnear, ray.tfar, 8, rays + base, m);
     rtc_occluded8(valid, s->scene, &q, &ray);
     for (size_t k = 0; k < m; k++) count += ray.tfar[k] < 0.0f;
   }

@@ -19,13 +19,16 @@ typedef struct TxRay {
   float tfar;
 } TxRay;
 
-/* The result of a closest-hit query. geom == TX_INVALID_ID when nothing was hit. */
+/* The result of a closest-hit query. geom == TX_INVALID_ID when nothing was hit. On an
+ * instance's triangle, inst is the instance's geometry id in the scene queried and prim the
+ * triangle's index in its group; inst is TX_INVALID_ID on every other hit. */
 typedef struct TxHit {
   float t;
   float u;
   float v;
   unsigned int geom;
   unsigned int prim;
+  unsigned int inst;
 } TxHit;
 
 #define TX_INVALID_ID 0xFFFFFFFFu
@@ -38,6 +41,13 @@ typedef void (*TxBoundsFn)(const void* user, unsigned int prim, float* lower3, f
 /* Returns 1 and writes t, u, v when the primitive is hit in (ray->tnear, ray->tfar). */
 typedef int (*TxIntersectFn)(const void* user, unsigned int prim, const TxRay* ray, float* t,
                              float* u, float* v);
+
+/* The exact routine of an instanced group's triangle `prim`, placed by the instance of
+ * geometry id `inst`, on the ray as the query asked it (in the world: the routine takes it into
+ * the group's space itself, as the built-in BVH does). Returns 1 and writes t, u, v and the
+ * hit's key in the tie rule when it is hit in (ray->tnear, ray->tfar). */
+typedef int (*TxInstancedFn)(const void* user, unsigned int inst, unsigned int prim,
+                             const TxRay* ray, float* t, float* u, float* v, unsigned int* key);
 
 /* Returns the Embree major version the shim was compiled against. */
 int tx_embree_major(void);
@@ -81,6 +91,18 @@ unsigned int tx_scene_add_triangles(TxScene* scene, const float* vertices,
                                     const unsigned int* indices, unsigned int n_triangles,
                                     const void* user, TxIntersectFn exact,
                                     unsigned int key_base);
+
+/* Adds a group's triangles (in its own space) to `group`, a scene that instances place
+ * (tx_scene_add_instance); in an exact scene `exact` decides their hits, on the query's own
+ * ray. */
+unsigned int tx_scene_add_group_triangles(TxScene* group, const float* vertices,
+                                          const unsigned int* indices, unsigned int n_triangles,
+                                          const void* user, TxInstancedFn exact);
+
+/* Adds to `scene` an instance of `group` (committed, released after `scene`), placed by
+ * `to_world`: 12 floats, the columns of a 3x4 matrix (the linear part's three, then the
+ * translation). Returns the instance's geometry id, or TX_INVALID_ID. */
+unsigned int tx_scene_add_instance(TxScene* scene, const TxScene* group, const float* to_world);
 
 /* Adds n user primitives (spheres, rings) with the given callbacks. */
 unsigned int tx_scene_add_user(TxScene* scene, unsigned int n, const void* user,

@@ -265,8 +265,8 @@ fn meshes_includes_paths_and_spectra() {
 }
 
 /// A shapegroup of one rectangle (moved by 1 along x inside the group) instanced twice: the
-/// group alone makes nothing, and each instance places the group's shapes by its own
-/// transform after theirs (Mitsuba's order), with the group's one material.
+/// group alone makes nothing, its triangles are stored once, and each instance places them by
+/// its own transform after theirs (Mitsuba's order), with the group's one material.
 #[test]
 fn instances_place_their_group_after_its_own_transforms() {
     let text = r#"<scene version="3.0.0">
@@ -284,13 +284,27 @@ fn instances_place_their_group_after_its_own_transforms() {
     </scene>"#;
     let file = write("instances", &[("instances.xml", text.as_bytes())]);
     let scene = Scene::load(&file).expect("loads");
-    let t = &scene.triangles;
-    assert_eq!(t.len(), 4, "two rectangles of two triangles");
+    assert!(scene.triangles.is_empty());
+    let instancing = &scene.instancing;
+    assert_eq!(
+        instancing.stored_triangle_count(),
+        2,
+        "one rectangle stored"
+    );
+    assert_eq!(instancing.triangle_count(), 4, "two rectangles placed");
+    let world: Vec<[trilux::geometry::Vec3; 3]> =
+        (0..4).map(|i| scene.instanced_vertices(i)).collect();
+    // A rectangle's centre: the middle of its first triangle's long edge (its diagonal).
     let centre = |k: usize| {
-        t.positions[4 * k..4 * k + 4]
-            .iter()
-            .sum::<trilux::geometry::Vec3>()
-            / 4.0
+        let [a, b, c] = world[2 * k];
+        let (ab, bc, ca) = ((a - b).length(), (b - c).length(), (c - a).length());
+        if ab >= bc && ab >= ca {
+            (a + b) / 2.0
+        } else if bc >= ca {
+            (b + c) / 2.0
+        } else {
+            (c + a) / 2.0
+        }
     };
     assert_eq!(centre(0), vec3(1.0, 0.0, 0.0));
     assert_eq!(
@@ -299,11 +313,249 @@ fn instances_place_their_group_after_its_own_transforms() {
         "translated by 1, then scaled by 2, then moved"
     );
     assert_eq!(
-        t.positions[4].x - t.positions[5].x,
-        2.0 * (t.positions[0].x - t.positions[1].x)
+        world[2][0].x - world[2][1].x,
+        2.0 * (world[0][0].x - world[0][1].x)
     );
-    assert!(t.materials.iter().all(|&m| m == t.materials[0]));
+    let materials: Vec<u32> = (0..4).map(|i| instancing.material(i)).collect();
+    assert!(materials.iter().all(|&m| m == materials[0]));
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+}
+
+/// The members of the shapegroup of `instanced_scene`, each with its own transform.
+const GROUP_MEMBERS: [(&str, &str); 3] = [
+    (
+        r#"<shape type="cube"><bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.3, 0.2"/></bsdf>"#,
+        r#"<scale x="0.4" y="0.6" z="0.3"/>"#,
+    ),
+    (
+        r#"<shape type="cylinder"><float name="radius" value="0.3"/><bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf>"#,
+        r#"<rotate x="1" angle="30"/><translate x="0.8"/>"#,
+    ),
+    (
+        r#"<shape type="disk"><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.6, 0.3"/></bsdf>"#,
+        r#"<scale value="0.5"/><translate y="0.9"/>"#,
+    ),
+];
+
+/// Where `instanced_scene` places its group: as it is, rotated, scaled unevenly, mirrored.
+const PLACEMENTS: [&str; 4] = [
+    r#"<translate x="-1.5" y="-1"/>"#,
+    r#"<rotate y="1" angle="70"/><translate x="1.2" y="-0.8" z="0.3"/>"#,
+    r#"<scale x="1.6" y="0.7" z="1.2"/><translate x="-1" y="1.2"/>"#,
+    r#"<scale x="-1"/><rotate z="1" angle="25"/><translate x="1.3" y="1.1"/>"#,
+];
+
+/// A scene of the group of `GROUP_MEMBERS` (a box, a cylinder, a disk) placed at each of
+/// `PLACEMENTS` — through a shapegroup and instances when `instanced`, else each member written
+/// out at every placement, its own transform then the instance's (Mitsuba's order) — on a
+/// floor, lit by a rectangle and a dim environment, seen from above.
+fn instanced_scene(instanced: bool) -> String {
+    let mut shapes = String::new();
+    if instanced {
+        shapes += r#"<shape type="shapegroup" id="g">"#;
+        for (shape, own) in GROUP_MEMBERS {
+            shapes += &format!("{shape}<transform name=\"to_world\">{own}</transform></shape>\n");
+        }
+        shapes += "</shape>\n";
+        for place in PLACEMENTS {
+            shapes += &format!(
+                "<shape type=\"instance\"><ref id=\"g\"/><transform name=\"to_world\">{place}</transform></shape>\n"
+            );
+        }
+    } else {
+        for place in PLACEMENTS {
+            for (shape, own) in GROUP_MEMBERS {
+                shapes += &format!(
+                    "{shape}<transform name=\"to_world\">{own}{place}</transform></shape>\n"
+                );
+            }
+        }
+    }
+    format!(
+        r#"<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="5"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="55"/>
+        <transform name="to_world"><lookat origin="0.5, -3, 6" target="0, 0, 0" up="0, 0, 1"/></transform>
+        <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="48"/></film>
+    </sensor>
+    <emitter type="constant"><rgb name="radiance" value="0.2"/></emitter>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.8"/><rotate x="1" angle="180"/><translate x="0.5" y="-0.5" z="4"/></transform>
+        <emitter type="area"><rgb name="radiance" value="12"/></emitter>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="5"/><translate z="-0.7"/></transform>
+        <bsdf type="diffuse"/>
+    </shape>
+    {shapes}
+</scene>"#
+    )
+}
+
+/// The path tracer renders the instanced scene as it renders the same shapes placed directly,
+/// with both Accels; and the group is stored once. The images are not identical: an
+/// instanced triangle is tested in its group's space, on a ray rounded there, so a hit's point
+/// and normals differ from the flattened ones in their last bits, and a path whose random
+/// decision (Russian roulette, a light sample at the rim of a BSDF lobe) lies within those
+/// bits of its threshold turns elsewhere. So nearly every pixel agrees to float precision (here
+/// all of them, the worst by 7e-6 of its value), a few may differ as two samples of the same
+/// pixel differ, and the image means agree within their noise. The two Accels' instanced
+/// images are identical: they hit the same triangle at the same t, u and v.
+#[test]
+fn an_instanced_scene_renders_as_its_shapes_placed_directly() {
+    let instanced = write(
+        "instanced",
+        &[("instanced.xml", instanced_scene(true).as_bytes())],
+    );
+    let flattened = write(
+        "flattened",
+        &[("flattened.xml", instanced_scene(false).as_bytes())],
+    );
+    let (scene, flat) = (
+        Scene::load(&instanced).expect("loads"),
+        Scene::load(&flattened).expect("loads"),
+    );
+    let floor_and_light = 4;
+    assert_eq!(scene.triangles.len(), floor_and_light);
+    let per_group = (flat.triangles.len() - floor_and_light) / PLACEMENTS.len();
+    assert_eq!(
+        scene.instancing.stored_triangle_count(),
+        per_group,
+        "the group's triangles stored once"
+    );
+    assert_eq!(
+        scene.instancing.triangle_count(),
+        PLACEMENTS.len() * per_group
+    );
+    assert_eq!(scene.instancing.instances.len(), PLACEMENTS.len());
+    // Every instanced triangle where the flattened scene has it (to float precision: the
+    // flattened vertex is placed by the composed transform).
+    for i in 0..scene.instancing.triangle_count() {
+        let placed = scene.instanced_vertices(i as u32);
+        let direct = flat.triangles.vertices(floor_and_light + i);
+        for (a, b) in placed.iter().zip(direct) {
+            assert!((*a - b).abs().max_element() <= 1e-6 * (1.0 + b.abs().max_element()));
+        }
+    }
+    let size = (64, 48);
+    let spp = 16;
+    let kinds = backends();
+    let films = path_films(&scene, &kinds, size, spp);
+    let direct = path_films(&flat, &kinds[..1], size, spp).remove(0);
+    for film in &films[1..] {
+        assert!(
+            film.pixels == films[0].pixels,
+            "the Accels' instanced images are identical"
+        );
+    }
+    let film = &films[0];
+    let lum = |c: &trilux::geometry::Vec3| (c.x + c.y + c.z) as f64 / 3.0;
+    let close = film
+        .pixels
+        .iter()
+        .zip(&direct.pixels)
+        .filter(|(a, b)| (lum(a) - lum(b)).abs() <= 1e-4 * (1.0 + lum(b)))
+        .count();
+    let n = film.pixels.len();
+    let worst = film
+        .pixels
+        .iter()
+        .zip(&direct.pixels)
+        .map(|(a, b)| (lum(a) - lum(b)).abs() / (1.0 + lum(b)))
+        .fold(0.0, f64::max);
+    let mean = |f: &trilux::film::Film| f.pixels.iter().map(lum).sum::<f64>() / n as f64;
+    let (m_inst, m_flat) = (mean(film), mean(&direct));
+    // The noise of the mean: the pixels' spread over √n (each pixel an independent estimate).
+    let spread = (direct
+        .pixels
+        .iter()
+        .map(|p| (lum(p) - m_flat).powi(2))
+        .sum::<f64>()
+        / n as f64)
+        .sqrt();
+    println!(
+        "{close} of {n} pixels agree to 1e-4 (the worst by {worst:.2e}); means {m_inst:.6} (instanced) and {m_flat:.6} (placed directly), pixel spread {spread:.4}"
+    );
+    assert!(m_flat > 0.05, "the scene is lit: {m_flat}");
+    assert!(close >= n - n / 100, "{close} of {n} pixels agree");
+    assert!(
+        (m_inst - m_flat).abs() <= 3.0 * spread / (n as f64).sqrt(),
+        "means {m_inst} and {m_flat}"
+    );
+}
+
+/// The other engines take instanced triangles as world triangles where they need them (the
+/// radiosity mesh a patch per instanced triangle, the lights, the plan): each renders the
+/// instanced scene as the shapes placed directly, to float precision (the radiosity mesh's
+/// patches are the same, in the same order), and `--plan` says how many triangles are stored
+/// and how many instanced.
+#[test]
+fn every_engine_renders_instances_as_shapes_placed_directly() {
+    use trilux::engines::{render, EngineKind};
+    let load = |name: &str, instanced: bool| {
+        let text = instanced_scene(instanced);
+        Scene::load(&write(name, &[(&format!("{name}.xml"), text.as_bytes())])).expect("loads")
+    };
+    let (scene, flat) = (
+        load("engines-instanced", true),
+        load("engines-flattened", false),
+    );
+    let settings = RenderSettings {
+        width: 32,
+        height: 24,
+        num_antialias_samples: 4,
+        quiet: true,
+        ..RenderSettings::default()
+    };
+    let per_group = scene.instancing.stored_triangle_count();
+    let plan = trilux::plan::Plan::new(&scene, EngineKind::Radiosity, AccelKind::Bvh, &settings);
+    let expected = format!(
+        "instancing: 4 instances of 1 shapegroup: {per_group} triangles stored, {} triangles instanced",
+        4 * per_group
+    );
+    assert!(plan.to_string().contains(&expected), "{plan}");
+    for kind in [
+        EngineKind::Raycast,
+        EngineKind::Raytrace,
+        EngineKind::Radiosity,
+    ] {
+        let mean = |scene: &Scene| {
+            let accel = accel::build(scene, AccelKind::Bvh, &AccelOptions::default()).unwrap();
+            let film = render(kind, scene, accel.as_ref(), &settings)
+                .expect("renders")
+                .film;
+            film.pixels
+                .iter()
+                .map(|p| p.x as f64 + p.y as f64 + p.z as f64)
+                .sum::<f64>()
+                / film.pixels.len() as f64
+        };
+        let (a, b) = (mean(&scene), mean(&flat));
+        println!("{kind:?}: {a:.6} instanced, {b:.6} placed directly");
+        assert!(b > 0.01, "{kind:?} renders something: {b}");
+        assert!((a - b).abs() <= 1e-4 * b, "{kind:?}: {a} against {b}");
+    }
+}
+
+/// Mitsuba refuses emitters in a shapegroup, and nested instancing: so does trilux, naming
+/// the file and line.
+#[test]
+fn emitters_and_instances_inside_a_shapegroup_are_refused() {
+    let group = |inner: &str| {
+        format!(
+            "{HEAD}<shape type=\"shapegroup\" id=\"g\">\n{inner}\n</shape>\n<shape type=\"instance\"><ref id=\"g\"/></shape>\n</scene>\n"
+        )
+    };
+    let emitter = group("<shape type=\"rectangle\">\n<emitter type=\"area\"/>\n</shape>");
+    let file = write("group-emitter", &[("emitter.xml", emitter.as_bytes())]);
+    fails(&file, "emitter.xml", 4, &["emitter", "shapegroup"]);
+    let nested = format!(
+        "{HEAD}<shape type=\"shapegroup\" id=\"h\"><shape type=\"cube\"/></shape>\n{}",
+        &group("<shape type=\"instance\"><ref id=\"h\"/></shape>")[HEAD.len()..]
+    );
+    let file = write("group-nested", &[("nested.xml", nested.as_bytes())]);
+    fails(&file, "nested.xml", 4, &["instance", "shapegroup"]);
 }
 
 /// Asserts that loading `file` fails with a message naming `file_name` at `line` and

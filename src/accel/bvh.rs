@@ -41,7 +41,7 @@ use super::{Accel, AccelError, PackedPrim};
 use crate::geometry::{
     faces_ray, intersect_quad_sheared, AnalyticShape, Bounds3, Ray, RayShear, Shape, Vec3,
 };
-use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
+use crate::scene::{Instance, PrimHit, PrimKind, PrimRef, Quad, Scene, ShapePrim, TriangleMesh};
 
 /// Number of SAH bins per axis.
 const BINS: usize = 16;
@@ -275,7 +275,8 @@ fn occupied(n: &Node) -> u32 {
 }
 
 /// A primitive tested on its own, copied into leaf order: a quad's four vertices and its
-/// front normal, or for an analytic shape just the reference into `shapes`.
+/// front normal, or for an analytic shape or an instance just the reference into `shapes` or
+/// `instances`.
 #[derive(Clone, Copy, Debug)]
 struct LeafPrim {
     v: [Vec3; 4],
@@ -336,6 +337,11 @@ impl LeafItem {
     }
 }
 
+/// A tree over a scene's own primitives and its instances, whose leaves hold the instances as
+/// single items: a ray that reaches one is taken into its group's space
+/// (`Instance::ray_to_group`) and walks the group's tree, built once however many instances
+/// place it, with t (and so the closest hit so far) shared between the two levels. Batched
+/// queries take an instance's group ray by ray (a packet's rays part there).
 pub struct Bvh {
     nodes: HugePageArray<Node>,
     /// The leaves' contents; a leaf node's `first .. first + count` indexes this.
@@ -343,6 +349,10 @@ pub struct Bvh {
     /// How many primitives the tree holds (those with finite bounds).
     prim_count: usize,
     shapes: Vec<AnalyticShape>,
+    /// The scene's instances (what the leaves' `Instanced` items refer to) and a tree per
+    /// group (over its triangles, in its space); both empty in a group's tree.
+    instances: Vec<Instance>,
+    groups: Vec<Bvh>,
     one_sided_quads: bool,
     /// The processor's instructions, for the batched queries' dispatch.
     arch: pulp::Arch,
@@ -350,8 +360,9 @@ pub struct Bvh {
 
 /// A primitive during the build: the corners of its box in two `Vec4`s, so that binning and
 /// partitioning take a primitive in two SIMD loads, and its packed reference in the lower
-/// corner's fourth lane (no reference's bits are a NaN: its two top bits, the kind, are never
-/// both set).
+/// corner's fourth lane. The lane is only ever copied, never computed with, so its bits stay as
+/// they are even where they read as a NaN (an instance's reference, kind 3, of index 2³⁰ −
+/// 2²³ or more).
 #[derive(Clone, Copy)]
 struct BuildPrim {
     lower: Vec4,
@@ -412,12 +423,75 @@ impl BuildNode {
     }
 }
 
+/// What a tree is built over: a scene's quads, triangles, shapes and its instances' world
+/// boxes, or one group's triangles alone.
+#[derive(Clone, Copy)]
+struct Source<'a> {
+    quads: &'a [Quad],
+    triangles: &'a TriangleMesh,
+    shapes: &'a [ShapePrim],
+    instances: &'a [Bounds3],
+}
+
+impl<'a> Source<'a> {
+    fn group(mesh: &'a TriangleMesh) -> Source<'a> {
+        Source {
+            quads: &[],
+            triangles: mesh,
+            shapes: &[],
+            instances: &[],
+        }
+    }
+
+    /// The scene's primitives, with `instances` its instances' world boxes.
+    fn scene(scene: &'a Scene, instances: &'a [Bounds3]) -> Source<'a> {
+        Source {
+            quads: &scene.quads,
+            triangles: &scene.triangles,
+            shapes: &scene.shapes,
+            instances,
+        }
+    }
+}
+
+/// The world boxes of a scene's instances (`Instance::world_bounds`).
+fn instance_boxes(scene: &Scene) -> Vec<Bounds3> {
+    let instancing = &scene.instancing;
+    instancing
+        .instances
+        .iter()
+        .map(|i| i.world_bounds(instancing.group_of(i)))
+        .collect()
+}
+
 impl Bvh {
     pub fn build(scene: &Scene) -> Result<Bvh, AccelError> {
-        let total = scene.primitive_count();
+        let total = scene.primitive_count() + scene.instancing.instances.len();
         if total > PackedPrim::MAX_INDEX as usize {
             return Err(AccelError::TooLarge(total));
         }
+        let groups = scene
+            .instancing
+            .groups
+            .par_iter()
+            .map(|g| Bvh::build_over(Source::group(&g.mesh), false))
+            .collect();
+        let boxes = instance_boxes(scene);
+        let source = Source::scene(scene, &boxes);
+        Ok(Bvh {
+            instances: scene.instancing.instances.clone(),
+            groups,
+            ..Bvh::build_over(source, !scene.two_sided_quads)
+        })
+    }
+
+    /// The tree over `source`'s primitives (no groups yet); `one_sided_quads` unless
+    /// `--two-sided`.
+    fn build_over(source: Source, one_sided_quads: bool) -> Bvh {
+        let total = source.quads.len()
+            + source.triangles.len()
+            + source.shapes.len()
+            + source.instances.len();
         // Made on every thread, as the leaves' copies below (the two together: the 1M-triangle
         // terrain's build on two threads 0.917 → 0.842 s, medians of interleaved rounds).
         let build_prim = |bounds: Bounds3, kind: PrimKind, index: usize| {
@@ -434,25 +508,32 @@ impl Bvh {
         let finite = |p: &BuildPrim| p.bounds().min.is_finite() && p.bounds().max.is_finite();
         let mut build: Vec<BuildPrim> = Vec::with_capacity(total);
         build.par_extend(
-            scene
+            source
                 .quads
                 .par_iter()
                 .enumerate()
                 .map(|(i, q)| build_prim(Bounds3::from_points(&q.vertices), PrimKind::Quad, i)),
         );
-        build.par_extend((0..scene.triangles.len()).into_par_iter().map(|i| {
+        build.par_extend((0..source.triangles.len()).into_par_iter().map(|i| {
             build_prim(
-                Bounds3::from_points(&scene.triangles.vertices(i)),
+                Bounds3::from_points(&source.triangles.vertices(i)),
                 PrimKind::Triangle,
                 i,
             )
         }));
         build.extend(
-            scene
+            source
                 .shapes
                 .iter()
                 .enumerate()
                 .map(|(i, s)| build_prim(s.shape.bounds(), PrimKind::Shape, i)),
+        );
+        build.extend(
+            source
+                .instances
+                .iter()
+                .enumerate()
+                .map(|(i, b)| build_prim(*b, PrimKind::Instanced, i)),
         );
         // Looked for on every thread first: the filter's pass is serial, and seldom needed
         // (filtered in the parallel loops, the primitives were gathered into lists of parts
@@ -489,22 +570,34 @@ impl Bvh {
                 rest = tail;
             }
             outs.into_par_iter()
-                .for_each(|(range, out)| write_leaf_items(scene, &build[range], out));
+                .for_each(|(range, out)| write_leaf_items(source, &build[range], out));
         });
-        Ok(Bvh {
+        Bvh {
             nodes: HugePageArray::new(nodes),
             items,
             prim_count: build.len(),
-            shapes: scene.shapes.iter().map(|s| s.shape).collect(),
-            one_sided_quads: !scene.two_sided_quads,
+            shapes: source.shapes.iter().map(|s| s.shape).collect(),
+            instances: Vec::new(),
+            groups: Vec::new(),
+            one_sided_quads,
             arch: pulp::Arch::new(),
-        })
+        }
     }
 
-    /// Checks the tree's invariants: every child box inside its parent's, every primitive's
-    /// box inside its leaf's, every primitive in exactly one leaf, unused slots empty. Returns
-    /// what is wrong.
+    /// Checks the tree's invariants, and each group's tree's: every child box inside its
+    /// parent's, every primitive's box inside its leaf's, every primitive in exactly one leaf,
+    /// unused slots empty. Returns what is wrong.
     pub fn validate(&self, scene: &Scene) -> Result<(), String> {
+        let boxes = instance_boxes(scene);
+        self.validate_over(Source::scene(scene, &boxes))?;
+        for (k, (tree, group)) in self.groups.iter().zip(&scene.instancing.groups).enumerate() {
+            tree.validate_over(Source::group(&group.mesh))
+                .map_err(|e| format!("group {k}: {e}"))?;
+        }
+        Ok(())
+    }
+
+    fn validate_over(&self, source: Source) -> Result<(), String> {
         let mut seen = std::collections::HashMap::<u32, u32>::new();
         let mut stack = vec![(0usize, None::<Bounds3>, 0usize)];
         while let Some((i, parent, depth)) = stack.pop() {
@@ -534,7 +627,7 @@ impl Bvh {
                         "node {i}: leaf {slot} runs past the leaves' contents"
                     ))?;
                 for prim in items.iter().flat_map(LeafItem::prims) {
-                    if !contains(&b, &prim_bounds(scene, prim.unpack())) {
+                    if !contains(&b, &prim_bounds(source, prim.unpack())) {
                         return Err(format!(
                             "primitive {:?} sticks out of its leaf in node {i}",
                             prim.unpack()
@@ -572,6 +665,7 @@ impl Bvh {
         rays: (&Ray, &RayShear, &Tri4Ray),
         t_max: &mut f32,
         best: &mut Option<(PackedPrim, f32, f32)>,
+        base: Option<u32>,
     ) {
         let (ray, shear, pack_ray) = rays;
         for item in self.leaf(leaf) {
@@ -584,9 +678,12 @@ impl Bvh {
                 ItemView::Triangles(pack) => {
                     let hits = pack.intersect(pack_ray, ray, shear, limit);
                     for i in (0..4).filter(|i| hits.mask >> i & 1 != 0) {
-                        let hit = (pack.prim(i), hits.t[i], hits.u[i], hits.v[i]);
+                        let hit = (rebase(pack.prim(i), base), hits.t[i], hits.u[i], hits.v[i]);
                         keep_closest(best, t_max, hit);
                     }
+                }
+                ItemView::Single(p) if p.prim.kind() == PrimKind::Instanced => {
+                    self.instance_closest(p.prim.index(), ray, t_max, best);
                 }
                 ItemView::Single(p) => {
                     if let Some((t, u, v)) = self.hit_single(&p, ray, || shear, limit) {
@@ -618,7 +715,43 @@ impl Bvh {
             PrimKind::Shape => self.shapes[p.prim.index() as usize]
                 .intersect(ray, t_max)
                 .map(|(t, _)| (t, 0.0, 0.0)),
+            PrimKind::Instanced => unreachable!("instances are walked into, not tested"),
         }
+    }
+
+    /// The closest hit so far (`best`, at `t_max`) against instance `k`'s triangles: its
+    /// group's tree walked with the ray in the group's space, the group's triangles' hits
+    /// numbered as instanced ones. Not inlined: it walks a tree from within a walk.
+    #[inline(never)]
+    fn instance_closest(
+        &self,
+        k: u32,
+        ray: &Ray,
+        t_max: &mut f32,
+        best: &mut Option<(PackedPrim, f32, f32)>,
+    ) {
+        let instance = &self.instances[k as usize];
+        let local = instance.ray_to_group(ray);
+        let shear = RayShear::new(&local);
+        let pack_ray = Tri4Ray::new(&local, &shear);
+        let mut closest = ClosestHit {
+            ray: (&local, &shear, &pack_ray),
+            best: *best,
+            base: Some(instance.first),
+        };
+        let group = &self.groups[instance.group as usize];
+        group.traverse::<true>((&local, &RayBoxes::new(&local)), ROOT, t_max, &mut closest);
+        *best = closest.best;
+    }
+
+    /// Whether a triangle of instance `k` blocks the ray (in the group's space, as
+    /// `instance_closest`).
+    #[inline(never)]
+    fn instance_blocks(&self, k: u32, ray: &Ray) -> bool {
+        let instance = &self.instances[k as usize];
+        let local = instance.ray_to_group(ray);
+        let group = &self.groups[instance.group as usize];
+        group.occluded_below(ROOT, (&local, &OnceCell::new()), inverse_direction(&local))
     }
 
     /// Walks the tree below `start` (`ROOT`, or a child the ray was found to enter), the
@@ -820,6 +953,7 @@ impl Bvh {
         let mut closest = ClosestHit {
             ray: (ray, &shear, &pack_ray),
             best: None,
+            base: None,
         };
         self.traverse::<true>((ray, &RayBoxes::new(ray)), ROOT, &mut t_max, &mut closest);
         closest.best.map(|(prim, u, v)| PrimHit {
@@ -853,6 +987,9 @@ impl Bvh {
                     pack: pack_ray,
                 } = forms();
                 pack.intersect(pack_ray, ray, shear, ray.t_max).mask != 0
+            }
+            ItemView::Single(p) if p.prim.kind() == PrimKind::Instanced => {
+                self.instance_blocks(p.prim.index(), ray)
             }
             ItemView::Single(p) => self
                 .hit_single(&p, ray, || &forms().shear, ray.t_max)
@@ -997,12 +1134,28 @@ struct ClosestHit<'a> {
     /// The ray with its shear and pack form (a closest hit tests a primitive at once).
     ray: (&'a Ray, &'a RayShear, &'a Tri4Ray),
     best: Option<(PackedPrim, f32, f32)>,
+    /// In a group's tree, the `Instanced` index of the instance's first triangle (`rebase`);
+    /// None in the scene's.
+    base: Option<u32>,
+}
+
+/// A triangle's reference as a hit reports it: as it is in the scene's tree, or, in a group's
+/// tree walked for an instance, the instanced triangle (`base` its first one).
+#[inline(always)]
+fn rebase(prim: PackedPrim, base: Option<u32>) -> PackedPrim {
+    match base {
+        None => prim,
+        Some(first) => PackedPrim::new(PrimRef {
+            kind: PrimKind::Instanced,
+            index: first + prim.index(),
+        }),
+    }
 }
 
 impl LeafVisit for ClosestHit<'_> {
     #[inline(always)]
     fn visit(&mut self, bvh: &Bvh, leaf: &Entry, t_max: &mut f32) -> bool {
-        bvh.leaf_closest(leaf, self.ray, t_max, &mut self.best);
+        bvh.leaf_closest(leaf, self.ray, t_max, &mut self.best, self.base);
         false
     }
 }
@@ -1176,18 +1329,20 @@ fn contains(outer: &Bounds3, inner: &Bounds3) -> bool {
             && outer.max.z >= inner.max.z)
 }
 
-fn prim_bounds(scene: &Scene, prim: PrimRef) -> Bounds3 {
+/// The box of a tree's primitive (an `Instanced` one an instance, by its world box).
+fn prim_bounds(source: Source, prim: PrimRef) -> Bounds3 {
     let i = prim.index as usize;
     match prim.kind {
-        PrimKind::Quad => Bounds3::from_points(&scene.quads[i].vertices),
-        PrimKind::Triangle => Bounds3::from_points(&scene.triangles.vertices(i)),
-        PrimKind::Shape => scene.shapes[i].shape.bounds(),
+        PrimKind::Quad => Bounds3::from_points(&source.quads[i].vertices),
+        PrimKind::Triangle => Bounds3::from_points(&source.triangles.vertices(i)),
+        PrimKind::Shape => source.shapes[i].shape.bounds(),
+        PrimKind::Instanced => source.instances[i],
     }
 }
 
 /// Writes a leaf's contents into `out` (as many items as `leaf_items` counts): its triangles
 /// in packs of four, then its other primitives.
-fn write_leaf_items(scene: &Scene, leaf: &[BuildPrim], out: &mut [LeafItem]) {
+fn write_leaf_items(source: Source, leaf: &[BuildPrim], out: &mut [LeafItem]) {
     let mut out = out.iter_mut();
     let mut pack = [([Vec3::ZERO; 3], leaf[0].prim()); 4];
     let mut in_pack = 0;
@@ -1196,7 +1351,7 @@ fn write_leaf_items(scene: &Scene, leaf: &[BuildPrim], out: &mut [LeafItem]) {
         *item = LeafItem::triangles(Tri4::new(pack));
     };
     for p in leaf.iter().filter(|p| p.is_triangle()) {
-        let vertices = scene.triangles.vertices(p.prim().index() as usize);
+        let vertices = source.triangles.vertices(p.prim().index() as usize);
         pack[in_pack] = (vertices, p.prim());
         in_pack += 1;
         if in_pack == 4 {
@@ -1211,8 +1366,8 @@ fn write_leaf_items(scene: &Scene, leaf: &[BuildPrim], out: &mut [LeafItem]) {
         let i = p.prim().index() as usize;
         let (v, normal) = match p.prim().kind() {
             PrimKind::Triangle => continue,
-            PrimKind::Quad => (scene.quads[i].vertices, scene.quads[i].normal),
-            PrimKind::Shape => ([Vec3::ZERO; 4], Vec3::ZERO),
+            PrimKind::Quad => (source.quads[i].vertices, source.quads[i].normal),
+            PrimKind::Shape | PrimKind::Instanced => ([Vec3::ZERO; 4], Vec3::ZERO),
         };
         let item = out.next().expect("the leaf's items were counted");
         *item = LeafItem::single(&LeafPrim {

@@ -9,7 +9,7 @@ use super::{Accel, AccelError, AccelOptions, EmbreeQuality, PackedPrim};
 use crate::geometry::{
     faces_ray, intersect_quad, intersect_triangle, AnalyticShape, Ray, Shape, Vec3,
 };
-use crate::scene::{PrimHit, PrimKind, PrimRef, Scene};
+use crate::scene::{Instance, PrimHit, PrimKind, PrimRef, Scene};
 
 #[allow(
     non_camel_case_types,
@@ -174,6 +174,53 @@ unsafe extern "C" fn triangle_exact(
     }
 }
 
+/// What the exact routine of instanced triangles reads: the instances, which instance each
+/// Embree instance geometry is, and each group's triangles in its space.
+struct InstancedExact {
+    instances: Vec<Instance>,
+    /// By Embree geometry id, the index into `instances` (`u32::MAX`: not an instance).
+    of_geometry: Vec<u32>,
+    groups: Vec<Box<[[Vec3; 3]]>>,
+}
+
+impl InstancedExact {
+    /// The instance of Embree geometry `id`.
+    #[inline]
+    fn instance(&self, id: u32) -> &Instance {
+        &self.instances[self.of_geometry[id as usize] as usize]
+    }
+}
+
+/// The exact test of triangle `prim` of the group that the instance of geometry `inst` places:
+/// the BVH's, on the ray the BVH takes into the group's space (`Instance::ray_to_group`), so
+/// that both backends find the same t, u and v; its key the instanced triangle's.
+unsafe extern "C" fn instanced_exact(
+    user: *const c_void,
+    inst: u32,
+    prim: u32,
+    ray: *const sys::TxRay,
+    t: *mut f32,
+    u: *mut f32,
+    v: *mut f32,
+    key: *mut u32,
+) -> i32 {
+    // SAFETY: `user` points to the `InstancedExact` boxed in the accel, alive as long as the
+    // scene; Embree reports `inst`, an instance geometry's id, and prim < its group's
+    // triangle count; `ray` has `Ray`'s layout; t/u/v/key are writable.
+    unsafe {
+        let exact = &*(user as *const InstancedExact);
+        let instance = exact.instance(inst);
+        let [a, b, c] = exact.groups[instance.group as usize][prim as usize];
+        let local = instance.ray_to_group(&*(ray as *const Ray));
+        *key = PackedPrim::new(PrimRef {
+            kind: PrimKind::Instanced,
+            index: instance.first + prim,
+        })
+        .raw();
+        answer(intersect_triangle(&local, local.t_max, a, b, c), t, u, v)
+    }
+}
+
 /// The key base of a primitive kind in the tie rule both backends apply: the packed
 /// reference of its primitive 0, so that `key_base | prim` orders as the BVH's packed
 /// references do.
@@ -192,6 +239,10 @@ pub struct EmbreeAccel {
     shapes: Box<[AnalyticShape]>,
     quads: Box<ExactQuads>,
     triangles: Box<[[Vec3; 3]]>,
+    instanced: Box<InstancedExact>,
+    /// A scene per group of triangles (null for a group without), which the top scene's
+    /// instance geometries place; released after it.
+    groups: Vec<*mut sys::TxScene>,
     /// `--embree-exact`: the hits are the exact routines' (`PrimHit::exact`).
     exact: bool,
 }
@@ -204,9 +255,13 @@ unsafe impl Sync for EmbreeAccel {}
 
 impl Drop for EmbreeAccel {
     fn drop(&mut self) {
-        // SAFETY: both handles came from the shim and are released once, the scene first.
+        // SAFETY: every handle came from the shim and is released once: the scene first, then
+        // the groups it places, then the device (the shim accepts NULL scenes).
         unsafe {
             sys::tx_scene_release(self.scene);
+            for &group in &self.groups {
+                sys::tx_scene_release(group);
+            }
             sys::tx_device_release(self.device);
         }
     }
@@ -225,7 +280,7 @@ impl EmbreeAccel {
             EmbreeQuality::High => 2,
         };
         // SAFETY: device is a live device.
-        let tx_scene = unsafe {
+        let new_scene = || unsafe {
             sys::tx_scene_new(
                 device,
                 quality,
@@ -233,6 +288,8 @@ impl EmbreeAccel {
                 options.embree_exact as i32,
             )
         };
+        let tx_scene = new_scene();
+        let instancing = &scene.instancing;
         let mut accel = EmbreeAccel {
             device,
             scene: tx_scene,
@@ -245,6 +302,16 @@ impl EmbreeAccel {
             triangles: (0..scene.triangles.len())
                 .map(|i| scene.triangles.vertices(i))
                 .collect(),
+            instanced: Box::new(InstancedExact {
+                instances: instancing.instances.clone(),
+                of_geometry: Vec::new(),
+                groups: instancing
+                    .groups
+                    .iter()
+                    .map(|g| (0..g.mesh.len()).map(|i| g.mesh.vertices(i)).collect())
+                    .collect(),
+            }),
+            groups: Vec::new(),
             exact: options.embree_exact,
         };
         if tx_scene.is_null() {
@@ -326,11 +393,77 @@ impl EmbreeAccel {
             };
             accel.register(id, PrimKind::Shape)?;
         }
+        accel.add_instances(scene, new_scene)?;
         // SAFETY: tx_scene is live; every geometry is attached.
         if unsafe { sys::tx_scene_commit(tx_scene) } != 0 {
             return Err(last_error("Embree could not build the scene"));
         }
         Ok(accel)
+    }
+
+    /// A committed scene per group of triangles, and an instance geometry in the top scene
+    /// per instance of one (`new_scene` makes a scene with the top one's options).
+    fn add_instances(
+        &mut self,
+        scene: &Scene,
+        new_scene: impl Fn() -> *mut sys::TxScene,
+    ) -> Result<(), AccelError> {
+        let user = &*self.instanced as *const InstancedExact as *const c_void;
+        for group in &scene.instancing.groups {
+            let mesh = &group.mesh;
+            if mesh.is_empty() {
+                self.groups.push(std::ptr::null_mut());
+                continue;
+            }
+            let tx_group = new_scene();
+            if tx_group.is_null() {
+                return Err(last_error("cannot create an Embree scene for a shapegroup"));
+            }
+            self.groups.push(tx_group);
+            let vertices: Vec<f32> = mesh.positions.iter().flat_map(|v| v.to_array()).collect();
+            let indices: Vec<u32> = mesh.indices.iter().flatten().copied().collect();
+            let n = u32::try_from(mesh.len()).map_err(|_| AccelError::TooLarge(mesh.len()))?;
+            // SAFETY: the arrays hold 3 floats per vertex and 3 valid vertex indices per
+            // triangle (the shim copies them); `user` points to the box owned by `self`, which
+            // outlives the scenes, as `instanced_exact` expects; tx_group is live.
+            let id = unsafe {
+                sys::tx_scene_add_group_triangles(
+                    tx_group,
+                    vertices.as_ptr(),
+                    indices.as_ptr(),
+                    n,
+                    user,
+                    Some(instanced_exact),
+                )
+            };
+            if id == sys::TX_INVALID_ID {
+                return Err(last_error("Embree refused a shapegroup's triangles"));
+            }
+            // SAFETY: tx_group is live, its geometry attached.
+            if unsafe { sys::tx_scene_commit(tx_group) } != 0 {
+                return Err(last_error("Embree could not build a shapegroup"));
+            }
+        }
+        for (k, instance) in scene.instancing.instances.iter().enumerate() {
+            let tx_group = self.groups[instance.group as usize];
+            if tx_group.is_null() {
+                continue;
+            }
+            let m = instance.to_world.as_mat4();
+            let columns: Vec<f32> = [m.x_axis, m.y_axis, m.z_axis, m.w_axis]
+                .iter()
+                .flat_map(|c| c.truncate().to_array())
+                .collect();
+            // SAFETY: both scenes are live, the group committed; `columns` holds 12 floats.
+            let id = unsafe { sys::tx_scene_add_instance(self.scene, tx_group, columns.as_ptr()) };
+            self.register(id, PrimKind::Instanced)?;
+            let of = &mut self.instanced.of_geometry;
+            if of.len() <= id as usize {
+                of.resize(id as usize + 1, u32::MAX);
+            }
+            of[id as usize] = k as u32;
+        }
+        Ok(())
     }
 
     fn register(&mut self, id: u32, kind: PrimKind) -> Result<(), AccelError> {
@@ -350,12 +483,20 @@ impl EmbreeAccel {
         if h.geom == sys::TX_INVALID_ID {
             return None;
         }
-        Some(PrimHit {
-            t: h.t,
-            prim: PrimRef {
+        let prim = if h.inst == sys::TX_INVALID_ID {
+            PrimRef {
                 kind: self.kinds[h.geom as usize],
                 index: h.prim,
-            },
+            }
+        } else {
+            PrimRef {
+                kind: PrimKind::Instanced,
+                index: self.instanced.instance(h.inst).first + h.prim,
+            }
+        };
+        Some(PrimHit {
+            t: h.t,
+            prim,
             u: h.u,
             v: h.v,
             exact: self.exact,
@@ -408,6 +549,7 @@ impl Accel for EmbreeAccel {
             v: 0.0,
             geom: sys::TX_INVALID_ID,
             prim: 0,
+            inst: sys::TX_INVALID_ID,
         };
         // SAFETY: `ray` has TxRay's layout; `hit` is a valid output; the scene is committed.
         unsafe { sys::tx_intersect1(self.scene, ray as *const Ray as *const sys::TxRay, &mut hit) };
@@ -442,6 +584,7 @@ impl Accel for EmbreeAccel {
             v: 0.0,
             geom: sys::TX_INVALID_ID,
             prim: 0,
+            inst: sys::TX_INVALID_ID,
         };
         let mut buf = [empty; CHUNK];
         for (rays, hits) in rays.chunks(CHUNK).zip(hits.chunks_mut(CHUNK)) {

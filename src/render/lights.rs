@@ -140,6 +140,25 @@ pub struct Light {
     pub prim: PrimRef,
 }
 
+/// The light of triangle `prim` of world vertices `[a, b, c]`, emitting `emitted` (from both
+/// sides with `--two-sided`).
+fn triangle_light(scene: &Scene, [a, b, c]: [Vec3; 3], emitted: Color, prim: PrimRef) -> Light {
+    let n = (b - a).cross(c - a);
+    let two_sided = scene.two_sided_quads;
+    Light {
+        shape: LightShape::Triangle {
+            v0: a,
+            e1: b - a,
+            e2: c - a,
+            normal: n.normalize_or_zero(),
+            two_sided,
+        },
+        emitted,
+        area: 0.5 * n.length(),
+        prim,
+    }
+}
+
 /// A point on a light with its outward unit normal; `one_sided` lights emit only where
 /// `normal · direction > 0`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -175,20 +194,13 @@ impl Light {
         for i in 0..scene.triangles.len() {
             let e = emitted(scene.triangles.materials[i]);
             if e.max_element() > 0.0 {
-                let [a, b, c] = scene.triangles.vertices(i);
-                let n = (b - a).cross(c - a);
-                lights.push(Light {
-                    shape: LightShape::Triangle {
-                        v0: a,
-                        e1: b - a,
-                        e2: c - a,
-                        normal: n.normalize_or_zero(),
-                        two_sided: scene.two_sided_quads,
-                    },
-                    emitted: e,
-                    area: 0.5 * n.length(),
-                    prim: prim(PrimKind::Triangle, i),
-                });
+                let vertices = scene.triangles.vertices(i);
+                lights.push(triangle_light(
+                    scene,
+                    vertices,
+                    e,
+                    prim(PrimKind::Triangle, i),
+                ));
             }
         }
         for (i, s) in scene.shapes.iter().enumerate() {
@@ -200,6 +212,20 @@ impl Light {
                     area: s.shape.area(),
                     prim: prim(PrimKind::Shape, i),
                 });
+            }
+        }
+        // Instanced triangles last, as their kind orders (the Mitsuba reader refuses emitters
+        // in a shapegroup, but a light is whatever emits).
+        for i in 0..scene.instancing.triangle_count() {
+            let e = emitted(scene.instancing.material(i as u32));
+            if e.max_element() > 0.0 {
+                let vertices = scene.instanced_vertices(i as u32);
+                lights.push(triangle_light(
+                    scene,
+                    vertices,
+                    e,
+                    prim(PrimKind::Instanced, i),
+                ));
             }
         }
         lights

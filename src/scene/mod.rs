@@ -6,6 +6,7 @@ pub mod bsdf_support;
 pub mod bsdf_texture;
 mod dialect;
 mod error;
+pub mod instance;
 pub mod medium;
 mod mgf;
 mod mitsuba;
@@ -21,6 +22,7 @@ use std::path::{Path, PathBuf};
 
 pub use crate::camera::{Camera, Projection, View};
 pub use error::SceneError;
+pub use instance::{Group, Instance, Instancing};
 pub use surface::{bilinear, PrimHit, QuadNeighbours, SurfaceHit};
 pub use texture::Texture;
 
@@ -227,11 +229,19 @@ pub enum PrimKind {
     Triangle,
     /// One of `Scene::shapes`: whichever analytic kind it is, the `Shape` trait answers.
     Shape,
+    /// A triangle of an instanced group, placed by its instance: the index runs over all
+    /// instances' triangles (`scene::instance`).
+    Instanced,
 }
 
 impl PrimKind {
     /// Every kind, in the order of their discriminants (`kind as u32` indexes this).
-    pub const ALL: [PrimKind; 3] = [PrimKind::Quad, PrimKind::Triangle, PrimKind::Shape];
+    pub const ALL: [PrimKind; 4] = [
+        PrimKind::Quad,
+        PrimKind::Triangle,
+        PrimKind::Shape,
+        PrimKind::Instanced,
+    ];
 }
 
 /// One primitive of a scene: its kind and its index in that kind's list (ordered by both).
@@ -255,6 +265,9 @@ pub struct Scene {
     pub footprint: procedural::Footprint,
     pub quads: Vec<Quad>,
     pub triangles: TriangleMesh,
+    /// Triangles stored once per group and placed by instances (Mitsuba's `shapegroup` and
+    /// `instance`; default none).
+    pub instancing: Instancing,
     /// Spheres and rings, in the order of the scene file.
     pub shapes: Vec<ShapePrim>,
     pub camera: Option<Camera>,
@@ -455,6 +468,17 @@ impl Scene {
             *q = Quad::new(q.vertices.map(map), q.tex_coords, q.material);
         }
         s.triangles.positions.iter_mut().for_each(|p| *p = map(*p));
+        let placed = glam::DMat4::from_scale_rotation_translation(
+            glam::DVec3::splat(scale as f64),
+            glam::DQuat::IDENTITY,
+            offset.as_dvec3(),
+        );
+        s.instancing.instances.clear();
+        for i in &self.instancing.instances {
+            s.instancing
+                .add_instance(i.group, placed * i.to_world)
+                .expect("a scaled invertible transform stays invertible");
+        }
         for sp in &mut s.shapes {
             sp.shape = sp.shape.scaled(scale, offset);
         }
@@ -537,6 +561,17 @@ impl Scene {
             "{:?}{:?}{:?}{:?}{}",
             self.materials, self.quads, self.triangles, self.shapes, self.two_sided_quads
         );
+        // Only scenes with instances hash them, keeping the other scenes' hashes.
+        if !self.instancing.instances.is_empty() {
+            let groups: Vec<_> = self.instancing.groups.iter().map(|g| &g.mesh).collect();
+            let placements: Vec<_> = self
+                .instancing
+                .instances
+                .iter()
+                .map(|i| (i.group, i.to_world))
+                .collect();
+            let _ = write!(h, "{groups:?}{placements:?}");
+        }
         // Only scenes with media or a sky hash them: the other scenes keep the hash (and the
         // saved solutions and photon maps) they had before there were either.
         if self.fog.is_some() || self.sky.is_some() || !self.media.is_empty() {
@@ -629,11 +664,26 @@ impl Scene {
         for s in self.shapes.iter().filter(|s| keep(s.material)) {
             b = b.union(s.shape.bounds());
         }
+        let instanced = self.instancing.triangle_count() as u32;
+        for i in (0..instanced).filter(|&i| keep(self.instancing.material(i))) {
+            b = b.union(Bounds3::from_points(&self.instanced_vertices(i)));
+        }
         b
     }
 
+    /// The primitives a ray may hit, instanced triangles counted once per instance.
     pub fn primitive_count(&self) -> usize {
-        self.quads.len() + self.triangles.len() + self.shapes.len()
+        self.quads.len()
+            + self.triangles.len()
+            + self.shapes.len()
+            + self.instancing.triangle_count()
+    }
+
+    /// The world vertices of instanced triangle `index` (`PrimKind::Instanced`): what the
+    /// surface, the lights and the engines that need world triangles take it as.
+    #[inline]
+    pub fn instanced_vertices(&self, index: u32) -> [Vec3; 3] {
+        self.instancing.world_vertices(index)
     }
 
     pub fn material_of(&self, prim: PrimRef) -> u32 {
@@ -642,6 +692,7 @@ impl Scene {
             PrimKind::Quad => self.quads[i].material,
             PrimKind::Triangle => self.triangles.materials[i],
             PrimKind::Shape => self.shapes[i].material,
+            PrimKind::Instanced => self.instancing.material(prim.index),
         }
     }
 
@@ -680,6 +731,19 @@ impl Scene {
         self.quads.iter().for_each(|q| mark(q.material));
         self.triangles.materials.iter().for_each(|&m| mark(m));
         self.shapes.iter().for_each(|s| mark(s.material));
+        let mut placed = vec![false; self.instancing.groups.len()];
+        for i in &self.instancing.instances {
+            placed[i.group as usize] = true;
+        }
+        for (g, _) in self
+            .instancing
+            .groups
+            .iter()
+            .zip(placed)
+            .filter(|(_, p)| *p)
+        {
+            g.mesh.materials.iter().for_each(|&m| mark(m));
+        }
         used
     }
 

@@ -91,6 +91,19 @@ pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
             )));
         }
     }
+    for (k, g) in scene.instancing.groups.iter().enumerate() {
+        for (i, p) in g.mesh.positions.iter().enumerate() {
+            check_coordinate(*p, &format!("vertex {i} of shapegroup {k}")).map_err(fail)?;
+        }
+    }
+    for (k, i) in scene.instancing.instances.iter().enumerate() {
+        let b = i.world_bounds(scene.instancing.group_of(i));
+        if !b.is_empty() {
+            for corner in [b.min, b.max] {
+                check_coordinate(corner, &format!("the box of instance {k}")).map_err(fail)?;
+            }
+        }
+    }
     for (i, s) in scene.shapes.iter().enumerate() {
         // A shape's centre and size each within the range: its extent within twice that.
         let m = s.shape.magnitude();

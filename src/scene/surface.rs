@@ -47,12 +47,11 @@ impl SurfaceHit {
     }
 }
 
-/// The vertex normals of triangle `i` interpolated at barycentric (b1, b2), on the side of
-/// the geometric normal `ng` (a mesh whose normals disagree with its winding is shaded from
-/// the side it is hit on); `ng` where they cancel.
+/// The vertex normals `[a, b, c]` of a triangle interpolated at barycentric (b1, b2), on the
+/// side of the geometric normal `ng` (a mesh whose normals disagree with its winding, or an
+/// instance that mirrors, is shaded from the side it is hit on); `ng` where they cancel.
 #[inline]
-fn smooth_normal(mesh: &super::TriangleMesh, i: usize, b1: f32, b2: f32, ng: Vec3) -> Vec3 {
-    let [a, b, c] = mesh.indices[i].map(|k| mesh.normals[k as usize]);
+fn smooth_normal([a, b, c]: [Vec3; 3], b1: f32, b2: f32, ng: Vec3) -> Vec3 {
     let n = (a * (1.0 - b1 - b2) + b * b1 + c * b2).normalize_or_zero();
     match n.dot(ng) {
         d if d > 0.0 => n,
@@ -195,7 +194,7 @@ impl Scene {
             PrimKind::Shape => self.shapes[hit.prim.index as usize]
                 .shape
                 .uv_at(hit.point, hit.part),
-            PrimKind::Quad | PrimKind::Triangle => hit.uv,
+            PrimKind::Quad | PrimKind::Triangle | PrimKind::Instanced => hit.uv,
         }
     }
 
@@ -204,12 +203,10 @@ impl Scene {
     /// degenerate; None elsewhere. An anisotropic BSDF's frame is aligned with the first,
     /// as in Mitsuba; a bump map tilts both.
     pub fn tangents(&self, hit: &SurfaceHit) -> Option<(Vec3, Vec3)> {
-        let mesh = &self.triangles;
-        if hit.prim.kind != PrimKind::Triangle || mesh.tex_coords.is_empty() {
+        let (mesh, i, [p0, p1, p2], _) = self.triangle_of(hit.prim)?;
+        if mesh.tex_coords.is_empty() {
             return None;
         }
-        let i = hit.prim.index as usize;
-        let [p0, p1, p2] = mesh.vertices(i);
         let [t0, t1, t2] = mesh.indices[i].map(|k| mesh.tex_coords[k as usize]);
         let (du1, du2) = (t1 - t0, t2 - t0);
         let det = du1.x * du2.y - du1.y * du2.x;
@@ -217,6 +214,24 @@ impl Scene {
         let dpdv = ((p2 - p0) * du1.x - (p1 - p0) * du2.x) / det;
         (det != 0.0 && dpdu.is_finite() && dpdv.is_finite() && dpdu != Vec3::ZERO)
             .then_some((dpdu, dpdv))
+    }
+
+    /// A triangle primitive's mesh, its index there, its world vertices and its instance: a
+    /// triangle of `triangles` (no instance), or an instanced one (its group's mesh, its
+    /// vertices placed by its instance); None for other primitives.
+    #[inline]
+    fn triangle_of(&self, prim: PrimRef) -> Option<TriangleOf<'_>> {
+        let i = prim.index as usize;
+        match prim.kind {
+            PrimKind::Triangle => Some((&self.triangles, i, self.triangles.vertices(i), None)),
+            PrimKind::Instanced => {
+                let (instance, j) = self.instancing.locate(prim.index);
+                let mesh = &self.instancing.group_of(instance).mesh;
+                let vertices = mesh.vertices(j).map(|p| instance.place(p));
+                Some((mesh, j, vertices, Some(instance)))
+            }
+            PrimKind::Quad | PrimKind::Shape => None,
+        }
     }
 
     /// The texture coordinates at a hit: interpolated from the primitive's `vt` where it has
@@ -229,22 +244,13 @@ impl Scene {
                 Some(tc) => bilinear(tc, u, v),
                 None => vec2(u, v),
             },
-            PrimKind::Triangle => self.triangle_tex_coords(i, u, v),
+            PrimKind::Triangle => triangle_tex_coords(&self.triangles, i, u, v),
+            PrimKind::Instanced => {
+                let (instance, j) = self.instancing.locate(hit.prim.index);
+                triangle_tex_coords(&self.instancing.group_of(instance).mesh, j, u, v)
+            }
             PrimKind::Shape => vec2(u, v),
         }
-    }
-
-    /// The texture coordinates of triangle `i` at the point of barycentric parameters
-    /// (u, v) (the point a + u·(b − a) + v·(c − a)): its vertices' interpolated where the
-    /// mesh has them, else (u, v).
-    fn triangle_tex_coords(&self, i: usize, u: f32, v: f32) -> Vec2 {
-        let mesh = &self.triangles;
-        if mesh.tex_coords.is_empty() {
-            return vec2(u, v);
-        }
-        let [a, b, c] = mesh.indices[i].map(|k| mesh.tex_coords[k as usize]);
-        let b0 = 1.0 - u - v;
-        vec2(a.x * b0 + b.x * u + c.x * v, a.y * b0 + b.y * u + c.y * v)
     }
 
     /// The radiance the surface at a hit emits: its material's `emission_texture` there, or
@@ -278,7 +284,7 @@ impl Scene {
         } else {
             (0.0, 0.0)
         };
-        self.textures[k].lookup(self.triangle_tex_coords(i, u, v))
+        self.textures[k].lookup(triangle_tex_coords(&self.triangles, i, u, v))
     }
 
     /// The size of a primitive: the longest side of its bounding box.
@@ -288,6 +294,7 @@ impl Scene {
             PrimKind::Quad => Bounds3::from_points(&self.quads[i].vertices),
             PrimKind::Triangle => Bounds3::from_points(&self.triangles.vertices(i)),
             PrimKind::Shape => self.shapes[i].shape.bounds(),
+            PrimKind::Instanced => Bounds3::from_points(&self.instanced_vertices(prim.index)),
         };
         bounds.extent().max_element()
     }
@@ -324,10 +331,13 @@ impl Scene {
                     material: q.material,
                 }
             }
-            PrimKind::Triangle => {
-                let mesh = &self.triangles;
-                let [p0, p1, p2] = mesh.vertices(i);
+            PrimKind::Triangle | PrimKind::Instanced => {
+                let (mesh, j, [p0, p1, p2], instance) = self
+                    .triangle_of(hit.prim)
+                    .expect("a triangle kind has a triangle");
                 // An exact hit is the routine's own answer: testing again would give it back.
+                // (An instanced triangle's exact answer is its test in the group's space, whose
+                // t is the world's: `Instance::ray_to_group`.)
                 let (t, b1, b2) = if hit.exact {
                     (hit.t, hit.u, hit.v)
                 } else {
@@ -337,7 +347,12 @@ impl Scene {
                 let point = p0 + (p1 - p0) * b1 + (p2 - p0) * b2;
                 let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
                 let shading_normal = if self.smooth_normals && !mesh.normals.is_empty() {
-                    smooth_normal(mesh, i, b1, b2, ng)
+                    let normals = mesh.indices[j].map(|k| mesh.normals[k as usize]);
+                    let normals = match instance {
+                        Some(instance) => normals.map(|n| instance.turn(n)),
+                        None => normals,
+                    };
+                    smooth_normal(normals, b1, b2, ng)
                 } else {
                     ng
                 };
@@ -350,7 +365,7 @@ impl Scene {
                     uv: (b1, b2),
                     prim: hit.prim,
                     part: 0,
-                    material: mesh.materials[i],
+                    material: mesh.materials[j],
                 }
             }
             PrimKind::Shape => {
@@ -382,6 +397,26 @@ impl Scene {
             }
         }
     }
+}
+
+/// What `Scene::triangle_of` answers: mesh, index in it, world vertices, instance.
+type TriangleOf<'a> = (
+    &'a super::TriangleMesh,
+    usize,
+    [Vec3; 3],
+    Option<&'a super::Instance>,
+);
+
+/// The texture coordinates of `mesh`'s triangle `i` at the point of barycentric parameters
+/// (u, v) (the point a + u·(b − a) + v·(c − a)): its vertices' interpolated where the mesh has
+/// them, else (u, v).
+fn triangle_tex_coords(mesh: &super::TriangleMesh, i: usize, u: f32, v: f32) -> Vec2 {
+    if mesh.tex_coords.is_empty() {
+        return vec2(u, v);
+    }
+    let [a, b, c] = mesh.indices[i].map(|k| mesh.tex_coords[k as usize]);
+    let b0 = 1.0 - u - v;
+    vec2(a.x * b0 + b.x * u + c.x * v, a.y * b0 + b.y * u + c.y * v)
 }
 
 /// Derived data of a scene: for each quad, the quads sharing a vertex position with it.

@@ -104,6 +104,10 @@ impl BruteForce<'_> {
                 intersect_triangle(ray, t_max, a, b, c).map(|h| h.0)
             }
             PrimKind::Shape => shape_oracle::hit(&s.shapes[i].shape, ray, t_max).map(|t| t as f32),
+            PrimKind::Instanced => {
+                let [a, b, c] = s.instanced_vertices(prim.index);
+                intersect_triangle(ray, t_max, a, b, c).map(|h| h.0)
+            }
         }
     }
 
@@ -113,6 +117,7 @@ impl BruteForce<'_> {
         of(PrimKind::Quad, s.quads.len())
             .chain(of(PrimKind::Triangle, s.triangles.len()))
             .chain(of(PrimKind::Shape, s.shapes.len()))
+            .chain(of(PrimKind::Instanced, s.instancing.triangle_count()))
     }
 }
 

@@ -94,7 +94,18 @@ impl QuadMesh {
                 [a, b, c, c],
             )
         });
-        for (kind, i, material, corners) in polygons.chain(triangles) {
+        // Instanced triangles each a patch of their own, in the world: each instance is lit
+        // differently.
+        let instanced = (0..scene.instancing.triangle_count()).map(|i| {
+            let [a, b, c] = scene.instanced_vertices(i as u32);
+            (
+                PrimKind::Instanced,
+                i,
+                scene.instancing.material(i as u32),
+                [a, b, c, c],
+            )
+        });
+        for (kind, i, material, corners) in polygons.chain(triangles).chain(instanced) {
             let prim = PrimRef {
                 kind,
                 index: i as u32,

@@ -239,6 +239,7 @@ fn patch_of_face(mesh: &QuadMesh, patches: &[Patch]) -> Vec<u32> {
 pub fn convex_enclosure(scene: &Scene) -> bool {
     const LIMIT: usize = 4096;
     if !scene.triangles.is_empty()
+        || !scene.instancing.instances.is_empty()
         || !scene.shapes.is_empty()
         || scene.quads.is_empty()
         || scene.quads.len() > LIMIT
@@ -558,7 +559,7 @@ impl Solution {
                     inverse_bilinear(&q.vertices, q.normal, hit.point).unwrap_or(parameters);
                 (u, v, side)
             }
-            PrimKind::Triangle => {
+            PrimKind::Triangle | PrimKind::Instanced => {
                 let (b1, b2) = parameters;
                 let u = if b2 < 1.0 { b1 / (1.0 - b2) } else { 0.0 };
                 (u, b2, side)
@@ -930,7 +931,7 @@ pub fn mesh_plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
 fn planned_input_patches(scene: &Scene, r: &RadiositySettings) -> u64 {
     let tessellation = r.tessellation();
     let sides = 1 + scene.two_sided_quads as u64;
-    (scene.quads.len() + scene.triangles.len()) as u64 * sides
+    (scene.quads.len() + scene.triangles.len() + scene.instancing.triangle_count()) as u64 * sides
         + scene
             .shapes
             .iter()

@@ -112,7 +112,9 @@ pub fn patches(scene: &Scene, mesh: &QuadMesh) -> Vec<Patch> {
 pub fn on_primitive(scene: &Scene, patch: &Patch, p: Vec3, side: Vec3) -> Vec3 {
     let i = patch.prim.index as usize;
     let (point, normal, magnitude) = match patch.prim.kind {
-        PrimKind::Quad | PrimKind::Triangle => (p, patch.normal, p.abs().max_element()),
+        PrimKind::Quad | PrimKind::Triangle | PrimKind::Instanced => {
+            (p, patch.normal, p.abs().max_element())
+        }
         PrimKind::Shape => {
             let shape = &scene.shapes[i].shape;
             let (q, n) = shape.project(p, patch.part);

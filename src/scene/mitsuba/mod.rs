@@ -35,7 +35,10 @@ use super::bsdf_texture::{BsdfParameter, TexturedParameter};
 use super::medium::{Albedo, Heterogeneous, Medium};
 use super::sky::{Sky, SkyMap};
 use super::volume_grid::GridVolume;
-use super::{DeltaKind, DeltaLight, Material, Scene, SceneError, ShadingTilt, ShapePrim, Texture};
+use super::{
+    DeltaKind, DeltaLight, Material, Scene, SceneError, ShadingTilt, ShapePrim, Texture,
+    TriangleMesh,
+};
 use crate::camera::{Camera, Projection};
 use crate::color::Color;
 use crate::geometry::{SphereShape, Vec2, Vec3};
@@ -58,6 +61,8 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneErr
         bsdf_textures: Vec::new(),
         bsdf_plugins: Vec::new(),
         mesh_files: HashMap::new(),
+        groups: HashMap::new(),
+        group_mesh: None,
     };
     for child in &root.children {
         let plugin = &child.plugin;
@@ -99,6 +104,12 @@ struct Builder {
     /// Each mesh file read, by its shape type, path and shape index: a file that several
     /// shapes name is read once (Mitsuba's BSDF tests place one 2.8 MB sphere twelve times).
     mesh_files: HashMap<(String, PathBuf, u32), Mesh>,
+    /// The group (`Scene::instancing`) made of each shapegroup plugin, made where an instance
+    /// first refers to it.
+    groups: HashMap<*const Plugin, u32>,
+    /// The triangles of the shapegroup being made (in its own space), where `shape` adds a
+    /// mesh while one is; None otherwise (meshes go to the scene's triangles).
+    group_mesh: Option<TriangleMesh>,
 }
 
 impl Builder {
@@ -286,30 +297,30 @@ impl Builder {
         Ok(())
     }
 
-    /// A shape, placed by its `to_world` and then by `outer` (an instance's, or the
-    /// identity).
+    /// A shape, placed by its `to_world` and then by `outer` (an instance's sphere's, or the
+    /// identity); a mesh goes into the group being made, if one is (`group_mesh`).
     fn shape(&mut self, p: &Plugin, outer: DMat4) -> Result<(), SceneError> {
         p.mark_used();
         let to_world = outer * p.transform("to_world")?;
+        let in_group = self.group_mesh.is_some();
         match p.kind.as_str() {
+            // As Mitsuba: no nesting, and no emitters in a group.
+            "shapegroup" | "instance" if in_group => {
+                return Err(p.at.error(format!(
+                    "a {} cannot stand inside a shapegroup (Mitsuba does not nest instancing)",
+                    p.kind
+                )))
+            }
             // Made where an instance refers to it.
             "shapegroup" if outer == DMat4::IDENTITY => return Ok(()),
             "shapegroup" => return Err(p.at.error("a shapegroup cannot stand inside another")),
-            // Its group's shapes, each placed by the instance's transform after its own.
-            // They are copied: the triangles of each instance are stored apart.
-            "instance" => {
-                let group = p
-                    .children_tagged("shape")
-                    .find(|c| c.plugin.kind == "shapegroup")
-                    .map(|c| c.plugin.clone())
-                    .ok_or_else(|| p.at.error("an instance needs a <ref> to a shapegroup"))?;
-                group.mark_used();
-                for member in group.children_tagged("shape") {
-                    self.shape(&member.plugin, to_world)?;
-                }
-                return Ok(());
-            }
+            "instance" => return self.instance(p, to_world),
             _ => {}
+        }
+        if let Some(e) = p.children_tagged("emitter").next().filter(|_| in_group) {
+            return Err(e.plugin.at.error(
+                "an emitter cannot stand in a shapegroup: Mitsuba does not instance emitters",
+            ));
         }
         let flip = p.boolean("flip_normals", false)?;
         let material = self.shape_material(p)?;
@@ -391,66 +402,110 @@ impl Builder {
         if p.boolean("face_normals", false)? {
             mesh.normals.clear();
         }
-        self.add_mesh(mesh, to_world, flip, material);
+        let into = match &mut self.group_mesh {
+            Some(group) => group,
+            None => &mut self.scene.triangles,
+        };
+        add_mesh(into, mesh, to_world, flip, material);
         Ok(())
     }
 
-    /// Appends a mesh, moved by `to_world`, to the scene's triangles: every triangle gets
-    /// shading normals at its vertices (its own face's where the mesh has none).
-    fn add_mesh(&mut self, mesh: Mesh, to_world: DMat4, flip: bool, material: u32) {
-        let normal_matrix = to_world.inverse().transpose();
-        let tri = &mut self.scene.triangles;
-        let place = |p: Vec3| to_world.transform_point3(p.as_dvec3()).as_vec3();
-        let turn = |n: Vec3| {
-            let n = normal_matrix
-                .transform_vector3(n.as_dvec3())
-                .normalize_or_zero()
-                .as_vec3();
-            if flip {
-                -n
-            } else {
-                n
+    /// An instance: its shapegroup's triangles, made once into a group (`Scene::instancing`),
+    /// placed by `to_world`. The group's spheres are placed as shapes of their own, one per
+    /// instance (an analytic shape is a centre and a radius: nothing to share).
+    fn instance(&mut self, p: &Plugin, to_world: DMat4) -> Result<(), SceneError> {
+        let group = p
+            .children_tagged("shape")
+            .find(|c| c.plugin.kind == "shapegroup")
+            .map(|c| c.plugin.clone())
+            .ok_or_else(|| p.at.error("an instance needs a <ref> to a shapegroup"))?;
+        group.mark_used();
+        let members = || group.children_tagged("shape").map(|c| c.plugin.clone());
+        let index = match self.groups.get(&Rc::as_ptr(&group)) {
+            Some(&k) => k,
+            None => {
+                self.group_mesh = Some(TriangleMesh::default());
+                let made = members()
+                    .filter(|m| m.kind != "sphere")
+                    .try_for_each(|m| self.shape(&m, DMat4::IDENTITY));
+                let mesh = self.group_mesh.take().unwrap_or_default();
+                made?;
+                let k = self.scene.instancing.add_group(mesh);
+                self.groups.insert(Rc::as_ptr(&group), k);
+                k
             }
         };
-        // Texture coordinates are one per position or none: meshes without them get (0, 0).
-        let before = tri.positions.len();
-        if !mesh.tex_coords.is_empty() {
-            tri.tex_coords.resize(before, Vec2::ZERO);
-        }
-        let flat = mesh.normals.is_empty();
-        let order = |t: [u32; 3]| if flip { [t[0], t[2], t[1]] } else { t };
-        if flat {
-            // Each triangle its own vertices, with its face's normal.
-            for t in &mesh.indices {
-                let t = order(*t);
-                let [a, b, c] = t.map(|k| place(mesh.positions[k as usize]));
-                let n = (b - a).cross(c - a).normalize_or_zero();
-                let base = tri.positions.len() as u32;
-                tri.positions.extend([a, b, c]);
-                tri.normals.extend([n; 3]);
-                if !mesh.tex_coords.is_empty() {
-                    tri.tex_coords
-                        .extend(t.map(|k| mesh.tex_coords[k as usize]));
-                }
-                tri.indices.push([base, base + 1, base + 2]);
-                tri.materials.push(material);
+        for sphere in members().filter(|m| m.kind == "sphere") {
+            if let Some(e) = sphere.children_tagged("emitter").next() {
+                return Err(e.plugin.at.error(
+                    "an emitter cannot stand in a shapegroup: Mitsuba does not instance emitters",
+                ));
             }
+            self.shape(&sphere, to_world)?;
+        }
+        self.scene
+            .instancing
+            .add_instance(index, to_world)
+            .map_err(|why| p.at.error(why))
+    }
+}
+
+/// Appends a mesh, moved by `to_world`, to `tri` (the scene's triangles, or a group's): every
+/// triangle gets shading normals at its vertices (its own face's where the mesh has none).
+fn add_mesh(tri: &mut TriangleMesh, mesh: Mesh, to_world: DMat4, flip: bool, material: u32) {
+    let normal_matrix = to_world.inverse().transpose();
+    let place = |p: Vec3| to_world.transform_point3(p.as_dvec3()).as_vec3();
+    let turn = |n: Vec3| {
+        let n = normal_matrix
+            .transform_vector3(n.as_dvec3())
+            .normalize_or_zero()
+            .as_vec3();
+        if flip {
+            -n
         } else {
-            let base = tri.positions.len() as u32;
-            tri.positions
-                .extend(mesh.positions.iter().map(|&p| place(p)));
-            tri.normals.extend(mesh.normals.iter().map(|&n| turn(n)));
-            tri.tex_coords.extend(mesh.tex_coords.iter().copied());
-            for t in &mesh.indices {
-                tri.indices.push(order(*t).map(|k| base + k));
-                tri.materials.push(material);
-            }
+            n
         }
-        if !tri.tex_coords.is_empty() {
-            tri.tex_coords.resize(tri.positions.len(), Vec2::ZERO);
+    };
+    // Texture coordinates are one per position or none: meshes without them get (0, 0).
+    let before = tri.positions.len();
+    if !mesh.tex_coords.is_empty() {
+        tri.tex_coords.resize(before, Vec2::ZERO);
+    }
+    let flat = mesh.normals.is_empty();
+    let order = |t: [u32; 3]| if flip { [t[0], t[2], t[1]] } else { t };
+    if flat {
+        // Each triangle its own vertices, with its face's normal.
+        for t in &mesh.indices {
+            let t = order(*t);
+            let [a, b, c] = t.map(|k| place(mesh.positions[k as usize]));
+            let n = (b - a).cross(c - a).normalize_or_zero();
+            let base = tri.positions.len() as u32;
+            tri.positions.extend([a, b, c]);
+            tri.normals.extend([n; 3]);
+            if !mesh.tex_coords.is_empty() {
+                tri.tex_coords
+                    .extend(t.map(|k| mesh.tex_coords[k as usize]));
+            }
+            tri.indices.push([base, base + 1, base + 2]);
+            tri.materials.push(material);
+        }
+    } else {
+        let base = tri.positions.len() as u32;
+        tri.positions
+            .extend(mesh.positions.iter().map(|&p| place(p)));
+        tri.normals.extend(mesh.normals.iter().map(|&n| turn(n)));
+        tri.tex_coords.extend(mesh.tex_coords.iter().copied());
+        for t in &mesh.indices {
+            tri.indices.push(order(*t).map(|k| base + k));
+            tri.materials.push(material);
         }
     }
+    if !tri.tex_coords.is_empty() {
+        tri.tex_coords.resize(tri.positions.len(), Vec2::ZERO);
+    }
+}
 
+impl Builder {
     /// The material of a shape: its BSDF (Mitsuba's default, diffuse 0.5, without one), with
     /// its area emitter's radiance, and the media inside and outside it.
     fn shape_material(&mut self, p: &Plugin) -> Result<u32, SceneError> {
