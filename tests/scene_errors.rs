@@ -480,6 +480,45 @@ fn scene_without_light_renders_black_with_one_warning() {
     }
 }
 
+/// A scene lit only by a light without area (a Mitsuba point light) is lit: the path tracer
+/// renders it with no warning that nothing emits, and the floor under the light is not black.
+#[test]
+fn a_scene_lit_by_a_point_light_alone_is_not_called_dark() {
+    let dir = common::temp_dir("point-light-only");
+    std::fs::write(
+        dir.join("point.xml"),
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+    </sensor>
+    <emitter type="point"><point name="position" x="0" y="0" z="2"/></emitter>
+    <shape type="rectangle"/>
+</scene>"#,
+    )
+    .expect("scene written");
+    let args = [
+        "--input",
+        "point.xml",
+        "--engine",
+        "path",
+        "--size",
+        "8",
+        "8",
+        "--quiet",
+        "-o",
+        "p.pfm",
+    ];
+    let out = run_render(&dir, &args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("emits light"), "{stderr}");
+    let film = trilux::film::read_pfm(&dir.join("p.pfm")).expect("image read");
+    assert!(
+        film.pixels.iter().any(|p| p.x > 0.0),
+        "the lit rectangle is black"
+    );
+}
+
 const CAMERA: &str =
     "PerspectiveCamera {\ncamera_position 0 0 5\npoint_of_interest 0 0 0\nup 0 1 0\nangle 0.5\n}\n";
 

@@ -264,7 +264,7 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
     // every engine's image of it is black or the background, which a user should be told once.
     if !scene.emits_light() {
         eprintln!(
-            "warning: {}: nothing in the scene emits light (no emitting surface, no sky): the image shows only the background (and the ray tracer's --ambient-light)",
+            "warning: {}: nothing in the scene emits light (no emitting surface, no sky, no point, spot or directional light): the image shows only the background (and the ray tracer's --ambient-light)",
             input.display()
         );
     }

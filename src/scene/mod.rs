@@ -618,10 +618,12 @@ impl Scene {
         }
     }
 
-    /// Whether anything lights the scene: a primitive whose material emits, or a sky.
+    /// Whether anything lights the scene: a primitive whose material emits, a sky, or a light
+    /// without area.
     pub fn emits_light(&self) -> bool {
         let used = self.used_materials();
         self.sky.is_some()
+            || !self.delta_lights.is_empty()
             || self
                 .materials
                 .iter()
