@@ -303,6 +303,84 @@ pub struct CameraBatch<'a> {
     pub ids: &'a [SampleId],
 }
 
+/// What `look` made of each camera sample of a whole image (`camera_samples`): images drawn
+/// from it again take no ray. A pixel's samples lie together, pixels in the order of their
+/// numbers (row-major from the bottom row).
+pub struct SampleGrid<T> {
+    width: u32,
+    height: u32,
+    spp: u32,
+    samples: Vec<T>,
+}
+
+/// `look` at the ray and closest hit of every camera sample of the whole image, traced as
+/// `render_pixels` traces them. None where the settings ask for what a grid does not draw (a
+/// part of a split render, passes until a deadline, the samples' sums kept), or where the
+/// render was superseded or interrupted before every sample was looked at.
+pub fn camera_samples<T: Send + Sync>(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &ImageSettings,
+    look: impl Fn(&Ray, Option<SurfaceHit>) -> T + Sync,
+) -> Option<SampleGrid<T>> {
+    if settings.keeps_sums() || settings.deadline.is_some() {
+        return None;
+    }
+    let spp = settings.num_antialias_samples.max(1);
+    let count = settings.width as usize * settings.height as usize * spp as usize;
+    // Each slot is set once, by the row that owns its pixel.
+    let slots: Vec<std::sync::OnceLock<T>> = (0..count).map(|_| Default::default()).collect();
+    render_pixel_batches(scene, accel, settings, "camera samples", |batch, _, _| {
+        for ((ray, hit), id) in batch.rays.iter().zip(batch.hits).zip(batch.ids) {
+            let slot = id.pixel as usize * spp as usize + id.index as usize;
+            let _ = slots[slot].set(look(ray, *hit));
+        }
+    });
+    let samples = slots
+        .into_iter()
+        .map(std::sync::OnceLock::into_inner)
+        .collect::<Option<Vec<T>>>()?;
+    Some(SampleGrid {
+        width: settings.width,
+        height: settings.height,
+        spp,
+        samples,
+    })
+}
+
+impl<T: Sync> SampleGrid<T> {
+    /// The image whose samples' radiance `radiance` gives: each pixel the mean of its finite
+    /// samples, summed as `render_pixels` sums them, so that a grid drawn with the radiance
+    /// `render_pixels` would compute from the same rays gives its pixels, bit for bit.
+    pub fn film(&self, radiance: impl Fn(&T) -> Color + Sync) -> (Film, RenderStats) {
+        let (w, h, spp) = (self.width, self.height, self.spp as usize);
+        let stats = RenderStats::default();
+        let mut film = Film::new(w, h);
+        film.pixels
+            .par_chunks_mut(w as usize)
+            .enumerate()
+            .for_each(|(row, out)| {
+                let j = h - 1 - row as u32;
+                let first = (j as usize * w as usize) * spp;
+                let samples = self.samples[first..first + out.len() * spp].chunks(spp);
+                let mut non_finite = 0;
+                for (pixel, samples) in out.iter_mut().zip(samples) {
+                    let mut sum = PixelSum::default();
+                    for l in samples.iter().map(&radiance) {
+                        if l.is_finite() {
+                            sum.add_sample(l);
+                        } else {
+                            non_finite += 1;
+                        }
+                    }
+                    *pixel = sum.mean();
+                }
+                stats.non_finite_samples.fetch_add(non_finite, Relaxed);
+            });
+        (film, stats)
+    }
+}
+
 /// `render_pixels` for engines that follow a chunk's camera samples together (the path
 /// tracer's wavefront): `radiance` writes the radiance along each of the batch's rays into
 /// `out`, in the batch's order.

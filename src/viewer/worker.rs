@@ -22,10 +22,11 @@ use std::time::Instant;
 
 use crate::accel::{Accel, AccelKind, AccelOptions};
 use crate::engines::photon::{self, PhotonMaps};
-use crate::engines::radiosity::{self, ProgressiveSolve, Solution};
+use crate::engines::radiosity::{self, ProgressiveSolve, SeenMesh, Solution};
 use crate::engines::{self, compose, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::geometry::Vec3;
+use crate::render::ImageSettings;
 use crate::scene::{Camera, Scene};
 
 /// The block sides of a progressive trace's coarse stages (one sample each), coarsest first;
@@ -97,14 +98,24 @@ pub struct Renderer {
     /// How to build the Accel again when a job turns `--two-sided` on or off.
     pub accel_kind: AccelKind,
     pub accel_options: AccelOptions,
-    /// The last radiosity solve, and what it was solved with (the settings with their
-    /// display fields and shots reset, see `solve_key`, and the quads' sides): another view
-    /// of it or another camera renders it without solving again, and more shots shoot on
-    /// from it.
-    pub radiosity: Option<((RenderSettings, bool), KeptSolve)>,
+    /// The last radiosity solve: another view of it or another camera renders it without
+    /// solving again, and more shots shoot on from it.
+    pub radiosity: Option<KeptRadiosity>,
     /// The last photon maps, and what they were traced with (see `photon_key`): another
     /// camera or display of them renders them without tracing again.
     pub photons: Option<(PhotonKey, PhotonMaps)>,
+}
+
+/// A radiosity solve the render thread keeps, and what it keeps to draw it.
+pub struct KeptRadiosity {
+    /// What it was solved with: the settings with their display fields and shots reset (see
+    /// `solve_key`), and the quads' sides.
+    key: (RenderSettings, bool),
+    solve: KeptSolve,
+    /// What the camera samples of its last image saw of its mesh, and their camera and image
+    /// settings: the next image from that camera, after a shot more or in another view, is
+    /// drawn from it without tracing (the mesh is the solve's, which shots do not change).
+    seen: Option<((Camera, ImageSettings), SeenMesh)>,
 }
 
 /// A radiosity solve the render thread keeps.
@@ -275,11 +286,12 @@ impl Renderer {
             let kept = self
                 .radiosity
                 .take()
-                .filter(|(k, kept)| *k == key && kept.reaches(iterations));
-            let mut kept =
-                match kept {
-                    Some((_, kept)) => kept,
-                    None => match pool.install(|| ProgressiveSolve::new(scene, accel, settings)) {
+                .filter(|kept| kept.key == key && kept.solve.reaches(iterations));
+            let mut kept = match kept {
+                Some(kept) => kept,
+                None => KeptRadiosity {
+                    key,
+                    solve: match pool.install(|| ProgressiveSolve::new(scene, accel, settings)) {
                         Some(solve) => KeptSolve::Shooting(Box::new(solve)),
                         None => KeptSolve::Solved(
                             iterations,
@@ -288,23 +300,33 @@ impl Renderer {
                             })?),
                         ),
                     },
-                };
-            if let KeptSolve::Shooting(solve) = &mut kept {
+                    seen: None,
+                },
+            };
+            if let KeptSolve::Shooting(solve) = &mut kept.solve {
                 pool.install(|| solve.shoot_to(scene, accel, settings));
             }
             if crate::interrupt::superseded() {
                 // Cut short. The shots a solve shooting on took stand (the next job shoots
                 // on from them); a solve in one go is not the one its settings ask for.
-                if matches!(kept, KeptSolve::Shooting(_)) {
-                    self.radiosity = Some((key, kept));
+                if matches!(kept.solve, KeptSolve::Shooting(_)) {
+                    self.radiosity = Some(kept);
                 }
                 return Ok(None);
             }
-            let solution = kept.solution();
+            let seen_key = (job.camera, settings.image());
+            if kept.seen.as_ref().is_none_or(|(k, _)| *k != seen_key) {
+                let solution = kept.solve.solution();
+                kept.seen = pool
+                    .install(|| SeenMesh::trace(scene, accel, settings, solution))
+                    .map(|seen| (seen_key, seen));
+            }
+            let solution = kept.solve.solution();
+            let seen = kept.seen.as_ref().map(|(_, seen)| seen);
             let (film, stats) =
-                pool.install(|| radiosity::render_solved(scene, accel, settings, solution));
+                pool.install(|| radiosity::render_solved(scene, accel, settings, solution, seen));
             let rendered = solution.rendered(film, stats, settings)?;
-            self.radiosity = Some((key, kept));
+            self.radiosity = Some(kept);
             return Ok((!crate::interrupt::superseded()).then_some(rendered));
         }
         if job.engine == EngineKind::Photon {

@@ -18,7 +18,7 @@ pub use settings::{Display, RadiositySettings, SolverKind};
 
 use std::sync::atomic::Ordering::Relaxed;
 
-pub use display::render_solution;
+pub use display::{render_seen, render_solution, SeenMesh};
 use patch::Patch;
 use solver::{FormFactorSampler, PatchLight, RadiositySolver, SolveLimits, Step, Stop};
 
@@ -607,10 +607,15 @@ impl Solution {
         field: &PatchField,
     ) -> Option<Color> {
         let (k, u, v) = self.locate(scene, hit, toward)?;
+        Some(self.value_at(field, (k, u, v)))
+    }
+
+    /// The value of `field` at the parameters (u, v) of patch k (as `locate` finds them).
+    pub fn value_at(&self, field: &PatchField, (k, u, v): (usize, f32, f32)) -> Color {
         if field.per_element {
-            return Some(field.values[self.state.leaf_at(k, u, v).0]);
+            return field.values[self.state.leaf_at(k, u, v).0];
         }
-        Some(match &field.corners {
+        match &field.corners {
             Some(c) => {
                 let c = &c[k];
                 c[0] * ((1.0 - u) * (1.0 - v))
@@ -619,7 +624,7 @@ impl Solution {
                     + c[3] * ((1.0 - u) * v)
             }
             None => field.values[k],
-        })
+        }
     }
 
     /// Values at the four corners of every patch for smooth display: each corner takes the
@@ -709,19 +714,24 @@ pub fn render(
     settings: &RenderSettings,
 ) -> Result<(Film, RenderStats, Solution), String> {
     let solution = solve_with_progress(scene, accel, settings)?;
-    let (film, stats) = render_solved(scene, accel, settings, &solution);
+    let (film, stats) = render_solved(scene, accel, settings, &solution, None);
     Ok((film, stats, solution))
 }
 
 /// The image of a solution already solved, as the engine renders it after its solve (the
-/// viewer keeps a solution between images of it).
+/// viewer keeps a solution between images of it): drawn from `seen` when given (what the
+/// image's camera samples see of the solution's mesh, traced before), else traced.
 pub fn render_solved(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
     solution: &Solution,
+    seen: Option<&SeenMesh>,
 ) -> (Film, RenderStats) {
-    let (film, stats) = render_solution(scene, accel, settings, solution);
+    let (film, stats) = match seen {
+        Some(seen) => render_seen(scene, accel, settings, solution, seen),
+        None => render_solution(scene, accel, settings, solution),
+    };
     stats.form_factor_rays.store(solution.rays, Relaxed);
     (film, stats)
 }
