@@ -470,7 +470,7 @@ fn patch_through(solution: &Solution, o: [f64; 3], d: [f64; 3], eps: f64) -> Thr
 /// for both passes it; this one does not.)
 #[test]
 fn radiosity_images_show_each_patchs_value() {
-    use trilux::engines::radiosity::{render_seen, render_solution, Display, SeenMesh};
+    use trilux::engines::radiosity::{render_solution, Display, Samples};
     let scene = Scene::load(&common::own_scene_dir().join("l.obj")).expect("loads");
     let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
     let mut settings = RenderSettings {
@@ -507,13 +507,33 @@ fn radiosity_images_show_each_patchs_value() {
             20,
         ),
     ];
-    // What the camera samples see of the mesh, traced once: each mode's image drawn from it
-    // is the one rendered (and so passes the same checks).
-    let seen = SeenMesh::trace(&scene, accel.as_ref(), &settings, &solution).expect("traced");
+    // What the camera samples see of the mesh, kept once: each mode's image drawn from it is
+    // the one rendered (and so passes the same checks).
+    let mut seen = None;
+    render_solution(
+        &scene,
+        accel.as_ref(),
+        &settings,
+        &solution,
+        Samples::Keep(&mut seen),
+    );
+    let seen = seen.expect("kept");
     for (display, value, least_distinct) in modes {
         settings.radiosity.display = display;
-        let (film, _) = render_solution(&scene, accel.as_ref(), &settings, &solution);
-        let (drawn, _) = render_seen(&scene, accel.as_ref(), &settings, &solution, &seen);
+        let (film, _) = render_solution(
+            &scene,
+            accel.as_ref(),
+            &settings,
+            &solution,
+            Samples::Traced,
+        );
+        let (drawn, _) = render_solution(
+            &scene,
+            accel.as_ref(),
+            &settings,
+            &solution,
+            Samples::Kept(&seen),
+        );
         assert!(
             bits(&drawn.pixels) == bits(&film.pixels),
             "{display:?}: the image drawn from the samples kept differs"
@@ -568,7 +588,7 @@ fn radiosity_images_show_each_patchs_value() {
 /// samples averaged as the pixel loop averages them.
 #[test]
 fn an_image_drawn_from_the_samples_kept_is_the_rendered_image() {
-    use trilux::engines::radiosity::{render_seen, render_solution, Display, SeenMesh};
+    use trilux::engines::radiosity::{render_solution, Display, Samples};
     let scene = common::own_scene("cornell_box_fog.obj");
     assert!(scene.fog.is_some(), "the scene has a fog");
     let accel = accel_for(&scene);
@@ -586,7 +606,16 @@ fn an_image_drawn_from_the_samples_kept_is_the_rendered_image() {
         ..RenderSettings::default()
     };
     let solution = Solution::solve(&scene, accel.as_ref(), &settings, |_| {});
-    let seen = SeenMesh::trace(&scene, accel.as_ref(), &settings, &solution).expect("traced");
+    let render = |settings: &RenderSettings, samples: Samples<'_>| {
+        render_solution(&scene, accel.as_ref(), settings, &solution, samples).0
+    };
+    let mut seen = None;
+    let keeping = render(&settings, Samples::Keep(&mut seen));
+    let seen = seen.expect("kept");
+    assert!(
+        bits(&keeping.pixels) == bits(&render(&settings, Samples::Traced).pixels),
+        "the image that keeps its samples differs"
+    );
     for (display, interpolate, wireframe) in [
         (Display::Radiance, false, false),
         (Display::Radiance, true, false),
@@ -595,8 +624,8 @@ fn an_image_drawn_from_the_samples_kept_is_the_rendered_image() {
     ] {
         let r = &mut settings.radiosity;
         (r.display, r.interpolate, r.wireframe) = (display, interpolate, wireframe);
-        let (film, _) = render_solution(&scene, accel.as_ref(), &settings, &solution);
-        let (drawn, _) = render_seen(&scene, accel.as_ref(), &settings, &solution, &seen);
+        let film = render(&settings, Samples::Traced);
+        let drawn = render(&settings, Samples::Kept(&seen));
         let what = format!("{display:?}, interpolated {interpolate}, outlined {wireframe}");
         assert!(
             bits(&drawn.pixels) == bits(&film.pixels),
@@ -622,7 +651,7 @@ fn bits(colours: &[trilux::scene::Color]) -> Vec<[u32; 3]> {
 /// boxes (visibility rays, the row cache full at once) and the subdivided Cornell box.
 #[test]
 fn a_solve_shot_on_a_few_shots_at_a_time_equals_one_solve_of_all_its_shots() {
-    use trilux::engines::radiosity::{self, ProgressiveSolve};
+    use trilux::engines::radiosity::{self, ProgressiveSolve, Samples};
     let cases = [
         ("gen-room 300", trilux::generate::room(300), 0),
         ("cornell_box.obj", common::own_scene("cornell_box.obj"), 1),
@@ -657,14 +686,15 @@ fn a_solve_shot_on_a_few_shots_at_a_time_equals_one_solve_of_all_its_shots() {
                 shots += step;
                 solve.shoot_to(&scene, accel.as_ref(), &settings(shots));
                 assert_eq!(solve.shots(), shots, "{name}");
-                seen = seen.or_else(|| {
-                    radiosity::SeenMesh::trace(
+                if seen.is_none() {
+                    radiosity::render_solved(
                         &scene,
                         accel.as_ref(),
                         &settings(shots),
                         solve.solution(),
-                    )
-                });
+                        Samples::Keep(&mut seen),
+                    );
+                }
             }
             let kept = solve.solution();
             let what = format!("{name}, shot on in steps of {steps:?}");
@@ -680,14 +710,20 @@ fn a_solve_shot_on_a_few_shots_at_a_time_equals_one_solve_of_all_its_shots() {
             assert_eq!(bits(&[kept.ambient]), bits(&[solved.ambient]), "{what}");
             assert_eq!(a.residual.to_bits(), b.residual.to_bits(), "{what}");
             assert_eq!(kept.summary(&offline), solved.summary(&offline), "{what}");
-            let (image, _) = radiosity::render_solved(&scene, accel.as_ref(), &offline, kept, None);
+            let (image, _) =
+                radiosity::render_solved(&scene, accel.as_ref(), &offline, kept, Samples::Traced);
             assert!(
                 bits(&image.pixels) == bits(&film.pixels),
                 "{what}: the image differs"
             );
-            let seen = seen.as_ref().expect("the samples are traced");
-            let (image, stats) =
-                radiosity::render_solved(&scene, accel.as_ref(), &offline, kept, Some(seen));
+            let seen = seen.as_ref().expect("the samples are kept");
+            let (image, stats) = radiosity::render_solved(
+                &scene,
+                accel.as_ref(),
+                &offline,
+                kept,
+                Samples::Kept(seen),
+            );
             assert!(
                 bits(&image.pixels) == bits(&film.pixels),
                 "{what}: the image drawn from the samples kept differs"

@@ -303,7 +303,7 @@ pub struct CameraBatch<'a> {
     pub ids: &'a [SampleId],
 }
 
-/// What `look` made of each camera sample of a whole image (`camera_samples`): images drawn
+/// What each camera sample of a whole image saw (`render_keeping_samples`): images drawn
 /// from it again take no ray. A pixel's samples lie together, pixels in the order of their
 /// numbers (row-major from the bottom row).
 pub struct SampleGrid<T> {
@@ -313,39 +313,52 @@ pub struct SampleGrid<T> {
     samples: Vec<T>,
 }
 
-/// `look` at the ray and closest hit of every camera sample of the whole image, traced as
-/// `render_pixels` traces them. None where the settings ask for what a grid does not draw (a
-/// part of a split render, passes until a deadline, the samples' sums kept), or where the
-/// render was superseded or interrupted before every sample was looked at.
-pub fn camera_samples<T: Send + Sync>(
+/// `render_pixels` with each sample's radiance found in two steps, `look` at its ray and
+/// closest hit, then `radiance` of what it saw, keeping what every sample saw: the image and
+/// that grid, to draw images from again without a camera ray. No grid where the settings
+/// ask for what a grid does not draw (a part of a split render, passes until a deadline, the
+/// samples' sums kept), or where the render was superseded or interrupted before every
+/// sample was taken.
+pub fn render_keeping_samples<T: Send + Sync>(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &ImageSettings,
+    label: &str,
     look: impl Fn(&Ray, Option<SurfaceHit>) -> T + Sync,
-) -> Option<SampleGrid<T>> {
-    if settings.keeps_sums() || settings.deadline.is_some() {
-        return None;
-    }
+    radiance: impl Fn(&T) -> Color + Sync,
+) -> (Film, RenderStats, Option<SampleGrid<T>>) {
+    let keep = !settings.keeps_sums() && settings.deadline.is_none();
     let spp = settings.num_antialias_samples.max(1);
     let count = settings.width as usize * settings.height as usize * spp as usize;
     // Each slot is set once, by the row that owns its pixel.
-    let slots: Vec<std::sync::OnceLock<T>> = (0..count).map(|_| Default::default()).collect();
-    render_pixel_batches(scene, accel, settings, "camera samples", |batch, _, _| {
-        for ((ray, hit), id) in batch.rays.iter().zip(batch.hits).zip(batch.ids) {
-            let slot = id.pixel as usize * spp as usize + id.index as usize;
-            let _ = slots[slot].set(look(ray, *hit));
+    let slots: Vec<std::sync::OnceLock<T>> = (0..if keep { count } else { 0 })
+        .map(|_| Default::default())
+        .collect();
+    let (film, stats) = render_pixel_batches(scene, accel, settings, label, |batch, _, out| {
+        for (k, l) in out.iter_mut().enumerate() {
+            let seen = look(&batch.rays[k], batch.hits[k]);
+            *l = radiance(&seen);
+            if keep {
+                let id = batch.ids[k];
+                let _ = slots[id.pixel as usize * spp as usize + id.index as usize].set(seen);
+            }
         }
     });
-    let samples = slots
-        .into_iter()
-        .map(std::sync::OnceLock::into_inner)
-        .collect::<Option<Vec<T>>>()?;
-    Some(SampleGrid {
+    let samples = keep
+        .then(|| {
+            slots
+                .into_iter()
+                .map(std::sync::OnceLock::into_inner)
+                .collect::<Option<Vec<T>>>()
+        })
+        .flatten();
+    let grid = samples.map(|samples| SampleGrid {
         width: settings.width,
         height: settings.height,
         spp,
         samples,
-    })
+    });
+    (film, stats, grid)
 }
 
 impl<T: Sync> SampleGrid<T> {

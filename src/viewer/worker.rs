@@ -22,7 +22,7 @@ use std::time::Instant;
 
 use crate::accel::{Accel, AccelKind, AccelOptions};
 use crate::engines::photon::{self, PhotonMaps};
-use crate::engines::radiosity::{self, ProgressiveSolve, SeenMesh, Solution};
+use crate::engines::radiosity::{self, ProgressiveSolve, Samples, SeenMesh, Solution};
 use crate::engines::{self, compose, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::geometry::Vec3;
@@ -314,17 +314,20 @@ impl Renderer {
                 }
                 return Ok(None);
             }
-            let seen_key = (job.camera, settings.image());
-            if kept.seen.as_ref().is_none_or(|(k, _)| *k != seen_key) {
-                let solution = kept.solve.solution();
-                kept.seen = pool
-                    .install(|| SeenMesh::trace(scene, accel, settings, solution))
-                    .map(|seen| (seen_key, seen));
-            }
             let solution = kept.solve.solution();
-            let seen = kept.seen.as_ref().map(|(_, seen)| seen);
-            let (film, stats) =
-                pool.install(|| radiosity::render_solved(scene, accel, settings, solution, seen));
+            let draw = |samples| {
+                pool.install(|| radiosity::render_solved(scene, accel, settings, solution, samples))
+            };
+            let seen_key = (job.camera, settings.image());
+            let (film, stats) = match &kept.seen {
+                Some((key, seen)) if *key == seen_key => draw(Samples::Kept(seen)),
+                _ => {
+                    let mut seen = None;
+                    let drawn = draw(Samples::Keep(&mut seen));
+                    kept.seen = seen.map(|seen| (seen_key, seen));
+                    drawn
+                }
+            };
             let rendered = solution.rendered(film, stats, settings)?;
             self.radiosity = Some(kept);
             return Ok((!crate::interrupt::superseded()).then_some(rendered));

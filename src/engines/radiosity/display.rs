@@ -12,7 +12,7 @@ use crate::engines::engine::RenderSettings;
 use crate::engines::radiosity::mesh::NONE;
 use crate::film::Film;
 use crate::geometry::{Ray, Vec3};
-use crate::render::{camera_samples, render_pixels, RenderStats, SampleGrid};
+use crate::render::{render_keeping_samples, render_pixels, RenderStats, SampleGrid};
 use crate::scene::{Camera, Color, Scene, SurfaceHit};
 
 const WIRE: Color = Vec3::ZERO;
@@ -22,71 +22,61 @@ const SOURCE_OUTLINE: Color = Vec3 {
     z: 0.0,
 };
 
-/// Renders a solution in the mode `settings.radiosity.display`.
+/// At most this many camera samples are kept (`SeenMesh`, about 36 bytes each): a
+/// 1024×1024 image at 2 samples a pixel.
+const MAX_KEPT_SAMPLES: usize = 1 << 21;
+
+/// What the camera samples of an image saw of a solution's mesh. The viewer keeps it between
+/// images of one solve from one camera: each shot more draws the image again from it
+/// (`Samples::Kept`) without a camera ray.
+pub struct SeenMesh(SampleGrid<Seen>);
+
+/// Where the camera samples of a solution's image come from.
+pub enum Samples<'a> {
+    /// Traced.
+    Traced,
+    /// Traced, and what they saw of the mesh put in `keep` (None where it is not kept: see
+    /// `render::render_keeping_samples`, or more than `MAX_KEPT_SAMPLES` samples).
+    Keep(&'a mut Option<SeenMesh>),
+    /// What the image's samples saw, kept from an image of the same scene, camera, image
+    /// settings and mesh: drawn with no camera ray, the same pixels bit for bit.
+    Kept(&'a SeenMesh),
+}
+
+/// Renders a solution in the mode `settings.radiosity.display`, its camera samples from
+/// `samples`.
 pub fn render_solution(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
     solution: &Solution,
+    samples: Samples,
 ) -> (Film, RenderStats) {
-    draw(scene, accel, settings, solution, |field| {
-        render_pixels(
-            scene,
-            accel,
-            &settings.image(),
-            "display",
-            |ray, hit, _rng, _id, _counts| {
-                Seen::of(scene, solution, ray, hit).radiance(solution, field)
-            },
-        )
-    })
-}
-
-/// At most this many camera samples are kept (`SeenMesh`, about 36 bytes each): a
-/// 1024×1024 image at 2 samples a pixel.
-const MAX_KEPT_SAMPLES: usize = 1 << 21;
-
-/// What the camera samples of an image see of a solution's mesh. The viewer keeps it between
-/// images of one solve from one camera: each shot more draws the image again from it
-/// (`render_seen`) without tracing a camera ray.
-pub struct SeenMesh(SampleGrid<Seen>);
-
-impl SeenMesh {
-    /// What the camera samples of `settings`' image see of `solution`'s mesh from the
-    /// scene's camera. None where `render::camera_samples` gives none (a part of an image, a
-    /// deadline, the samples' sums kept, a render superseded) or the samples are more than
-    /// `MAX_KEPT_SAMPLES`.
-    pub fn trace(
-        scene: &Scene,
-        accel: &dyn Accel,
-        settings: &RenderSettings,
-        solution: &Solution,
-    ) -> Option<SeenMesh> {
-        let image = settings.image();
-        let samples =
-            image.width as usize * image.height as usize * image.num_antialias_samples as usize;
-        if samples > MAX_KEPT_SAMPLES {
-            return None;
+    let image = settings.image();
+    let look = |ray: &Ray, hit| Seen::of(scene, solution, ray, hit);
+    draw(scene, accel, settings, solution, |field| match samples {
+        Samples::Kept(seen) => seen.0.film(|s| s.radiance(solution, field)),
+        Samples::Keep(keep)
+            if image.width as usize
+                * image.height as usize
+                * image.num_antialias_samples as usize
+                <= MAX_KEPT_SAMPLES =>
+        {
+            let (film, stats, grid) =
+                render_keeping_samples(scene, accel, &image, "display", look, |s| {
+                    s.radiance(solution, field)
+                });
+            *keep = grid.map(SeenMesh);
+            (film, stats)
         }
-        camera_samples(scene, accel, &image, |ray, hit| {
-            Seen::of(scene, solution, ray, hit)
-        })
-        .map(SeenMesh)
-    }
-}
-
-/// The image `render_solution` renders, drawn from what its camera samples see (`seen`,
-/// traced with the same scene, camera, image settings and mesh): the same pixels, bit for
-/// bit, with no camera ray.
-pub fn render_seen(
-    scene: &Scene,
-    accel: &dyn Accel,
-    settings: &RenderSettings,
-    solution: &Solution,
-    seen: &SeenMesh,
-) -> (Film, RenderStats) {
-    draw(scene, accel, settings, solution, |field| {
-        seen.0.film(|s| s.radiance(solution, field))
+        samples => {
+            if let Samples::Keep(keep) = samples {
+                *keep = None;
+            }
+            render_pixels(scene, accel, &image, "display", |ray, hit, _, _, _| {
+                look(ray, hit).radiance(solution, field)
+            })
+        }
     })
 }
 

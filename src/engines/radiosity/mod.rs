@@ -18,7 +18,7 @@ pub use settings::{Display, RadiositySettings, SolverKind};
 
 use std::sync::atomic::Ordering::Relaxed;
 
-pub use display::{render_seen, render_solution, SeenMesh};
+pub use display::{render_solution, Samples, SeenMesh};
 use patch::Patch;
 use solver::{FormFactorSampler, PatchLight, RadiositySolver, SolveLimits, Step, Stop};
 
@@ -714,24 +714,21 @@ pub fn render(
     settings: &RenderSettings,
 ) -> Result<(Film, RenderStats, Solution), String> {
     let solution = solve_with_progress(scene, accel, settings)?;
-    let (film, stats) = render_solved(scene, accel, settings, &solution, None);
+    let (film, stats) = render_solved(scene, accel, settings, &solution, Samples::Traced);
     Ok((film, stats, solution))
 }
 
 /// The image of a solution already solved, as the engine renders it after its solve (the
-/// viewer keeps a solution between images of it): drawn from `seen` when given (what the
-/// image's camera samples see of the solution's mesh, traced before), else traced.
+/// viewer keeps a solution between images of it, and what their camera samples saw: see
+/// `Samples`).
 pub fn render_solved(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
     solution: &Solution,
-    seen: Option<&SeenMesh>,
+    samples: Samples,
 ) -> (Film, RenderStats) {
-    let (film, stats) = match seen {
-        Some(seen) => render_seen(scene, accel, settings, solution, seen),
-        None => render_solution(scene, accel, settings, solution),
-    };
+    let (film, stats) = render_solution(scene, accel, settings, solution, samples);
     stats.form_factor_rays.store(solution.rays, Relaxed);
     (film, stats)
 }
