@@ -377,6 +377,21 @@ impl<T: Sync> SampleGrid<T> {
                 let first = (j as usize * w as usize) * spp;
                 let samples = self.samples[first..first + out.len() * spp].chunks(spp);
                 let mut non_finite = 0;
+                if spp == 1 {
+                    // One sample a pixel: its mean is the sample itself (-0 made +0, as the
+                    // sum from +0 makes it), or black where it is not finite.
+                    for (pixel, sample) in out.iter_mut().zip(&self.samples[first..]) {
+                        let l = radiance(sample);
+                        *pixel = if l.is_finite() {
+                            l + Color::ZERO
+                        } else {
+                            non_finite += 1;
+                            Color::ZERO
+                        };
+                    }
+                    stats.non_finite_samples.fetch_add(non_finite, Relaxed);
+                    return;
+                }
                 for (pixel, samples) in out.iter_mut().zip(samples) {
                     let mut sum = PixelSum::default();
                     for l in samples.iter().map(&radiance) {
