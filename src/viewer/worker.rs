@@ -7,7 +7,9 @@
 //! What a pre-pass makes is kept between jobs while what it reads stays the same: the radiosity
 //! solve (more shots shoot on from it, a solve cut short by a newer job keeping the shots it
 //! took) and the photon maps. The image drawn from them is the one the offline command
-//! renders: a solve shot on is, after n shots, the solve of n shots in one go.
+//! renders: a solve shot on is, after n shots, the solve of n shots in one go. With the solve
+//! goes what the camera samples of its last image saw of its mesh: the next image from the
+//! same camera (a shot more, another mode) looks the solution up there and traces no ray.
 //!
 //! A progressive trace ('r') renders first with one sample per 16×16 block of pixels (the
 //! image at a sixteenth of the resolution, each pixel drawn as its block), then 8×8, 4×4 and
