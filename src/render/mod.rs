@@ -375,12 +375,12 @@ impl<T: Sync> SampleGrid<T> {
             .for_each(|(row, out)| {
                 let j = h - 1 - row as u32;
                 let first = (j as usize * w as usize) * spp;
-                let samples = self.samples[first..first + out.len() * spp].chunks(spp);
+                let samples = &self.samples[first..first + out.len() * spp];
                 let mut non_finite = 0;
                 if spp == 1 {
                     // One sample a pixel: its mean is the sample itself (-0 made +0, as the
                     // sum from +0 makes it), or black where it is not finite.
-                    for (pixel, sample) in out.iter_mut().zip(&self.samples[first..]) {
+                    for (pixel, sample) in out.iter_mut().zip(samples) {
                         let l = radiance(sample);
                         *pixel = if l.is_finite() {
                             l + Color::ZERO
@@ -392,7 +392,7 @@ impl<T: Sync> SampleGrid<T> {
                     stats.non_finite_samples.fetch_add(non_finite, Relaxed);
                     return;
                 }
-                for (pixel, samples) in out.iter_mut().zip(samples) {
+                for (pixel, samples) in out.iter_mut().zip(samples.chunks(spp)) {
                     let mut sum = PixelSum::default();
                     for l in samples.iter().map(&radiance) {
                         if l.is_finite() {

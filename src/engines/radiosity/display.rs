@@ -22,7 +22,7 @@ const SOURCE_OUTLINE: Color = Vec3 {
     z: 0.0,
 };
 
-/// At most this many camera samples are kept (`SeenMesh`, about 36 bytes each): a
+/// At most this many camera samples are kept (`SeenMesh`, 32 bytes each, 64 MiB in all): a
 /// 1024×1024 image at 2 samples a pixel.
 const MAX_KEPT_SAMPLES: usize = 1 << 21;
 
