@@ -283,56 +283,10 @@ impl Renderer {
         // A radiosity image of a solve kept from the last one (no time limit: a deadline
         // makes the solve depend on the clock).
         if job.engine == EngineKind::Radiosity && settings.deadline.is_none() {
-            let iterations = settings.radiosity.iterations;
-            let key = (solve_key(settings), job.two_sided);
-            let kept = self
-                .radiosity
-                .take()
-                .filter(|kept| kept.key == key && kept.solve.reaches(iterations));
-            let mut kept = match kept {
-                Some(kept) => kept,
-                None => KeptRadiosity {
-                    key,
-                    solve: match pool.install(|| ProgressiveSolve::new(scene, accel, settings)) {
-                        Some(solve) => KeptSolve::Shooting(Box::new(solve)),
-                        None => KeptSolve::Solved(
-                            iterations,
-                            Box::new(pool.install(|| {
-                                radiosity::solve_with_progress(scene, accel, settings)
-                            })?),
-                        ),
-                    },
-                    seen: None,
-                },
-            };
-            if let KeptSolve::Shooting(solve) = &mut kept.solve {
-                pool.install(|| solve.shoot_to(scene, accel, settings));
-            }
-            if crate::interrupt::superseded() {
-                // Cut short. The shots a solve shooting on took stand (the next job shoots
-                // on from them); a solve in one go is not the one its settings ask for.
-                if matches!(kept.solve, KeptSolve::Shooting(_)) {
-                    self.radiosity = Some(kept);
-                }
-                return Ok(None);
-            }
-            let solution = kept.solve.solution();
-            let draw = |samples| {
-                pool.install(|| radiosity::render_solved(scene, accel, settings, solution, samples))
-            };
-            let seen_key = (job.camera, settings.image());
-            let (film, stats) = match &kept.seen {
-                Some((key, seen)) if *key == seen_key => draw(Samples::Kept(seen)),
-                _ => {
-                    let mut seen = None;
-                    let drawn = draw(Samples::Keep(&mut seen));
-                    kept.seen = seen.map(|seen| (seen_key, seen));
-                    drawn
-                }
-            };
-            let rendered = solution.rendered(film, stats, settings)?;
-            self.radiosity = Some(kept);
-            return Ok((!crate::interrupt::superseded()).then_some(rendered));
+            // One call into the pool for the shots and the image: a press costs a millisecond
+            // or two, of which each hand-over between threads would take its share.
+            let kept = &mut self.radiosity;
+            return pool.install(|| radiosity_image(kept, scene, accel, job, settings));
         }
         if job.engine == EngineKind::Photon {
             let key = (
@@ -357,6 +311,63 @@ impl Renderer {
             pool.install(|| engines::engine(job.engine).render(scene, accel, settings))?;
         Ok((!crate::interrupt::superseded()).then_some(rendered))
     }
+}
+
+/// A radiosity image of the solve `kept_solve` holds, shot on to the shots `settings` ask
+/// for, or of a new solve where it cannot be; None if the job was superseded. Called in the
+/// render thread's pool.
+fn radiosity_image(
+    kept_solve: &mut Option<KeptRadiosity>,
+    scene: &Scene,
+    accel: &dyn Accel,
+    job: &Job,
+    settings: &RenderSettings,
+) -> Result<Option<Rendered>, String> {
+    let iterations = settings.radiosity.iterations;
+    let key = (solve_key(settings), job.two_sided);
+    let kept = kept_solve
+        .take()
+        .filter(|kept| kept.key == key && kept.solve.reaches(iterations));
+    let mut kept = match kept {
+        Some(kept) => kept,
+        None => KeptRadiosity {
+            key,
+            solve: match ProgressiveSolve::new(scene, accel, settings) {
+                Some(solve) => KeptSolve::Shooting(Box::new(solve)),
+                None => KeptSolve::Solved(
+                    iterations,
+                    Box::new(radiosity::solve_with_progress(scene, accel, settings)?),
+                ),
+            },
+            seen: None,
+        },
+    };
+    if let KeptSolve::Shooting(solve) = &mut kept.solve {
+        solve.shoot_to(scene, accel, settings);
+    }
+    if crate::interrupt::superseded() {
+        // Cut short. The shots a solve shooting on took stand (the next job shoots
+        // on from them); a solve in one go is not the one its settings ask for.
+        if matches!(kept.solve, KeptSolve::Shooting(_)) {
+            *kept_solve = Some(kept);
+        }
+        return Ok(None);
+    }
+    let solution = kept.solve.solution();
+    let draw = |samples| radiosity::render_solved(scene, accel, settings, solution, samples);
+    let seen_key = (job.camera, settings.image());
+    let (film, stats) = match &kept.seen {
+        Some((key, seen)) if *key == seen_key => draw(Samples::Kept(seen)),
+        _ => {
+            let mut seen = None;
+            let drawn = draw(Samples::Keep(&mut seen));
+            kept.seen = seen.map(|seen| (seen_key, seen));
+            drawn
+        }
+    };
+    let rendered = solution.rendered(film, stats, settings)?;
+    *kept_solve = Some(kept);
+    Ok((!crate::interrupt::superseded()).then_some(rendered))
 }
 
 /// The settings but those of the image (samples, lens, the time limit) and whether progress
