@@ -470,7 +470,7 @@ fn patch_through(solution: &Solution, o: [f64; 3], d: [f64; 3], eps: f64) -> Thr
 /// for both passes it; this one does not.)
 #[test]
 fn radiosity_images_show_each_patchs_value() {
-    use trilux::engines::radiosity::{render_solution, Display};
+    use trilux::engines::radiosity::{render_solution, Display, Samples};
     let scene = Scene::load(&common::own_scene_dir().join("l.obj")).expect("loads");
     let accel = accel::build(&scene, backends()[0], &AccelOptions::default()).expect("builds");
     let mut settings = RenderSettings {
@@ -507,9 +507,37 @@ fn radiosity_images_show_each_patchs_value() {
             20,
         ),
     ];
+    // What the camera samples see of the mesh, kept once: each mode's image drawn from it is
+    // the one rendered (and so passes the same checks).
+    let mut seen = None;
+    render_solution(
+        &scene,
+        accel.as_ref(),
+        &settings,
+        &solution,
+        Samples::Keep(&mut seen),
+    );
+    let seen = seen.expect("kept");
     for (display, value, least_distinct) in modes {
         settings.radiosity.display = display;
-        let (film, _) = render_solution(&scene, accel.as_ref(), &settings, &solution);
+        let (film, _) = render_solution(
+            &scene,
+            accel.as_ref(),
+            &settings,
+            &solution,
+            Samples::Traced,
+        );
+        let (drawn, _) = render_solution(
+            &scene,
+            accel.as_ref(),
+            &settings,
+            &solution,
+            Samples::Kept(&seen),
+        );
+        assert!(
+            bits(&drawn.pixels) == bits(&film.pixels),
+            "{display:?}: the image drawn from the samples kept differs"
+        );
         let (mut compared, mut distinct) = (0usize, Vec::<[u32; 3]>::new());
         for row in 0..h {
             let j = h - 1 - row;
@@ -554,6 +582,61 @@ fn radiosity_images_show_each_patchs_value() {
     }
 }
 
+/// The image drawn from what the camera samples see (`SeenMesh`, as the viewer keeps it) is
+/// the rendered one, bit for bit, where the samples are more than one a pixel, through a
+/// lens, through a fog, interpolated and outlined: the Cornell box in fog, every pixel's four
+/// samples averaged as the pixel loop averages them.
+#[test]
+fn an_image_drawn_from_the_samples_kept_is_the_rendered_image() {
+    use trilux::engines::radiosity::{render_solution, Display, Samples};
+    let scene = common::own_scene("cornell_box_fog.obj");
+    assert!(scene.fog.is_some(), "the scene has a fog");
+    let accel = accel_for(&scene);
+    let mut settings = RenderSettings {
+        width: 40,
+        height: 32,
+        num_antialias_samples: 4,
+        aperture: 0.05,
+        quiet: true,
+        radiosity: RadiositySettings {
+            subdivide: 1,
+            iterations: Some(30),
+            ..Default::default()
+        },
+        ..RenderSettings::default()
+    };
+    let solution = Solution::solve(&scene, accel.as_ref(), &settings, |_| {});
+    let render = |settings: &RenderSettings, samples: Samples<'_>| {
+        render_solution(&scene, accel.as_ref(), settings, &solution, samples).0
+    };
+    let mut seen = None;
+    let keeping = render(&settings, Samples::Keep(&mut seen));
+    let seen = seen.expect("kept");
+    assert!(
+        bits(&keeping.pixels) == bits(&render(&settings, Samples::Traced).pixels),
+        "the image that keeps its samples differs"
+    );
+    for (display, interpolate, wireframe) in [
+        (Display::Radiance, false, false),
+        (Display::Radiance, true, false),
+        (Display::Absorbed, false, true),
+        (Display::Materials, true, true),
+    ] {
+        let r = &mut settings.radiosity;
+        (r.display, r.interpolate, r.wireframe) = (display, interpolate, wireframe);
+        let film = render(&settings, Samples::Traced);
+        let drawn = render(&settings, Samples::Kept(&seen));
+        let what = format!("{display:?}, interpolated {interpolate}, outlined {wireframe}");
+        assert!(
+            bits(&drawn.pixels) == bits(&film.pixels),
+            "{what}: the image drawn from the samples kept differs"
+        );
+        let distinct: std::collections::HashSet<[u32; 3]> =
+            bits(&film.pixels).into_iter().collect();
+        assert!(distinct.len() > 50, "{what}: {} values", distinct.len());
+    }
+}
+
 /// Each colour's bits, to compare solutions bit for bit.
 fn bits(colours: &[trilux::scene::Color]) -> Vec<[u32; 3]> {
     colours
@@ -568,7 +651,7 @@ fn bits(colours: &[trilux::scene::Color]) -> Vec<[u32; 3]> {
 /// boxes (visibility rays, the row cache full at once) and the subdivided Cornell box.
 #[test]
 fn a_solve_shot_on_a_few_shots_at_a_time_equals_one_solve_of_all_its_shots() {
-    use trilux::engines::radiosity::{self, ProgressiveSolve};
+    use trilux::engines::radiosity::{self, ProgressiveSolve, Samples};
     let cases = [
         ("gen-room 300", trilux::generate::room(300), 0),
         ("cornell_box.obj", common::own_scene("cornell_box.obj"), 1),
@@ -596,10 +679,22 @@ fn a_solve_shot_on_a_few_shots_at_a_time_equals_one_solve_of_all_its_shots() {
             let mut solve =
                 ProgressiveSolve::new(&scene, accel.as_ref(), &settings(0)).expect("progressive");
             let mut shots = 0;
+            // What the camera samples see of the mesh, traced after the first step, as the
+            // viewer keeps it while more shots are taken.
+            let mut seen = None;
             for step in &steps {
                 shots += step;
                 solve.shoot_to(&scene, accel.as_ref(), &settings(shots));
                 assert_eq!(solve.shots(), shots, "{name}");
+                if seen.is_none() {
+                    radiosity::render_solved(
+                        &scene,
+                        accel.as_ref(),
+                        &settings(shots),
+                        solve.solution(),
+                        Samples::Keep(&mut seen),
+                    );
+                }
             }
             let kept = solve.solution();
             let what = format!("{name}, shot on in steps of {steps:?}");
@@ -615,10 +710,28 @@ fn a_solve_shot_on_a_few_shots_at_a_time_equals_one_solve_of_all_its_shots() {
             assert_eq!(bits(&[kept.ambient]), bits(&[solved.ambient]), "{what}");
             assert_eq!(a.residual.to_bits(), b.residual.to_bits(), "{what}");
             assert_eq!(kept.summary(&offline), solved.summary(&offline), "{what}");
-            let (image, _) = radiosity::render_solved(&scene, accel.as_ref(), &offline, kept);
+            let (image, _) =
+                radiosity::render_solved(&scene, accel.as_ref(), &offline, kept, Samples::Traced);
             assert!(
                 bits(&image.pixels) == bits(&film.pixels),
                 "{what}: the image differs"
+            );
+            let seen = seen.as_ref().expect("the samples are kept");
+            let (image, stats) = radiosity::render_solved(
+                &scene,
+                accel.as_ref(),
+                &offline,
+                kept,
+                Samples::Kept(seen),
+            );
+            assert!(
+                bits(&image.pixels) == bits(&film.pixels),
+                "{what}: the image drawn from the samples kept differs"
+            );
+            assert_eq!(
+                stats.camera_rays.load(std::sync::atomic::Ordering::Relaxed),
+                0,
+                "{what}: no camera ray"
             );
         }
     }

@@ -303,6 +303,112 @@ pub struct CameraBatch<'a> {
     pub ids: &'a [SampleId],
 }
 
+/// What each camera sample of a whole image saw (`render_keeping_samples`): images drawn
+/// from it again take no ray. A pixel's samples lie together, pixels in the order of their
+/// numbers (row-major from the bottom row).
+pub struct SampleGrid<T> {
+    width: u32,
+    height: u32,
+    spp: u32,
+    samples: Vec<T>,
+}
+
+/// `render_pixels` with each sample's radiance found in two steps, `look` at its ray and
+/// closest hit, then `radiance` of what it saw, keeping what every sample saw: the image and
+/// that grid, to draw images from again without a camera ray. No grid where the settings
+/// ask for what a grid does not draw (a part of a split render, passes until a deadline, the
+/// samples' sums kept), or where the render was superseded or interrupted before every
+/// sample was taken.
+pub fn render_keeping_samples<T: Send + Sync>(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &ImageSettings,
+    label: &str,
+    look: impl Fn(&Ray, Option<SurfaceHit>) -> T + Sync,
+    radiance: impl Fn(&T) -> Color + Sync,
+) -> (Film, RenderStats, Option<SampleGrid<T>>) {
+    let keep = !settings.keeps_sums() && settings.deadline.is_none();
+    let spp = settings.num_antialias_samples.max(1);
+    let count = settings.width as usize * settings.height as usize * spp as usize;
+    // Each slot is set once, by the row that owns its pixel.
+    let slots: Vec<std::sync::OnceLock<T>> = (0..if keep { count } else { 0 })
+        .map(|_| Default::default())
+        .collect();
+    let (film, stats) = render_pixel_batches(scene, accel, settings, label, |batch, _, out| {
+        for (k, l) in out.iter_mut().enumerate() {
+            let seen = look(&batch.rays[k], batch.hits[k]);
+            *l = radiance(&seen);
+            if keep {
+                let id = batch.ids[k];
+                let _ = slots[id.pixel as usize * spp as usize + id.index as usize].set(seen);
+            }
+        }
+    });
+    let samples = keep
+        .then(|| {
+            slots
+                .into_iter()
+                .map(std::sync::OnceLock::into_inner)
+                .collect::<Option<Vec<T>>>()
+        })
+        .flatten();
+    let grid = samples.map(|samples| SampleGrid {
+        width: settings.width,
+        height: settings.height,
+        spp,
+        samples,
+    });
+    (film, stats, grid)
+}
+
+impl<T: Sync> SampleGrid<T> {
+    /// The image whose samples' radiance `radiance` gives: each pixel the mean of its finite
+    /// samples, summed as `render_pixels` sums them, so that a grid drawn with the radiance
+    /// `render_pixels` would compute from the same rays gives its pixels, bit for bit.
+    pub fn film(&self, radiance: impl Fn(&T) -> Color + Sync) -> (Film, RenderStats) {
+        let (w, h, spp) = (self.width, self.height, self.spp as usize);
+        let stats = RenderStats::default();
+        let mut film = Film::new(w, h);
+        film.pixels
+            .par_chunks_mut(w as usize)
+            .enumerate()
+            .for_each(|(row, out)| {
+                let j = h - 1 - row as u32;
+                let first = (j as usize * w as usize) * spp;
+                let samples = &self.samples[first..first + out.len() * spp];
+                let mut non_finite = 0;
+                if spp == 1 {
+                    // One sample a pixel: its mean is the sample itself (-0 made +0, as the
+                    // sum from +0 makes it), or black where it is not finite.
+                    for (pixel, sample) in out.iter_mut().zip(samples) {
+                        let l = radiance(sample);
+                        *pixel = if l.is_finite() {
+                            l + Color::ZERO
+                        } else {
+                            non_finite += 1;
+                            Color::ZERO
+                        };
+                    }
+                    stats.non_finite_samples.fetch_add(non_finite, Relaxed);
+                    return;
+                }
+                for (pixel, samples) in out.iter_mut().zip(samples.chunks(spp)) {
+                    let mut sum = PixelSum::default();
+                    for l in samples.iter().map(&radiance) {
+                        if l.is_finite() {
+                            sum.add_sample(l);
+                        } else {
+                            non_finite += 1;
+                        }
+                    }
+                    *pixel = sum.mean();
+                }
+                stats.non_finite_samples.fetch_add(non_finite, Relaxed);
+            });
+        (film, stats)
+    }
+}
+
 /// `render_pixels` for engines that follow a chunk's camera samples together (the path
 /// tracer's wavefront): `radiance` writes the radiance along each of the batch's rays into
 /// `out`, in the batch's order.

@@ -7,7 +7,9 @@
 //! What a pre-pass makes is kept between jobs while what it reads stays the same: the radiosity
 //! solve (more shots shoot on from it, a solve cut short by a newer job keeping the shots it
 //! took) and the photon maps. The image drawn from them is the one the offline command
-//! renders: a solve shot on is, after n shots, the solve of n shots in one go.
+//! renders: a solve shot on is, after n shots, the solve of n shots in one go. With the solve
+//! goes what the camera samples of its last image saw of its mesh: the next image from the
+//! same camera (a shot more, another mode) looks the solution up there and traces no ray.
 //!
 //! A progressive trace ('r') renders first with one sample per 16×16 block of pixels (the
 //! image at a sixteenth of the resolution, each pixel drawn as its block), then 8×8, 4×4 and
@@ -22,10 +24,11 @@ use std::time::Instant;
 
 use crate::accel::{Accel, AccelKind, AccelOptions};
 use crate::engines::photon::{self, PhotonMaps};
-use crate::engines::radiosity::{self, ProgressiveSolve, Solution};
+use crate::engines::radiosity::{self, ProgressiveSolve, Samples, SeenMesh, Solution};
 use crate::engines::{self, compose, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::geometry::Vec3;
+use crate::render::ImageSettings;
 use crate::scene::{Camera, Scene};
 
 /// The block sides of a progressive trace's coarse stages (one sample each), coarsest first;
@@ -97,14 +100,24 @@ pub struct Renderer {
     /// How to build the Accel again when a job turns `--two-sided` on or off.
     pub accel_kind: AccelKind,
     pub accel_options: AccelOptions,
-    /// The last radiosity solve, and what it was solved with (the settings with their
-    /// display fields and shots reset, see `solve_key`, and the quads' sides): another view
-    /// of it or another camera renders it without solving again, and more shots shoot on
-    /// from it.
-    pub radiosity: Option<((RenderSettings, bool), KeptSolve)>,
+    /// The last radiosity solve: another view of it or another camera renders it without
+    /// solving again, and more shots shoot on from it.
+    pub radiosity: Option<KeptRadiosity>,
     /// The last photon maps, and what they were traced with (see `photon_key`): another
     /// camera or display of them renders them without tracing again.
     pub photons: Option<(PhotonKey, PhotonMaps)>,
+}
+
+/// A radiosity solve the render thread keeps, and what it keeps to draw it.
+pub struct KeptRadiosity {
+    /// What it was solved with: the settings with their display fields and shots reset (see
+    /// `solve_key`), and the quads' sides.
+    key: (RenderSettings, bool),
+    solve: KeptSolve,
+    /// What the camera samples of its last image saw of its mesh, and their camera and image
+    /// settings: the next image from that camera, after a shot more or in another view, is
+    /// drawn from it without tracing (the mesh is the solve's, which shots do not change).
+    seen: Option<((Camera, ImageSettings), SeenMesh)>,
 }
 
 /// A radiosity solve the render thread keeps.
@@ -270,42 +283,10 @@ impl Renderer {
         // A radiosity image of a solve kept from the last one (no time limit: a deadline
         // makes the solve depend on the clock).
         if job.engine == EngineKind::Radiosity && settings.deadline.is_none() {
-            let iterations = settings.radiosity.iterations;
-            let key = (solve_key(settings), job.two_sided);
-            let kept = self
-                .radiosity
-                .take()
-                .filter(|(k, kept)| *k == key && kept.reaches(iterations));
-            let mut kept =
-                match kept {
-                    Some((_, kept)) => kept,
-                    None => match pool.install(|| ProgressiveSolve::new(scene, accel, settings)) {
-                        Some(solve) => KeptSolve::Shooting(Box::new(solve)),
-                        None => KeptSolve::Solved(
-                            iterations,
-                            Box::new(pool.install(|| {
-                                radiosity::solve_with_progress(scene, accel, settings)
-                            })?),
-                        ),
-                    },
-                };
-            if let KeptSolve::Shooting(solve) = &mut kept {
-                pool.install(|| solve.shoot_to(scene, accel, settings));
-            }
-            if crate::interrupt::superseded() {
-                // Cut short. The shots a solve shooting on took stand (the next job shoots
-                // on from them); a solve in one go is not the one its settings ask for.
-                if matches!(kept, KeptSolve::Shooting(_)) {
-                    self.radiosity = Some((key, kept));
-                }
-                return Ok(None);
-            }
-            let solution = kept.solution();
-            let (film, stats) =
-                pool.install(|| radiosity::render_solved(scene, accel, settings, solution));
-            let rendered = solution.rendered(film, stats, settings)?;
-            self.radiosity = Some((key, kept));
-            return Ok((!crate::interrupt::superseded()).then_some(rendered));
+            // One call into the pool for the shots and the image: a press costs a millisecond
+            // or two, of which each hand-over between threads would take its share.
+            let kept = &mut self.radiosity;
+            return pool.install(|| radiosity_image(kept, scene, accel, job, settings));
         }
         if job.engine == EngineKind::Photon {
             let key = (
@@ -330,6 +311,63 @@ impl Renderer {
             pool.install(|| engines::engine(job.engine).render(scene, accel, settings))?;
         Ok((!crate::interrupt::superseded()).then_some(rendered))
     }
+}
+
+/// A radiosity image of the solve `kept_solve` holds, shot on to the shots `settings` ask
+/// for, or of a new solve where it cannot be; None if the job was superseded. Called in the
+/// render thread's pool.
+fn radiosity_image(
+    kept_solve: &mut Option<KeptRadiosity>,
+    scene: &Scene,
+    accel: &dyn Accel,
+    job: &Job,
+    settings: &RenderSettings,
+) -> Result<Option<Rendered>, String> {
+    let iterations = settings.radiosity.iterations;
+    let key = (solve_key(settings), job.two_sided);
+    let kept = kept_solve
+        .take()
+        .filter(|kept| kept.key == key && kept.solve.reaches(iterations));
+    let mut kept = match kept {
+        Some(kept) => kept,
+        None => KeptRadiosity {
+            key,
+            solve: match ProgressiveSolve::new(scene, accel, settings) {
+                Some(solve) => KeptSolve::Shooting(Box::new(solve)),
+                None => KeptSolve::Solved(
+                    iterations,
+                    Box::new(radiosity::solve_with_progress(scene, accel, settings)?),
+                ),
+            },
+            seen: None,
+        },
+    };
+    if let KeptSolve::Shooting(solve) = &mut kept.solve {
+        solve.shoot_to(scene, accel, settings);
+    }
+    if crate::interrupt::superseded() {
+        // Cut short. The shots a solve shooting on took stand (the next job shoots
+        // on from them); a solve in one go is not the one its settings ask for.
+        if matches!(kept.solve, KeptSolve::Shooting(_)) {
+            *kept_solve = Some(kept);
+        }
+        return Ok(None);
+    }
+    let solution = kept.solve.solution();
+    let draw = |samples| radiosity::render_solved(scene, accel, settings, solution, samples);
+    let seen_key = (job.camera, settings.image());
+    let (film, stats) = match &kept.seen {
+        Some((key, seen)) if *key == seen_key => draw(Samples::Kept(seen)),
+        _ => {
+            let mut seen = None;
+            let drawn = draw(Samples::Keep(&mut seen));
+            kept.seen = seen.map(|seen| (seen_key, seen));
+            drawn
+        }
+    };
+    let rendered = solution.rendered(film, stats, settings)?;
+    *kept_solve = Some(kept);
+    Ok((!crate::interrupt::superseded()).then_some(rendered))
 }
 
 /// The settings but those of the image (samples, lens, the time limit) and whether progress

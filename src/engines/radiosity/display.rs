@@ -6,14 +6,14 @@ use rayon::prelude::*;
 
 use super::settings::Display;
 use super::solver::{Element, FormFactorSampler};
-use super::Solution;
+use super::{PatchField, Solution};
 use crate::accel::Accel;
 use crate::engines::engine::RenderSettings;
 use crate::engines::radiosity::mesh::NONE;
 use crate::film::Film;
-use crate::geometry::Vec3;
-use crate::render::{render_pixels, RenderStats};
-use crate::scene::{Camera, Color, Scene};
+use crate::geometry::{Ray, Vec3};
+use crate::render::{render_keeping_samples, render_pixels, RenderStats, SampleGrid};
+use crate::scene::{Camera, Color, Scene, SurfaceHit};
 
 const WIRE: Color = Vec3::ZERO;
 const SOURCE_OUTLINE: Color = Vec3 {
@@ -22,12 +22,124 @@ const SOURCE_OUTLINE: Color = Vec3 {
     z: 0.0,
 };
 
-/// Renders a solution in the mode `settings.radiosity.display`.
+/// At most this many camera samples are kept (`SeenMesh`, 32 bytes each, 64 MiB in all): a
+/// 1024×1024 image at 2 samples a pixel.
+const MAX_KEPT_SAMPLES: usize = 1 << 21;
+
+/// What the camera samples of an image saw of a solution's mesh. The viewer keeps it between
+/// images of one solve from one camera: each shot more draws the image again from it
+/// (`Samples::Kept`) without a camera ray.
+pub struct SeenMesh(SampleGrid<Seen>);
+
+/// Where the camera samples of a solution's image come from.
+pub enum Samples<'a> {
+    /// Traced.
+    Traced,
+    /// Traced, and what they saw of the mesh put in `keep` (None where it is not kept: see
+    /// `render::render_keeping_samples`, or more than `MAX_KEPT_SAMPLES` samples).
+    Keep(&'a mut Option<SeenMesh>),
+    /// What the image's samples saw, kept from an image of the same scene, camera, image
+    /// settings and mesh: drawn with no camera ray, the same pixels bit for bit.
+    Kept(&'a SeenMesh),
+}
+
+/// Renders a solution in the mode `settings.radiosity.display`, its camera samples from
+/// `samples`.
 pub fn render_solution(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
     solution: &Solution,
+    samples: Samples,
+) -> (Film, RenderStats) {
+    let image = settings.image();
+    let look = |ray: &Ray, hit| Seen::of(scene, solution, ray, hit);
+    draw(scene, accel, settings, solution, |field| match samples {
+        Samples::Kept(seen) => seen.0.film(|s| s.radiance(solution, field)),
+        Samples::Keep(keep)
+            if image.width as usize
+                * image.height as usize
+                * image.num_antialias_samples as usize
+                <= MAX_KEPT_SAMPLES =>
+        {
+            let (film, stats, grid) =
+                render_keeping_samples(scene, accel, &image, "display", look, |s| {
+                    s.radiance(solution, field)
+                });
+            *keep = grid.map(SeenMesh);
+            (film, stats)
+        }
+        samples => {
+            if let Samples::Keep(keep) = samples {
+                *keep = None;
+            }
+            render_pixels(scene, accel, &image, "display", |ray, hit, _, _, _| {
+                look(ray, hit).radiance(solution, field)
+            })
+        }
+    })
+}
+
+/// What one camera sample sees.
+#[derive(Clone, Copy, Debug)]
+enum Seen {
+    /// No surface: the sky or the background (black through a fog, whose light is the other
+    /// engines').
+    Beyond(Color),
+    /// A surface: its patch and the point's parameters on it (None where no patch lies, e.g.
+    /// a triangle of a scene whose mesh left it out), and the fog's transmittance along the
+    /// ray.
+    Surface {
+        at: Option<(u32, f32, f32)>,
+        through: Option<Color>,
+    },
+}
+
+impl Seen {
+    fn of(scene: &Scene, solution: &Solution, ray: &Ray, hit: Option<SurfaceHit>) -> Seen {
+        // Through a fog, what the camera sees is attenuated over the ray's length (and
+        // nothing beyond the scene gets through); the light the fog scatters in is the
+        // other engines' (`--plan` says so).
+        let fog = scene.fog.map(|k| &scene.media[k]);
+        let Some(s) = hit else {
+            return Seen::Beyond(match fog {
+                Some(_) => Vec3::ZERO,
+                None => scene.sky_or_background(ray.direction),
+            });
+        };
+        Seen::Surface {
+            at: solution
+                .locate(scene, &s, -ray.direction)
+                .map(|(k, u, v)| (k as u32, u, v)),
+            through: fog.map(|m| m.transmittance(s.t * ray.direction.length())),
+        }
+    }
+
+    /// The radiance `field` shows along the sample's ray.
+    fn radiance(&self, solution: &Solution, field: &PatchField) -> Color {
+        match *self {
+            Seen::Beyond(background) => background,
+            Seen::Surface { at, through } => {
+                let seen = at.map_or(Vec3::ZERO, |(k, u, v)| {
+                    solution.value_at(field, (k as usize, u, v))
+                });
+                match through {
+                    Some(t) => seen * t,
+                    None => seen,
+                }
+            }
+        }
+    }
+}
+
+/// The image of a solution in the mode `settings.radiosity.display`: the values the mode
+/// shows over the patches, `pixels` drawing them, then the outlines over the pixels.
+fn draw(
+    scene: &Scene,
+    accel: &dyn Accel,
+    settings: &RenderSettings,
+    solution: &Solution,
+    pixels: impl FnOnce(&PatchField) -> (Film, RenderStats),
 ) -> (Film, RenderStats) {
     let r = &settings.radiosity;
     let patches = &solution.patches;
@@ -61,31 +173,7 @@ pub fn render_solution(
         ),
         _ => solution.field(values, r.interpolate),
     };
-    let (mut film, stats) = render_pixels(
-        scene,
-        accel,
-        &settings.image(),
-        "display",
-        |ray, hit, _rng, _id, _counts| {
-            // Through a fog, what the camera sees is attenuated over the ray's length (and
-            // nothing beyond the scene gets through); the light the fog scatters in is the
-            // other engines' (`--plan` says so).
-            let fog = scene.fog.map(|k| &scene.media[k]);
-            let Some(s) = hit else {
-                if fog.is_some() {
-                    return Vec3::ZERO;
-                }
-                return scene.sky_or_background(ray.direction);
-            };
-            let seen = solution
-                .sample(scene, &s, -ray.direction, &field)
-                .unwrap_or(Vec3::ZERO);
-            match fog {
-                Some(m) => seen * m.transmittance(s.t * ray.direction.length()),
-                None => seen,
-            }
-        },
-    );
+    let (mut film, stats) = pixels(&field);
     let outline_source = settings.radiosity.display == Display::FormFactors;
     if r.wireframe || outline_source {
         let ids = patch_ids(scene, accel, settings, solution);

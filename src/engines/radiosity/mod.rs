@@ -18,7 +18,7 @@ pub use settings::{Display, RadiositySettings, SolverKind};
 
 use std::sync::atomic::Ordering::Relaxed;
 
-pub use display::render_solution;
+pub use display::{render_solution, Samples, SeenMesh};
 use patch::Patch;
 use solver::{FormFactorSampler, PatchLight, RadiositySolver, SolveLimits, Step, Stop};
 
@@ -608,10 +608,15 @@ impl Solution {
         field: &PatchField,
     ) -> Option<Color> {
         let (k, u, v) = self.locate(scene, hit, toward)?;
+        Some(self.value_at(field, (k, u, v)))
+    }
+
+    /// The value of `field` at the parameters (u, v) of patch k (as `locate` finds them).
+    pub fn value_at(&self, field: &PatchField, (k, u, v): (usize, f32, f32)) -> Color {
         if field.per_element {
-            return Some(field.values[self.state.leaf_at(k, u, v).0]);
+            return field.values[self.state.leaf_at(k, u, v).0];
         }
-        Some(match &field.corners {
+        match &field.corners {
             Some(c) => {
                 let c = &c[k];
                 c[0] * ((1.0 - u) * (1.0 - v))
@@ -620,7 +625,7 @@ impl Solution {
                     + c[3] * ((1.0 - u) * v)
             }
             None => field.values[k],
-        })
+        }
     }
 
     /// Values at the four corners of every patch for smooth display: each corner takes the
@@ -710,19 +715,21 @@ pub fn render(
     settings: &RenderSettings,
 ) -> Result<(Film, RenderStats, Solution), String> {
     let solution = solve_with_progress(scene, accel, settings)?;
-    let (film, stats) = render_solved(scene, accel, settings, &solution);
+    let (film, stats) = render_solved(scene, accel, settings, &solution, Samples::Traced);
     Ok((film, stats, solution))
 }
 
 /// The image of a solution already solved, as the engine renders it after its solve (the
-/// viewer keeps a solution between images of it).
+/// viewer keeps a solution between images of it, and what their camera samples saw: see
+/// `Samples`).
 pub fn render_solved(
     scene: &Scene,
     accel: &dyn Accel,
     settings: &RenderSettings,
     solution: &Solution,
+    samples: Samples,
 ) -> (Film, RenderStats) {
-    let (film, stats) = render_solution(scene, accel, settings, solution);
+    let (film, stats) = render_solution(scene, accel, settings, solution, samples);
     stats.form_factor_rays.store(solution.rays, Relaxed);
     (film, stats)
 }
