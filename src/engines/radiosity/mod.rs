@@ -16,7 +16,9 @@ mod export;
 mod sky;
 pub use settings::{Display, RadiositySettings, SolverKind};
 
+use std::borrow::Cow;
 use std::sync::atomic::Ordering::Relaxed;
+use std::sync::OnceLock;
 
 pub use display::{render_solution, Samples, SeenMesh};
 use patch::Patch;
@@ -76,6 +78,11 @@ struct Shooters {
     twin_of: Vec<u32>,
     /// Rays cast to find the sky's reflected light.
     sky_rays: u64,
+    /// The form factors' ray anchors (`FormFactorSampler::anchors`) with the number of
+    /// samples, the visibility and the seed they were found for: made by the first sampler,
+    /// taken by the next ones, where a solve shot on a shot at a time (the viewer's Space)
+    /// found them again for each shot.
+    anchors: OnceLock<((u32, bool, u64), Vec<Vec3>)>,
 }
 
 impl Shooters {
@@ -87,13 +94,32 @@ impl Shooters {
         settings: &RenderSettings,
         visibility: bool,
     ) -> FormFactorSampler<'a> {
-        FormFactorSampler::new(
+        let samples = settings.radiosity.num_form_factor_samples.max(1);
+        let key = (samples, visibility, settings.seed);
+        let (made_for, anchors) = self.anchors.get_or_init(|| {
+            let anchors =
+                FormFactorSampler::anchors(scene, &self.patches, samples, visibility, key.2);
+            (key, anchors)
+        });
+        let anchors = if *made_for == key {
+            Cow::Borrowed(anchors.as_slice())
+        } else {
+            Cow::Owned(FormFactorSampler::anchors(
+                scene,
+                &self.patches,
+                samples,
+                visibility,
+                key.2,
+            ))
+        };
+        FormFactorSampler::with_anchors(
             scene,
             accel,
             &self.patches,
-            settings.radiosity.num_form_factor_samples.max(1),
+            samples,
             visibility,
             settings.seed,
+            anchors,
         )
     }
 
@@ -450,6 +476,7 @@ impl Solution {
             patches: solved_patches,
             twin_of,
             sky_rays,
+            anchors: OnceLock::new(),
         };
         (solution, shooters)
     }

@@ -7,6 +7,7 @@
 //! averages the exact point-to-patch form factor over its sample points, which keeps every
 //! receiver's form factors to a closed enclosure summing to one.
 
+use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 use rayon::prelude::*;
@@ -36,7 +37,7 @@ pub struct FormFactorSampler<'a> {
     visibility: bool,
     seed: u64,
     /// With one sample per form factor: where each patch's visibility rays start and end.
-    anchors: Vec<Vec3>,
+    anchors: Cow<'a, [Vec3]>,
     /// The fog's extinction σt (its channels' mean; 0 without fog): every form factor is
     /// attenuated by exp(−σt·d) along its point pairs.
     extinction: f32,
@@ -58,8 +59,21 @@ impl<'a> FormFactorSampler<'a> {
         visibility: bool,
         seed: u64,
     ) -> FormFactorSampler<'a> {
-        let samples = samples.max(1);
-        let anchors = if visibility && samples == 1 {
+        let anchors = Cow::Owned(Self::anchors(scene, patches, samples, visibility, seed));
+        Self::with_anchors(scene, accel, patches, samples, visibility, seed, anchors)
+    }
+
+    /// What `new` computes first and a caller may keep between samplers of the same patches
+    /// and settings (the viewer's shots, one sampler each): where each patch's visibility
+    /// rays start and end with one sample per form factor and visibility on, else nothing.
+    pub fn anchors(
+        scene: &Scene,
+        patches: &[Patch],
+        samples: u32,
+        visibility: bool,
+        seed: u64,
+    ) -> Vec<Vec3> {
+        if visibility && samples.max(1) == 1 {
             patches
                 .iter()
                 .enumerate()
@@ -67,7 +81,21 @@ impl<'a> FormFactorSampler<'a> {
                 .collect()
         } else {
             Vec::new()
-        };
+        }
+    }
+
+    /// `new` with the `anchors` it would compute (`FormFactorSampler::anchors` of the same
+    /// arguments).
+    pub fn with_anchors(
+        scene: &'a Scene,
+        accel: &'a dyn Accel,
+        patches: &'a [Patch],
+        samples: u32,
+        visibility: bool,
+        seed: u64,
+        anchors: Cow<'a, [Vec3]>,
+    ) -> FormFactorSampler<'a> {
+        let samples = samples.max(1);
         let sigma_t = scene.fog.map_or(Vec3::ZERO, |k| scene.media[k].sigma_t());
         let extinction = sigma_t.element_sum() / 3.0;
         let tint_extinction = Some(sigma_t - Vec3::splat(extinction))
