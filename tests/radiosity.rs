@@ -39,7 +39,7 @@ fn form_factor(
 ) -> f64 {
     let mesh = QuadMesh::from_scene(scene, raster());
     let patches = patches(scene, &mesh);
-    let sampler = FormFactorSampler::new(scene, accel, &patches, samples, true, seed);
+    let sampler = FormFactorSampler::new(scene, accel, &patches, samples, true, seed, None);
     // A row holds, for each receiver j, F_j→shooter.
     sampler.row(to)[from] as f64
 }
@@ -138,7 +138,7 @@ fn rows_of_a_closed_cube_sum_to_one() {
     let mut mesh = QuadMesh::from_scene(&cube, raster());
     mesh.subdivide(2);
     let patches = patches(&cube, &mesh);
-    let sampler = FormFactorSampler::new(&cube, accel.as_ref(), &patches, 256, true, 0);
+    let sampler = FormFactorSampler::new(&cube, accel.as_ref(), &patches, 256, true, 0, None);
     let n = patches.len();
     let rows: Vec<Vec<f32>> = (0..n).map(|i| sampler.row(i)).collect();
     let mut worst = 0.0f64;
@@ -314,7 +314,7 @@ fn every_form_factor_is_identical_with_both_accels() {
             .collect();
         let samplers: Vec<FormFactorSampler> = accels
             .iter()
-            .map(|a| FormFactorSampler::new(&scene, a.as_ref(), &patches, samples, true, 0))
+            .map(|a| FormFactorSampler::new(&scene, a.as_ref(), &patches, samples, true, 0, None))
             .collect();
         let mut differing = 0;
         for i in 0..patches.len() {

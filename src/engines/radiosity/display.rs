@@ -244,6 +244,7 @@ fn form_factor_greys(
         settings.radiosity.num_form_factor_samples.max(1),
         solution.visibility,
         settings.seed,
+        None,
     );
     // The row holds F_j→source; reciprocity turns it into F_source→j.
     let a_source = patches[source].area.max(f32::MIN_POSITIVE);

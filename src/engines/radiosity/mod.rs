@@ -16,7 +16,6 @@ mod export;
 mod sky;
 pub use settings::{Display, RadiositySettings, SolverKind};
 
-use std::borrow::Cow;
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::OnceLock;
 
@@ -80,8 +79,8 @@ struct Shooters {
     sky_rays: u64,
     /// The form factors' ray anchors (`FormFactorSampler::anchors`) with the number of
     /// samples, the visibility and the seed they were found for: made by the first sampler,
-    /// taken by the next ones, where a solve shot on a shot at a time (the viewer's Space)
-    /// found them again for each shot.
+    /// taken by the next ones (a solve shot on a shot at a time, as the viewer's Space does,
+    /// makes a sampler a shot).
     anchors: OnceLock<((u32, bool, u64), Vec<Vec3>)>,
 }
 
@@ -101,25 +100,14 @@ impl Shooters {
                 FormFactorSampler::anchors(scene, &self.patches, samples, visibility, key.2);
             (key, anchors)
         });
-        let anchors = if *made_for == key {
-            Cow::Borrowed(anchors.as_slice())
-        } else {
-            Cow::Owned(FormFactorSampler::anchors(
-                scene,
-                &self.patches,
-                samples,
-                visibility,
-                key.2,
-            ))
-        };
-        FormFactorSampler::with_anchors(
+        FormFactorSampler::new(
             scene,
             accel,
             &self.patches,
             samples,
             visibility,
             settings.seed,
-            anchors,
+            (*made_for == key).then_some(anchors.as_slice()),
         )
     }
 

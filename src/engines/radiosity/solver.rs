@@ -51,6 +51,10 @@ pub struct FormFactorSampler<'a> {
 }
 
 impl<'a> FormFactorSampler<'a> {
+    /// The sampler of the form factors between `patches`, `samples` point pairs each, with
+    /// visibility rays if `visibility`, its points drawn from `seed`. `kept`: the anchors
+    /// (`FormFactorSampler::anchors`) of these same arguments, where a caller keeps them
+    /// between samplers; None: found here.
     pub fn new(
         scene: &'a Scene,
         accel: &'a dyn Accel,
@@ -58,43 +62,12 @@ impl<'a> FormFactorSampler<'a> {
         samples: u32,
         visibility: bool,
         seed: u64,
+        kept: Option<&'a [Vec3]>,
     ) -> FormFactorSampler<'a> {
-        let anchors = Cow::Owned(Self::anchors(scene, patches, samples, visibility, seed));
-        Self::with_anchors(scene, accel, patches, samples, visibility, seed, anchors)
-    }
-
-    /// What `new` computes first and a caller may keep between samplers of the same patches
-    /// and settings (the viewer's shots, one sampler each): where each patch's visibility
-    /// rays start and end with one sample per form factor and visibility on, else nothing.
-    pub fn anchors(
-        scene: &Scene,
-        patches: &[Patch],
-        samples: u32,
-        visibility: bool,
-        seed: u64,
-    ) -> Vec<Vec3> {
-        if visibility && samples.max(1) == 1 {
-            patches
-                .iter()
-                .enumerate()
-                .map(|(k, p)| on_primitive(scene, p, nudge(seed, k, p), p.normal))
-                .collect()
-        } else {
-            Vec::new()
-        }
-    }
-
-    /// `new` with the `anchors` it would compute (`FormFactorSampler::anchors` of the same
-    /// arguments).
-    pub fn with_anchors(
-        scene: &'a Scene,
-        accel: &'a dyn Accel,
-        patches: &'a [Patch],
-        samples: u32,
-        visibility: bool,
-        seed: u64,
-        anchors: Cow<'a, [Vec3]>,
-    ) -> FormFactorSampler<'a> {
+        let anchors = match kept {
+            Some(anchors) => Cow::Borrowed(anchors),
+            None => Cow::Owned(Self::anchors(scene, patches, samples, visibility, seed)),
+        };
         let samples = samples.max(1);
         let sigma_t = scene.fog.map_or(Vec3::ZERO, |k| scene.media[k].sigma_t());
         let extinction = sigma_t.element_sum() / 3.0;
@@ -111,6 +84,28 @@ impl<'a> FormFactorSampler<'a> {
             extinction,
             tint_extinction,
             rays: AtomicU64::new(0),
+        }
+    }
+
+    /// What `new` finds first, which a caller may keep between samplers of the same patches
+    /// and settings (a solve shot on a shot at a time, one sampler a shot): where each
+    /// patch's visibility rays start and end, with one sample per form factor and visibility
+    /// on; else nothing.
+    pub fn anchors(
+        scene: &Scene,
+        patches: &[Patch],
+        samples: u32,
+        visibility: bool,
+        seed: u64,
+    ) -> Vec<Vec3> {
+        if visibility && samples.max(1) == 1 {
+            patches
+                .iter()
+                .enumerate()
+                .map(|(k, p)| on_primitive(scene, p, nudge(seed, k, p), p.normal))
+                .collect()
+        } else {
+            Vec::new()
         }
     }
 
