@@ -733,17 +733,8 @@ impl Scene {
         self.quads.iter().for_each(|q| mark(q.material));
         self.triangles.materials.iter().for_each(|&m| mark(m));
         self.shapes.iter().for_each(|s| mark(s.material));
-        let mut placed = vec![false; self.instancing.groups.len()];
-        for i in &self.instancing.instances {
-            placed[i.group as usize] = true;
-        }
-        for (g, _) in self
-            .instancing
-            .groups
-            .iter()
-            .zip(placed)
-            .filter(|(_, p)| *p)
-        {
+        // Every group is placed: the reader makes one where an instance first refers to it.
+        for g in &self.instancing.groups {
             g.mesh.materials.iter().for_each(|&m| mark(m));
         }
         used
