@@ -8,15 +8,16 @@ use crate::accel::AccelKind;
 pub use crate::bytes::{human_bytes, parse_bytes};
 use crate::engines::{self, EngineKind, RenderSettings};
 use crate::geometry::Shape;
-use crate::scene::Scene;
+use crate::scene::{CulledBacks, Scene};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
     pub engine: EngineKind,
     pub accel: AccelKind,
     pub quads: usize,
-    pub one_sided_quads: bool,
     pub triangles: usize,
+    /// Which of them a ray passes through from behind (`Scene::culled_backs`).
+    pub culled: CulledBacks,
     /// Instancing (Mitsuba's shapegroups and instances), when the scene has instances:
     /// instances, groups, triangles the groups store, triangles the instances place.
     pub instancing: Option<(usize, usize, usize, usize)>,
@@ -91,8 +92,8 @@ impl Plan {
             engine,
             accel,
             quads: scene.quads.len(),
-            one_sided_quads: !scene.two_sided_quads,
             triangles: scene.triangles.len(),
+            culled: scene.culled_backs(),
             instancing: (!scene.instancing.instances.is_empty()).then(|| {
                 let i = &scene.instancing;
                 (
@@ -311,16 +312,13 @@ impl fmt::Display for Plan {
                 crate::accel::embree::embree_major()
             )?;
         }
-        let sided = if self.one_sided_quads {
-            "one-sided"
-        } else {
-            "two-sided"
-        };
+        let sided = |one_sided| if one_sided { "one-sided" } else { "two-sided" };
         if self.quads > 0 {
             writeln!(
                 f,
-                "quad geometry: {} ({sided})",
-                plural(self.quads, "quad", "quads")
+                "quad geometry: {} ({})",
+                plural(self.quads, "quad", "quads"),
+                sided(self.culled.quads)
             )?;
         } else {
             writeln!(f, "quad geometry: none")?;
@@ -328,8 +326,9 @@ impl fmt::Display for Plan {
         if self.triangles > 0 {
             writeln!(
                 f,
-                "triangle geometry: {}",
-                plural(self.triangles, "triangle", "triangles")
+                "triangle geometry: {} ({})",
+                plural(self.triangles, "triangle", "triangles"),
+                sided(self.culled.triangles)
             )?;
         } else {
             writeln!(f, "triangle geometry: none")?;

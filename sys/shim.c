@@ -77,8 +77,9 @@ struct TxScene {
   RTCScene scene;
   /* Whether Embree's candidates are decided by the exact routines (`--embree-exact`). */
   int exact;
-  /* Front normals of one-sided quads, for the filter of a scene that is not exact. */
-  float* quad_normals;
+  /* Front normals of one-sided quads and triangles, for the filter of a scene that is not
+   * exact (index 0 quads, 1 triangles). */
+  float* front_normals[2];
   TxExact geometries[TX_MAX_GEOMETRIES];
   unsigned int n_geometries;
 };
@@ -210,7 +211,8 @@ TxScene* tx_scene_new(TxDevice* device, int quality, int robust, int exact) {
 void tx_scene_release(TxScene* scene) {
   if (!scene) return;
   rtcReleaseScene(scene->scene);
-  free(scene->quad_normals);
+  free(scene->front_normals[0]);
+  free(scene->front_normals[1]);
   free(scene);
 }
 
@@ -370,9 +372,9 @@ static void enlarge(const float* in, float* out, int corners, float margin) {
  * hits themselves are the exact routine's). */
 static float margin_for(float m) { return m * 1e-5f; }
 
-/* In a scene that is not exact: rejects hits on the back side of one-sided quads (the
- * geometry's user data is the array of their front normals). */
-static void quad_front_filter(const struct RTCFilterFunctionNArguments* args) {
+/* In a scene that is not exact: rejects hits on the back side of one-sided quads or triangles
+ * (the geometry's user data is the array of their front normals). */
+static void front_filter(const struct RTCFilterFunctionNArguments* args) {
   const float* normals = (const float*)args->geometryUserPtr;
   const unsigned int N = args->N;
   for (unsigned int i = 0; i < N; i++) {
@@ -423,6 +425,31 @@ static unsigned int attach_decided(TxScene* s, RTCGeometry geom, const void* use
   return attach(s, geom);
 }
 
+/* Attaches a geometry of a scene that is not exact, its n primitives' backs missed by the
+ * filter when front_normals is not NULL (kept in slot `which` of the scene: 0 quads, 1
+ * triangles; one geometry of each). */
+static unsigned int attach_one_sided(TxScene* s, RTCGeometry geom, const float* front_normals,
+                                     unsigned int n, int which) {
+  if (!front_normals) return attach(s, geom);
+  if (s->front_normals[which]) {
+    record_error("trilux shim: only one one-sided geometry of a kind per scene");
+    rtcReleaseGeometry(geom);
+    return TX_INVALID_ID;
+  }
+  float* normals = (float*)malloc(3 * sizeof(float) * (size_t)n);
+  if (!normals) {
+    rtcReleaseGeometry(geom);
+    record_error("trilux shim: out of memory");
+    return TX_INVALID_ID;
+  }
+  memcpy(normals, front_normals, 3 * sizeof(float) * (size_t)n);
+  s->front_normals[which] = normals;
+  rtcSetGeometryUserData(geom, normals);
+  rtcSetGeometryIntersectFilterFunction(geom, front_filter);
+  rtcSetGeometryOccludedFilterFunction(geom, front_filter);
+  return attach(s, geom);
+}
+
 unsigned int tx_scene_add_quads(TxScene* s, const float* vertices, unsigned int n,
                                 const float* front_normals, const void* user,
                                 TxIntersectFn exact, unsigned int key_base) {
@@ -445,24 +472,7 @@ unsigned int tx_scene_add_quads(TxScene* s, const float* vertices, unsigned int 
     return attach_decided(s, geom, user, exact, key_base);
   }
   memcpy(vb, vertices, 12 * sizeof(float) * (size_t)n);
-  if (front_normals) {
-    if (s->quad_normals) {
-      record_error("trilux shim: only one one-sided quad geometry per scene");
-      rtcReleaseGeometry(geom);
-      return TX_INVALID_ID;
-    }
-    s->quad_normals = (float*)malloc(3 * sizeof(float) * (size_t)n);
-    if (!s->quad_normals) {
-      rtcReleaseGeometry(geom);
-      record_error("trilux shim: out of memory");
-      return TX_INVALID_ID;
-    }
-    memcpy(s->quad_normals, front_normals, 3 * sizeof(float) * (size_t)n);
-    rtcSetGeometryUserData(geom, s->quad_normals);
-    rtcSetGeometryIntersectFilterFunction(geom, quad_front_filter);
-    rtcSetGeometryOccludedFilterFunction(geom, quad_front_filter);
-  }
-  return attach(s, geom);
+  return attach_one_sided(s, geom, front_normals, n, 0);
 }
 
 /* A triangle geometry of the mesh, its vertices enlarged one triangle at a time in an exact
@@ -505,11 +515,11 @@ static RTCGeometry triangle_geometry(TxScene* s, const float* vertices,
 
 unsigned int tx_scene_add_triangles(TxScene* s, const float* vertices,
                                     const unsigned int* indices, unsigned int n_triangles,
-                                    const void* user, TxIntersectFn exact,
-                                    unsigned int key_base) {
+                                    const float* front_normals, const void* user,
+                                    TxIntersectFn exact, unsigned int key_base) {
   RTCGeometry geom = triangle_geometry(s, vertices, indices, n_triangles);
   if (!geom) return TX_INVALID_ID;
-  if (!s->exact) return attach(s, geom);
+  if (!s->exact) return attach_one_sided(s, geom, front_normals, n_triangles, 1);
   return attach_decided(s, geom, user, exact, key_base);
 }
 

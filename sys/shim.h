@@ -86,11 +86,13 @@ unsigned int tx_scene_add_quads(TxScene* scene, const float* vertices, unsigned 
                                 const float* front_normals, const void* user,
                                 TxIntersectFn exact, unsigned int key_base);
 
-/* Adds an indexed triangle mesh: n_triangles * 3 indices into vertices (3 floats each). */
+/* Adds an indexed triangle mesh: n_triangles * 3 indices into vertices (3 floats each).
+ * front_normals: NULL for triangles opaque from both sides, else 3 floats per triangle, read
+ * as tx_scene_add_quads reads its own. */
 unsigned int tx_scene_add_triangles(TxScene* scene, const float* vertices,
                                     const unsigned int* indices, unsigned int n_triangles,
-                                    const void* user, TxIntersectFn exact,
-                                    unsigned int key_base);
+                                    const float* front_normals, const void* user,
+                                    TxIntersectFn exact, unsigned int key_base);
 
 /* Adds a group's triangles (in its own space) to `group`, a scene that instances place
  * (tx_scene_add_instance); in an exact scene `exact` decides their hits, on the query's own

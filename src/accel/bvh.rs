@@ -41,7 +41,9 @@ use super::{Accel, AccelError, PackedPrim};
 use crate::geometry::{
     faces_ray, intersect_quad_sheared, AnalyticShape, Bounds3, Ray, RayShear, Shape, Vec3,
 };
-use crate::scene::{Instance, PrimHit, PrimKind, PrimRef, Quad, Scene, ShapePrim, TriangleMesh};
+use crate::scene::{
+    CulledBacks, Instance, PrimHit, PrimKind, PrimRef, Quad, Scene, ShapePrim, TriangleMesh,
+};
 
 /// Number of SAH bins per axis.
 const BINS: usize = 16;
@@ -353,7 +355,8 @@ pub struct Bvh {
     /// group (over its triangles, in its space); both empty in a group's tree.
     instances: Vec<Instance>,
     groups: Vec<Bvh>,
-    one_sided_quads: bool,
+    /// The polygons missed from behind (none in a group's tree).
+    culled: CulledBacks,
     /// The processor's instructions, for the batched queries' dispatch.
     arch: pulp::Arch,
 }
@@ -474,20 +477,19 @@ impl Bvh {
             .instancing
             .groups
             .par_iter()
-            .map(|g| Bvh::build_over(Source::group(&g.mesh), false))
+            .map(|g| Bvh::build_over(Source::group(&g.mesh), CulledBacks::default()))
             .collect();
         let boxes = instance_boxes(scene);
         let source = Source::scene(scene, &boxes);
         Ok(Bvh {
             instances: scene.instancing.instances.clone(),
             groups,
-            ..Bvh::build_over(source, !scene.two_sided_quads)
+            ..Bvh::build_over(source, scene.culled_backs())
         })
     }
 
-    /// The tree over `source`'s primitives (no groups yet); `one_sided_quads` unless
-    /// `--two-sided`.
-    fn build_over(source: Source, one_sided_quads: bool) -> Bvh {
+    /// The tree over `source`'s primitives (no groups yet), missing the backs of `culled`.
+    fn build_over(source: Source, culled: CulledBacks) -> Bvh {
         let total = source.quads.len()
             + source.triangles.len()
             + source.shapes.len()
@@ -579,7 +581,7 @@ impl Bvh {
             shapes: source.shapes.iter().map(|s| s.shape).collect(),
             instances: Vec::new(),
             groups: Vec::new(),
-            one_sided_quads,
+            culled,
             arch: pulp::Arch::new(),
         }
     }
@@ -677,7 +679,8 @@ impl Bvh {
             match item.view() {
                 ItemView::Triangles(pack) => {
                     let hits = pack.intersect(pack_ray, ray, shear, limit);
-                    for i in (0..4).filter(|i| hits.mask >> i & 1 != 0) {
+                    let mask = self.triangles_met(pack, hits.mask, ray);
+                    for i in (0..4).filter(|i| mask >> i & 1 != 0) {
                         let hit = (rebase(pack.prim(i), base), hits.t[i], hits.u[i], hits.v[i]);
                         keep_closest(best, t_max, hit);
                     }
@@ -694,6 +697,16 @@ impl Bvh {
         }
     }
 
+    /// The lanes of `hits` (of `pack`) whose triangles `ray` meets: those it hits from the front
+    /// where triangles are one-sided (`CulledBacks`), else all.
+    #[inline(always)]
+    fn triangles_met(&self, pack: &Tri4, hits: u32, ray: &Ray) -> u32 {
+        if !self.culled.triangles || hits == 0 {
+            return hits;
+        }
+        pack.facing(hits, ray.direction)
+    }
+
     /// `shear` gives the ray's shear, made when first asked for where the caller makes it
     /// lazily (`RayForms`): a quad facing away, or a shape, does not ask.
     #[inline(always)]
@@ -707,7 +720,7 @@ impl Bvh {
         match p.prim.kind() {
             PrimKind::Triangle => unreachable!("triangles are tested in packs of four"),
             PrimKind::Quad => {
-                if self.one_sided_quads && !faces_ray(p.normal, ray.direction) {
+                if self.culled.quads && !faces_ray(p.normal, ray.direction) {
                     return None;
                 }
                 intersect_quad_sheared(ray, shear(), t_max, &p.v)
@@ -986,7 +999,8 @@ impl Bvh {
                     shear,
                     pack: pack_ray,
                 } = forms();
-                pack.intersect(pack_ray, ray, shear, ray.t_max).mask != 0
+                let hits = pack.intersect(pack_ray, ray, shear, ray.t_max);
+                self.triangles_met(pack, hits.mask, ray) != 0
             }
             ItemView::Single(p) if p.prim.kind() == PrimKind::Instanced => {
                 self.instance_blocks(p.prim.index(), ray)
@@ -1102,7 +1116,7 @@ impl Bvh {
     ) -> u32 {
         let (first, first_edge) = rays4.hit([p.v[0], p.v[1], p.v[3]]);
         let (second, second_edge) = rays4.hit([p.v[2], p.v[3], p.v[1]]);
-        let facing = if self.one_sided_quads {
+        let facing = if self.culled.quads {
             rays4.faces(p.normal)
         } else {
             0xf

@@ -7,7 +7,7 @@ use std::os::raw::c_char;
 
 use super::{Accel, AccelError, AccelOptions, EmbreeQuality, PackedPrim};
 use crate::geometry::{
-    faces_ray, intersect_quad, intersect_triangle, AnalyticShape, Ray, Shape, Vec3,
+    faces_ray, intersect_quad, intersect_triangle, triangle_normal, AnalyticShape, Ray, Shape, Vec3,
 };
 use crate::scene::{Instance, PrimHit, PrimKind, PrimRef, Scene};
 
@@ -106,11 +106,36 @@ unsafe extern "C" fn shape_exact(
     }
 }
 
-/// The quads as the exact test reads them: vertices, front normal, and whether the back side
-/// is to be missed.
-struct ExactQuads {
-    quads: Box<[([Vec3; 4], Vec3)]>,
+/// Quads (N = 4) or triangles (N = 3) as the exact tests read them: each one's vertices and
+/// front normal, and whether their back sides are missed (`CulledBacks`).
+struct ExactPolygons<const N: usize> {
+    polygons: Box<[([Vec3; N], Vec3)]>,
     one_sided: bool,
+}
+
+impl<const N: usize> ExactPolygons<N> {
+    /// The front normals, three floats each, for the shim's filter of a scene that is not
+    /// exact: none where both sides are met.
+    fn front_normals(&self) -> Option<Vec<f32>> {
+        self.one_sided.then(|| {
+            self.polygons
+                .iter()
+                .flat_map(|(_, n)| n.to_array())
+                .collect()
+        })
+    }
+
+    /// Polygon `prim`'s vertices, where a ray along `dir` meets it (not from a culled back).
+    #[inline(always)]
+    fn met(&self, prim: u32, dir: Vec3) -> Option<&[Vec3; N]> {
+        let (vertices, normal) = &self.polygons[prim as usize];
+        (!self.one_sided || faces_ray(*normal, dir)).then_some(vertices)
+    }
+}
+
+/// The floats as the shim takes an optional array: NULL for none.
+fn floats_or_null(floats: &Option<Vec<f32>>) -> *const f32 {
+    floats.as_ref().map_or(std::ptr::null(), |f| f.as_ptr())
 }
 
 /// Writes an exact routine's answer through the shim's out-pointers.
@@ -142,17 +167,16 @@ unsafe extern "C" fn quad_exact(
     u: *mut f32,
     v: *mut f32,
 ) -> i32 {
-    // SAFETY: `user` points to the `ExactQuads` boxed in the accel, alive as long as the scene;
-    // Embree proposes prim < the number of quads; `ray` has `Ray`'s layout (checked above);
-    // t/u/v are writable floats.
+    // SAFETY: `user` points to the `ExactPolygons<4>` boxed in the accel, alive as long as the
+    // scene; Embree proposes prim < the number of quads; `ray` has `Ray`'s layout (checked
+    // above); t/u/v are writable floats.
     unsafe {
-        let quads = &*(user as *const ExactQuads);
-        let (vertices, normal) = &quads.quads[prim as usize];
+        let quads = &*(user as *const ExactPolygons<4>);
         let ray = &*(ray as *const Ray);
-        if quads.one_sided && !faces_ray(*normal, ray.direction) {
-            return 0;
-        }
-        answer(intersect_quad(ray, ray.t_max, vertices), t, u, v)
+        let hit = quads
+            .met(prim, ray.direction)
+            .and_then(|vertices| intersect_quad(ray, ray.t_max, vertices));
+        answer(hit, t, u, v)
     }
 }
 
@@ -165,12 +189,16 @@ unsafe extern "C" fn triangle_exact(
     u: *mut f32,
     v: *mut f32,
 ) -> i32 {
-    // SAFETY: `user` points to the first of the boxed triangles, alive as long as the scene;
-    // prim < their number; `ray` has `Ray`'s layout; t/u/v are writable floats.
+    // SAFETY: `user` points to the `ExactPolygons<3>` boxed in the accel, alive as long as the
+    // scene; prim < the number of triangles; `ray` has `Ray`'s layout; t/u/v are writable
+    // floats.
     unsafe {
-        let [a, b, c] = *(user as *const [Vec3; 3]).add(prim as usize);
+        let triangles = &*(user as *const ExactPolygons<3>);
         let ray = &*(ray as *const Ray);
-        answer(intersect_triangle(ray, ray.t_max, a, b, c), t, u, v)
+        let hit = triangles
+            .met(prim, ray.direction)
+            .and_then(|&[a, b, c]| intersect_triangle(ray, ray.t_max, a, b, c));
+        answer(hit, t, u, v)
     }
 }
 
@@ -237,8 +265,8 @@ pub struct EmbreeAccel {
     /// User data of the geometries' exact routines: Embree holds pointers to them (to the
     /// first element of a slice), which stay put when the struct moves.
     shapes: Box<[AnalyticShape]>,
-    quads: Box<ExactQuads>,
-    triangles: Box<[[Vec3; 3]]>,
+    quads: Box<ExactPolygons<4>>,
+    triangles: Box<ExactPolygons<3>>,
     instanced: Box<InstancedExact>,
     /// A scene per group of triangles (null for a group without), which the top scene's
     /// instance geometries place; released after it.
@@ -290,18 +318,25 @@ impl EmbreeAccel {
         };
         let tx_scene = new_scene();
         let instancing = &scene.instancing;
+        let culled = scene.culled_backs();
         let mut accel = EmbreeAccel {
             device,
             scene: tx_scene,
             kinds: Vec::new(),
             shapes: scene.shapes.iter().map(|s| s.shape).collect(),
-            quads: Box::new(ExactQuads {
-                quads: scene.quads.iter().map(|q| (q.vertices, q.normal)).collect(),
-                one_sided: !scene.two_sided_quads,
+            quads: Box::new(ExactPolygons {
+                polygons: scene.quads.iter().map(|q| (q.vertices, q.normal)).collect(),
+                one_sided: culled.quads,
             }),
-            triangles: (0..scene.triangles.len())
-                .map(|i| scene.triangles.vertices(i))
-                .collect(),
+            triangles: Box::new(ExactPolygons {
+                polygons: (0..scene.triangles.len())
+                    .map(|i| {
+                        let v = scene.triangles.vertices(i);
+                        (v, triangle_normal(&v))
+                    })
+                    .collect(),
+                one_sided: culled.triangles,
+            }),
             instanced: Box::new(InstancedExact {
                 instances: instancing.instances.clone(),
                 of_geometry: Vec::new(),
@@ -325,28 +360,19 @@ impl EmbreeAccel {
                 .iter()
                 .flat_map(|q| q.vertices.iter().flat_map(|v| v.to_array()))
                 .collect();
-            let normals: Vec<f32> = scene
-                .quads
-                .iter()
-                .flat_map(|q| q.normal.to_array())
-                .collect();
-            let front = if !scene.two_sided_quads {
-                normals.as_ptr()
-            } else {
-                std::ptr::null()
-            };
+            let normals = accel.quads.front_normals();
             let n = u32::try_from(scene.quads.len())
                 .map_err(|_| AccelError::TooLarge(scene.quads.len()))?;
-            let user = &*accel.quads as *const ExactQuads as *const c_void;
-            // SAFETY: vertices holds 12 floats per quad and normals 3 (the shim copies both);
-            // `user` points to a box owned by `accel`, which outlives the scene, as
-            // `quad_exact` expects.
+            let user = &*accel.quads as *const ExactPolygons<4> as *const c_void;
+            // SAFETY: vertices holds 12 floats per quad and normals, where given, 3 (the shim
+            // copies both); `user` points to a box owned by `accel`, which outlives the scene,
+            // as `quad_exact` expects.
             let id = unsafe {
                 sys::tx_scene_add_quads(
                     tx_scene,
                     vertices.as_ptr(),
                     n,
-                    front,
+                    floats_or_null(&normals),
                     user,
                     Some(quad_exact),
                     key_base(PrimKind::Quad),
@@ -359,16 +385,19 @@ impl EmbreeAccel {
             let vertices: Vec<f32> = mesh.positions.iter().flat_map(|v| v.to_array()).collect();
             let indices: Vec<u32> = mesh.indices.iter().flatten().copied().collect();
             let nt = u32::try_from(mesh.len()).map_err(|_| AccelError::TooLarge(mesh.len()))?;
-            let user = accel.triangles.as_ptr() as *const c_void;
-            // SAFETY: the arrays hold 3 floats per vertex and 3 valid vertex indices per
-            // triangle (the shim copies them); `user` points into a boxed slice owned by
-            // `accel`, one entry per triangle, as `triangle_exact` expects.
+            let normals = accel.triangles.front_normals();
+            let user = &*accel.triangles as *const ExactPolygons<3> as *const c_void;
+            // SAFETY: the arrays hold 3 floats per vertex, 3 valid vertex indices per triangle
+            // and, where given, 3 floats of normal per triangle (the shim copies them); `user`
+            // points to a box owned by `accel`, which outlives the scene, as `triangle_exact`
+            // expects.
             let id = unsafe {
                 sys::tx_scene_add_triangles(
                     tx_scene,
                     vertices.as_ptr(),
                     indices.as_ptr(),
                     nt,
+                    floats_or_null(&normals),
                     user,
                     Some(triangle_exact),
                     key_base(PrimKind::Triangle),

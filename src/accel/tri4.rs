@@ -9,7 +9,9 @@
 use glam::Vec4;
 
 use super::PackedPrim;
-use crate::geometry::{intersect_triangle_sheared, Ray, RayShear, Vec3};
+use crate::geometry::{
+    faces_ray, intersect_triangle_sheared, triangle_normal, Ray, RayShear, Vec3,
+};
 
 /// Four triangles: `v[k][a]` holds coordinate `a` (x, y, z) of vertex `k` of each. A pack of
 /// fewer than four repeats its last triangle, which can only give the same hit again.
@@ -93,6 +95,15 @@ impl Tri4 {
             v: bytemuck::cast(lanes),
             prims: [prim; 4],
         }
+    }
+
+    /// The lanes of `lanes` whose triangles face a ray along `dir` (`faces_ray` of
+    /// `triangle_normal`: the one test every backend makes).
+    #[inline(always)]
+    pub fn facing(&self, lanes: u32, dir: Vec3) -> u32 {
+        (0..4)
+            .filter(|&i| lanes >> i & 1 != 0 && faces_ray(triangle_normal(&self.triangle(i)), dir))
+            .fold(0, |m, i| m | 1 << i)
     }
 
     /// The lanes as 36 floats, as `holding` wrote them.

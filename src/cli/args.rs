@@ -128,7 +128,7 @@ pub struct CommonArgs {
     /// and 50,000 photons a second; radiosity interpolated) and say so.
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub time_limit: Option<f64>,
-    /// Make quads opaque from both sides.
+    /// Make quads (and MGF's triangles) opaque from both sides, each side lit on its own.
     #[arg(long)]
     pub two_sided: bool,
     /// A parameter of a Mitsuba scene: what `$NAME` stands for, over the scene's own

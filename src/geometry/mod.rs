@@ -14,7 +14,7 @@ pub use bounds::Bounds3;
 pub use glam::{vec2, vec3, Vec2, Vec3};
 pub use polygon::{
     faces_ray, intersect_quad, intersect_quad_sheared, intersect_triangle,
-    intersect_triangle_sheared, quad_normal, quad_off_plane, RayShear,
+    intersect_triangle_sheared, quad_normal, quad_off_plane, triangle_normal, RayShear,
 };
 pub use ray::{offset_ray_origin, point_error, shadow_ray, spawn_ray, Ray};
 pub use shape::{AnalyticShape, RingPart, RingShape, Shape, SphereShape, Tessellation};

@@ -167,6 +167,13 @@ pub fn quad_normal(v: &[Vec3; 4]) -> Vec3 {
     (v[2] - v[0]).cross(v[3] - v[1])
 }
 
+/// The front normal of triangle `v` (unnormalised): the side its vertices run
+/// counter-clockwise round.
+#[inline]
+pub fn triangle_normal(v: &[Vec3; 3]) -> Vec3 {
+    (v[1] - v[0]).cross(v[2] - v[0])
+}
+
 /// How far off its plane quad `v` (of unit normal `unit` and diagonal `size`) is, when it is
 /// too far to count as planar: None when no vertex lies farther off the plane through its
 /// centre than a thousandth of its size (the course dialect's tolerance) or than rounding its

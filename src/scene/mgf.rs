@@ -35,6 +35,8 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         scene: Scene {
             path: path.to_path_buf(),
             background: Vec3::ZERO,
+            // RenderPark's rule for MGF's one-sided surfaces: a ray passes through their backs.
+            one_sided_triangles: true,
             ..Scene::default()
         },
         vertices: HashMap::new(),

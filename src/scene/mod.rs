@@ -26,7 +26,7 @@ pub use instance::{Group, Instance, Instancing};
 pub use surface::{bilinear, PrimHit, QuadNeighbours, SurfaceHit};
 pub use texture::Texture;
 
-use crate::geometry::{quad_normal, AnalyticShape, Bounds3, Shape, Vec2, Vec3};
+use crate::geometry::{faces_ray, quad_normal, AnalyticShape, Bounds3, Shape, Vec2, Vec3};
 use glam::Mat3;
 
 pub use crate::color::Color;
@@ -251,6 +251,28 @@ pub struct PrimRef {
     pub index: u32,
 }
 
+/// Which polygons a ray passes through from behind (`Scene::culled_backs`): every Accel, and
+/// every test of one polygon, apply it alike.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CulledBacks {
+    pub quads: bool,
+    pub triangles: bool,
+}
+
+impl CulledBacks {
+    /// Whether a ray along `dir` meets a polygon of kind `kind` (Quad or Triangle) whose front
+    /// normal (vertices counter-clockwise round it, unnormalized) is `normal`.
+    #[inline(always)]
+    pub fn meets(self, kind: PrimKind, normal: Vec3, dir: Vec3) -> bool {
+        let culled = match kind {
+            PrimKind::Quad => self.quads,
+            PrimKind::Triangle => self.triangles,
+            PrimKind::Shape | PrimKind::Instanced => false,
+        };
+        !culled || faces_ray(normal, dir)
+    }
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
     /// The file the scene came from (textures are relative to it).
@@ -289,6 +311,10 @@ pub struct Scene {
     /// Quads are opaque from both sides (`--two-sided`); by default they are one-sided for
     /// every query, as in the course program.
     pub two_sided_quads: bool,
+    /// Triangles are one-sided as quads are: missed from behind by every query unless
+    /// `--two-sided` (MGF scenes, as RenderPark culls their backs; default false: a triangle is
+    /// opaque from both sides, as in the course program and Mitsuba).
+    pub one_sided_triangles: bool,
     /// For each quad, the quads that share a vertex position with it (built on first use; it
     /// settles hits on shared edges the same way whichever backend reported them).
     pub quad_neighbours: QuadNeighbours,
@@ -561,6 +587,10 @@ impl Scene {
             "{:?}{:?}{:?}{:?}{}",
             self.materials, self.quads, self.triangles, self.shapes, self.two_sided_quads
         );
+        // Only scenes with one-sided triangles hash the rule, keeping the other scenes' hashes.
+        if self.one_sided_triangles {
+            let _ = write!(h, "one-sided triangles");
+        }
         // Only scenes with instances hash them, keeping the other scenes' hashes.
         if !self.instancing.instances.is_empty() {
             let groups: Vec<_> = self.instancing.groups.iter().map(|g| &g.mesh).collect();
@@ -686,6 +716,15 @@ impl Scene {
     #[inline]
     pub fn instanced_vertices(&self, index: u32) -> [Vec3; 3] {
         self.instancing.world_vertices(index)
+    }
+
+    /// Which polygons every query misses from behind (the scene's rule, `--two-sided`
+    /// applied). Instanced triangles are always opaque from both sides (Mitsuba's rule).
+    pub fn culled_backs(&self) -> CulledBacks {
+        CulledBacks {
+            quads: !self.two_sided_quads,
+            triangles: self.one_sided_triangles && !self.two_sided_quads,
+        }
     }
 
     pub fn material_of(&self, prim: PrimRef) -> u32 {

@@ -5,7 +5,7 @@
 use super::procedural::{bumped_normal, Bump, BumpSource};
 use super::{Color, PrimKind, PrimRef, Scene};
 use crate::geometry::{
-    faces_ray, intersect_quad, point_error, spawn_ray, vec2, Bounds3, Ray, Shape, Vec2, Vec3,
+    intersect_quad, point_error, spawn_ray, triangle_normal, vec2, Bounds3, Ray, Shape, Vec2, Vec3,
 };
 use crate::sampling::orthonormal_basis;
 
@@ -345,7 +345,7 @@ impl Scene {
                         .unwrap_or((hit.t, hit.u, hit.v))
                 };
                 let point = p0 + (p1 - p0) * b1 + (p2 - p0) * b2;
-                let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+                let ng = triangle_normal(&[p0, p1, p2]).normalize_or_zero();
                 let shading_normal = if self.smooth_normals && !mesh.normals.is_empty() {
                     let normals = mesh.indices[j].map(|k| mesh.normals[k as usize]);
                     let normals = match instance {
@@ -461,7 +461,10 @@ impl Scene {
     ) -> (usize, (f32, f32, f32)) {
         let exact = |k: usize, t_max: f32| {
             let q = &self.quads[k];
-            if !self.two_sided_quads && !faces_ray(q.normal, ray.direction) {
+            if !self
+                .culled_backs()
+                .meets(PrimKind::Quad, q.normal, ray.direction)
+            {
                 return None;
             }
             intersect_quad(ray, t_max, &q.vertices)

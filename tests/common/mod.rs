@@ -9,7 +9,7 @@ pub mod vec64;
 use std::path::{Path, PathBuf};
 
 use trilux::accel::{Accel, AccelKind, PrimHit};
-use trilux::geometry::{faces_ray, intersect_quad, intersect_triangle, Ray};
+use trilux::geometry::{intersect_quad, intersect_triangle, Ray};
 use trilux::scene::{PrimKind, PrimRef, Scene};
 
 /// The largest relative error of the red channel of `values` against `truth` (the furnaces
@@ -94,13 +94,17 @@ impl BruteForce<'_> {
         match prim.kind {
             PrimKind::Quad => {
                 let q = &s.quads[i];
-                if !s.two_sided_quads && !faces_ray(q.normal, ray.direction) {
+                if !s.culled_backs().meets(prim.kind, q.normal, ray.direction) {
                     return None;
                 }
                 intersect_quad(ray, t_max, &q.vertices).map(|h| h.0)
             }
             PrimKind::Triangle => {
                 let [a, b, c] = s.triangles.vertices(i);
+                let normal = (b - a).cross(c - a);
+                if !s.culled_backs().meets(prim.kind, normal, ray.direction) {
+                    return None;
+                }
                 intersect_triangle(ray, t_max, a, b, c).map(|h| h.0)
             }
             PrimKind::Shape => shape_oracle::hit(&s.shapes[i].shape, ray, t_max).map(|t| t as f32),
