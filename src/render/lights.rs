@@ -267,6 +267,10 @@ impl Light {
     }
 
     /// A point uniformly distributed by area, from (u, v) in [0,1)².
+    ///
+    /// Always inlined: as a call, the path tracer's wavefront, which draws one at every
+    /// vertex, took the point back through memory.
+    #[inline(always)]
     pub fn sample(&self, u: f32, v: f32) -> LightPoint {
         match self.shape {
             LightShape::Parallelogram(q) => q.sample(u, v),
