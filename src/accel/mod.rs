@@ -57,7 +57,8 @@ pub enum AccelKind {
 /// the BVH was as fast as Embree or faster in every engine measured (BENCHMARKS.md, "Which
 /// Accel by default"): the path tracer 1.25× on 1,000 quads and 1.66× on the Cornell box,
 /// whose sphere Embree reaches through a user-geometry callback; above it Embree's build and
-/// traversal win (the hospital's radiosity, 25,099 patches, 1.3×).
+/// traversal win for the engines that follow rays (the path tracer on Mitsuba's 130,050
+/// triangles, 1.09×). Radiosity's visibility rays are the exception (`default_for`).
 pub const BVH_UP_TO_PRIMITIVES: usize = 1_000;
 
 impl AccelKind {
@@ -71,9 +72,13 @@ impl AccelKind {
     }
 
     /// The backend when `--accel` is not given: the BVH for a scene of at most
-    /// `BVH_UP_TO_PRIMITIVES` primitives, else `default_available`.
-    pub fn default_for(scene: &Scene) -> AccelKind {
-        if scene.primitive_count() <= BVH_UP_TO_PRIMITIVES {
+    /// `BVH_UP_TO_PRIMITIVES` primitives, and for the visibility between radiosity's patches
+    /// (`patch_visibility`) at any size, else `default_available`. On radiosity the BVH took
+    /// Embree's time within 4% on the hospital, office3 and the classroom (either solver),
+    /// 1.09× on soda and 0.77× on sixteen hospitals, where Embree's time grew 16.8-fold to the
+    /// BVH's 12.8-fold (BENCHMARKS.md, "Sixteen hospitals").
+    pub fn default_for(scene: &Scene, patch_visibility: bool) -> AccelKind {
+        if patch_visibility || scene.primitive_count() <= BVH_UP_TO_PRIMITIVES {
             AccelKind::Bvh
         } else {
             AccelKind::default_available()

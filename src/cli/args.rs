@@ -760,12 +760,13 @@ impl RenderArgs {
         chosen
     }
 
-    /// The Accel asked for (`--accel`), or the best this build has.
-    /// The backend for `scene`: `--accel`, else `AccelKind::default_for` the scene.
+    /// The backend for `scene`: `--accel`, else `AccelKind::default_for` the scene and
+    /// whether its rays are radiosity's.
     pub fn accel_kind(&self, scene: &crate::scene::Scene) -> AccelKind {
+        let radiosity = self.engine() == EngineKind::Radiosity;
         self.common
             .accel
-            .unwrap_or_else(|| AccelKind::default_for(scene))
+            .unwrap_or_else(|| AccelKind::default_for(scene, radiosity))
     }
 
     pub fn accel_options(&self) -> AccelOptions {

@@ -39,7 +39,7 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             .collect();
         if args.common.accel.is_none() {
             notes += &format!(
-                "note: accel {kind} is the default for a scene of {} primitives (the BVH up to {}, Embree above when built in); --accel chooses\n",
+                "note: accel {kind} is the default for the {engine} engine on a scene of {} primitives (the BVH for radiosity and up to {} primitives, Embree above when built in); --accel chooses\n",
                 scene.primitive_count(),
                 accel::BVH_UP_TO_PRIMITIVES
             );
