@@ -1417,6 +1417,60 @@ fn mean_of(file: &Path) -> f64 {
     sum / film.pixels.len() as f64
 }
 
+/// An MGF scene's mirrors reflect without `--num-bounces` (its default there is pbrt's 5, not
+/// the course's 0): looking down at a mirror (`rs 1`, roughness 0) under a lamp of radiance 1,
+/// the ray tracer shows the lamp in every pixel, and with `--num-bounces 0` given, nothing.
+#[test]
+fn an_mgf_mirror_reflects_by_default() {
+    let dir = common::temp_dir("mgf-mirror");
+    let scene = "m lamp =\n c\n  cxy 0.333333 0.333333\n ed 575.13\n\
+        v l1 =\n p -20 -20 4\nv l2 =\n p 20 -20 4\nv l3 =\n p 20 20 4\nv l4 =\n p -20 20 4\n\
+        f l1 l4 l3 l2\n\
+        m mirror =\n c\n  cxy 0.333333 0.333333\n rs 1 0\n\
+        v m1 =\n p -20 -20 0\nv m2 =\n p 20 -20 0\nv m3 =\n p 20 20 0\nv m4 =\n p -20 20 0\n\
+        f m1 m2 m3 m4\n";
+    std::fs::write(dir.join("mirror.mgf"), scene).unwrap();
+    let view = [
+        "-input",
+        "mirror.mgf",
+        "--engine",
+        "raytrace",
+        "-size",
+        "16",
+        "16",
+        "--quiet",
+        "--camera-position",
+        "0 0 2",
+        "--look-at",
+        "0 0 0",
+        "--up",
+        "0 1 0",
+        "--fov",
+        "40",
+    ];
+    let split = |s: &str| s.split(' ').map(str::to_string).collect::<Vec<_>>();
+    let args = |extra: &[&str]| -> Vec<String> {
+        view.iter()
+            .flat_map(|a| split(a))
+            .chain(extra.iter().map(|a| a.to_string()))
+            .collect()
+    };
+    for (extra, expected) in [
+        (&["-o", "default.pfm"][..], 1.0),
+        (&["--num-bounces", "0", "-o", "none.pfm"][..], 0.0),
+    ] {
+        let argv = args(extra);
+        let argv: Vec<&str> = argv.iter().map(String::as_str).collect();
+        ok(&render(&dir, &argv));
+        let mean = mean_of(&dir.join(argv.last().unwrap()));
+        assert!(
+            (mean - expected).abs() < 0.01,
+            "{extra:?}: mean {mean}, expected {expected}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The photon engine chooses what is not given. With no photon flag it traces photons
 /// (`photons_for_image`): the Cornell box's mean is the path tracer's converged mean within
 /// 5% (with no photons it is 18% low: no indirect light). With `--time-limit`,

@@ -400,7 +400,8 @@ impl CameraArgs {
 #[derive(Args, Debug)]
 #[command(next_help_heading = "Ray tracing")]
 pub struct RayTraceArgs {
-    /// Mirror/refraction recursion depth (0: the course's value).
+    /// Mirror/refraction recursion depth (0: the course's value; MGF scenes 5, pbrt's, so
+    /// that their glossy floors and glass reflect).
     #[arg(long, default_value_t = rs().num_bounces)]
     pub num_bounces: u32,
     /// Shadow rays per light (radiosity: visibility in form factors when > 0; 0: the light's

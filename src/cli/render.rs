@@ -214,6 +214,9 @@ pub fn apply_scene_hints(args: &RenderArgs, scene: &mut Scene, settings: &mut Re
     if let (Some(n), false) = (hints.samples, given("num_antialias_samples")) {
         settings.num_antialias_samples = n;
     }
+    if let (Some(n), false) = (hints.num_bounces, given("num_bounces")) {
+        settings.num_bounces = n;
+    }
     if !given("max_depth") && hints.max_depth.is_some() {
         settings.max_depth = hints.max_depth;
     }

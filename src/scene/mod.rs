@@ -437,6 +437,9 @@ pub struct RenderHints {
     pub max_depth: Option<u32>,
     /// A thin lens: its radius and focus distance (`--aperture`, `--focus-distance`).
     pub lens: Option<(f32, f32)>,
+    /// Mirror and refraction depth of the ray tracer and the engines built on it
+    /// (`--num-bounces`), where the format has its own: MGF's (`mgf::NUM_BOUNCES`).
+    pub num_bounces: Option<u32>,
 }
 
 impl Scene {
