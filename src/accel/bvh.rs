@@ -38,9 +38,7 @@ use glam::Vec4;
 use super::pages::HugePageArray;
 use super::tri4::{Rays4, Tri4, Tri4Ray};
 use super::{Accel, AccelError, PackedPrim};
-use crate::geometry::{
-    faces_ray, intersect_quad_sheared, AnalyticShape, Bounds3, Ray, RayShear, Shape, Vec3,
-};
+use crate::geometry::{intersect_quad_sheared, AnalyticShape, Bounds3, Ray, RayShear, Shape, Vec3};
 use crate::scene::{
     CulledBacks, Instance, PrimHit, PrimKind, PrimRef, Quad, Scene, ShapePrim, TriangleMesh,
 };
@@ -720,7 +718,7 @@ impl Bvh {
         match p.prim.kind() {
             PrimKind::Triangle => unreachable!("triangles are tested in packs of four"),
             PrimKind::Quad => {
-                if self.culled.quads && !faces_ray(p.normal, ray.direction) {
+                if !self.culled.meets(PrimKind::Quad, p.normal, ray.direction) {
                     return None;
                 }
                 intersect_quad_sheared(ray, shear(), t_max, &p.v)

@@ -106,21 +106,36 @@ unsafe extern "C" fn shape_exact(
     }
 }
 
-/// Quads (N = 4) or triangles (N = 3) as the exact tests read them: each one's vertices and
-/// front normal, and whether their back sides are missed (`CulledBacks`).
+/// Quads (N = 4) or triangles (N = 3) as the exact tests read them: each one's vertices and,
+/// where their backs are missed (`CulledBacks`), its front normal.
 struct ExactPolygons<const N: usize> {
-    polygons: Box<[([Vec3; N], Vec3)]>,
-    one_sided: bool,
+    polygons: Box<[[Vec3; N]]>,
+    /// One per polygon where backs are missed; empty where both sides are met (no memory
+    /// spent on normals no test reads).
+    front_normals: Box<[Vec3]>,
 }
 
 impl<const N: usize> ExactPolygons<N> {
+    /// The polygons, with the front normal `normal` gives each where `one_sided`.
+    fn new(polygons: Box<[[Vec3; N]]>, one_sided: bool, normal: impl Fn(usize) -> Vec3) -> Self {
+        let front_normals = if one_sided {
+            (0..polygons.len()).map(normal).collect()
+        } else {
+            Box::default()
+        };
+        ExactPolygons {
+            polygons,
+            front_normals,
+        }
+    }
+
     /// The front normals, three floats each, for the shim's filter of a scene that is not
     /// exact: none where both sides are met.
     fn front_normals(&self) -> Option<Vec<f32>> {
-        self.one_sided.then(|| {
-            self.polygons
+        (!self.front_normals.is_empty()).then(|| {
+            self.front_normals
                 .iter()
-                .flat_map(|(_, n)| n.to_array())
+                .flat_map(|n| n.to_array())
                 .collect()
         })
     }
@@ -128,8 +143,11 @@ impl<const N: usize> ExactPolygons<N> {
     /// Polygon `prim`'s vertices, where a ray along `dir` meets it (not from a culled back).
     #[inline(always)]
     fn met(&self, prim: u32, dir: Vec3) -> Option<&[Vec3; N]> {
-        let (vertices, normal) = &self.polygons[prim as usize];
-        (!self.one_sided || faces_ray(*normal, dir)).then_some(vertices)
+        let i = prim as usize;
+        match self.front_normals.get(i) {
+            Some(&n) if !faces_ray(n, dir) => None,
+            _ => Some(&self.polygons[i]),
+        }
     }
 }
 
@@ -324,19 +342,18 @@ impl EmbreeAccel {
             scene: tx_scene,
             kinds: Vec::new(),
             shapes: scene.shapes.iter().map(|s| s.shape).collect(),
-            quads: Box::new(ExactPolygons {
-                polygons: scene.quads.iter().map(|q| (q.vertices, q.normal)).collect(),
-                one_sided: culled.quads,
-            }),
-            triangles: Box::new(ExactPolygons {
-                polygons: (0..scene.triangles.len())
-                    .map(|i| {
-                        let v = scene.triangles.vertices(i);
-                        (v, triangle_normal(&v))
-                    })
+            quads: Box::new(ExactPolygons::new(
+                scene.quads.iter().map(|q| q.vertices).collect(),
+                culled.quads,
+                |i| scene.quads[i].normal,
+            )),
+            triangles: Box::new(ExactPolygons::new(
+                (0..scene.triangles.len())
+                    .map(|i| scene.triangles.vertices(i))
                     .collect(),
-                one_sided: culled.triangles,
-            }),
+                culled.triangles,
+                |i| triangle_normal(&scene.triangles.vertices(i)),
+            )),
             instanced: Box::new(InstancedExact {
                 instances: instancing.instances.clone(),
                 of_geometry: Vec::new(),
