@@ -1471,6 +1471,79 @@ fn an_mgf_mirror_reflects_by_default() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A diffuse MGF room lit by a small lamp, a box casting its shadow: with no quality flag,
+/// radiosity, the photon engine and the path tracer agree on the image's mean, with each
+/// backend. MGF's defaults (`mgf::SHADOW_SAMPLES`, the hierarchical solver) make radiosity see
+/// the box and split the room's six faces; with the course's defaults (no visibility, one flat
+/// patch a face) its mean was 73% above the path tracer's.
+#[test]
+fn the_engines_agree_on_a_diffuse_mgf_room_by_default() {
+    let dir = common::temp_dir("mgf-room");
+    let white =
+        |name: &str, what: &str| format!("m {name} =\n c\n  cxy 0.333333 0.333333\n {what}\n");
+    let vertex = |name: &str, p: [f32; 3]| format!("v {name} =\n p {} {} {}\n", p[0], p[1], p[2]);
+    // A box from `lo` to `hi`: its corners c0..c3 (bottom) and d0..d3 (top) named `prefix`.
+    let corners = |prefix: &str, lo: [f32; 3], hi: [f32; 3]| -> String {
+        let ring = [
+            (lo[0], lo[1]),
+            (hi[0], lo[1]),
+            (hi[0], hi[1]),
+            (lo[0], hi[1]),
+        ];
+        ring.iter()
+            .enumerate()
+            .flat_map(|(k, &(x, y))| {
+                [
+                    vertex(&format!("{prefix}c{k}"), [x, y, lo[2]]),
+                    vertex(&format!("{prefix}d{k}"), [x, y, hi[2]]),
+                ]
+            })
+            .collect()
+    };
+    // The room's faces look in, the box's out (MGF's counter-clockwise fronts).
+    let scene = [
+        white("wall", "rd 0.7"),
+        white("floor", "rd 0.5"),
+        white("box", "rd 0.6"),
+        white("lamp", "ed 5751.3"),
+        corners("r", [0.0; 3], [10.0; 3]),
+        corners("b", [1.5, 1.5, 0.0], [4.5, 4.5, 3.0]),
+        vertex("l0", [4.5, 4.5, 9.99]),
+        vertex("l1", [4.5, 5.5, 9.99]),
+        vertex("l2", [5.5, 5.5, 9.99]),
+        vertex("l3", [5.5, 4.5, 9.99]),
+        "m floor\nf rc0 rc1 rc2 rc3\n".into(),
+        "m wall\nf rd0 rd3 rd2 rd1\nf rc0 rd0 rd1 rc1\nf rc3 rc2 rd2 rd3\n\
+         f rc0 rc3 rd3 rd0\nf rc1 rd1 rd2 rc2\n"
+            .into(),
+        "m lamp\nf l0 l1 l2 l3\n".into(),
+        "m box\nf bd0 bd1 bd2 bd3\nf bc0 bc1 bd1 bd0\nf bc3 bd3 bd2 bc2\n\
+         f bc0 bd0 bd3 bc3\nf bc1 bc2 bd2 bd1\n"
+            .into(),
+    ]
+    .concat();
+    std::fs::write(dir.join("room.mgf"), scene).unwrap();
+    let view = "-input room.mgf --camera-position 9 9 6 --look-at 2 2 1 --up 0 0 1 --fov 70 \
+                -size 32 32 --quiet";
+    for kind in backends() {
+        let mean = |engine: &str| {
+            let out = format!("{}-{kind}.pfm", engine.split(' ').next().unwrap());
+            let argv = format!("{view} --accel {kind} --engine {engine} -o {out}");
+            ok(&render(&dir, &argv.split(' ').collect::<Vec<_>>()));
+            mean_of(&dir.join(out))
+        };
+        let path = mean("path -num_antialias_samples 256");
+        for engine in ["radiosity", "photon"] {
+            let m = mean(engine);
+            assert!(
+                (m - path).abs() <= 0.03 * path,
+                "{kind}: {engine} mean {m}, the path tracer's {path}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The photon engine chooses what is not given. With no photon flag it traces photons
 /// (`photons_for_image`): the Cornell box's mean is the path tracer's converged mean within
 /// 5% (with no photons it is 18% low: no indirect light). With `--time-limit`,

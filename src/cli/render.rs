@@ -26,7 +26,7 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         .map(|t| load_start + std::time::Duration::from_secs_f64(t));
     let engine = args.engine();
     let mut scene = load_scene(args, input, engine)?;
-    apply_scene_hints(args, &mut scene, &mut settings);
+    let from_scene = apply_scene_hints(args, &mut scene, &mut settings);
     let load_s = load_start.elapsed().as_secs_f64();
     let kind = args.accel_kind(&scene);
     let plan = Plan::new(&scene, engine, kind, &settings);
@@ -37,6 +37,12 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             .iter()
             .map(|f| format!("note: {f} is ignored: the {engine} engine does not read it\n"))
             .collect();
+        if !from_scene.is_empty() {
+            notes += &format!(
+                "note: the scene file chooses {} (flags given win)\n",
+                from_scene.join(", ")
+            );
+        }
         if args.common.accel.is_none() {
             notes += &format!(
                 "note: accel {kind} is the default for the {engine} engine on a scene of {} primitives (the BVH for radiosity and up to {} primitives, Embree above when built in); --accel chooses\n",
@@ -201,33 +207,60 @@ pub fn checked_settings(args: &RenderArgs) -> Result<RenderSettings, String> {
 }
 
 /// What the scene file asks of the render (a Mitsuba scene's film size, samples per pixel,
-/// path depth and lens), where the command line did not give its own: the flags win.
-pub fn apply_scene_hints(args: &RenderArgs, scene: &mut Scene, settings: &mut RenderSettings) {
+/// path depth and lens; an MGF scene's reflection depth, shadow rays and radiosity solver),
+/// where the command line did not give its own: the flags win. Returns the settings taken, as
+/// a user would type them, for `--plan` to say.
+pub fn apply_scene_hints(
+    args: &RenderArgs,
+    scene: &mut Scene,
+    settings: &mut RenderSettings,
+) -> Vec<String> {
     let given = |id: &str| args.given.iter().any(|(_, g)| g == id);
     let hints = scene.render_hints.clone();
+    let mut taken = Vec::new();
     if let (Some((w, h)), false) = (hints.size, given("size")) {
         settings.width = w;
         settings.height = h;
         settings.window = args.part.window(w, h);
         scene.filter_textures_for(w, h);
+        taken.push(format!("-size {w} {h}"));
     }
     if let (Some(n), false) = (hints.samples, given("num_antialias_samples")) {
         settings.num_antialias_samples = n;
+        taken.push(format!("-num_antialias_samples {n}"));
     }
     if let (Some(n), false) = (hints.num_bounces, given("num_bounces")) {
         settings.num_bounces = n;
+        taken.push(format!("-num_bounces {n}"));
     }
-    if !given("max_depth") && hints.max_depth.is_some() {
-        settings.max_depth = hints.max_depth;
+    // A time limit chooses its own shadow rays (`RenderArgs::choose_for_time_limit`).
+    let time_limited = args.common.time_limit.is_some();
+    if let (Some(n), false) = (
+        hints.num_shadow_samples,
+        given("num_shadow_samples") || time_limited,
+    ) {
+        settings.num_shadow_samples = n;
+        taken.push(format!("-num_shadow_samples {n}"));
+    }
+    if hints.hierarchical_radiosity && !given("radiosity_solver") {
+        settings.radiosity.solver = crate::engines::radiosity::SolverKind::Hierarchical;
+        taken.push("--radiosity-solver hierarchical".to_string());
+    }
+    if let (Some(depth), false) = (hints.max_depth, given("max_depth")) {
+        settings.max_depth = Some(depth);
+        taken.push(format!("--max-depth {depth}"));
     }
     if let Some((radius, focus)) = hints.lens {
         if !given("aperture") {
             settings.aperture = radius;
+            taken.push(format!("--aperture {radius}"));
         }
         if !given("focus_distance") && focus > 0.0 {
             settings.focus_distance = Some(focus);
+            taken.push(format!("--focus-distance {focus}"));
         }
     }
+    taken
 }
 
 /// The scene as `render` reads it: loaded (its warnings printed), `--two-sided` and the

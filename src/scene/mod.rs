@@ -440,6 +440,13 @@ pub struct RenderHints {
     /// Mirror and refraction depth of the ray tracer and the engines built on it
     /// (`--num-bounces`), where the format has its own: MGF's (`mgf::NUM_BOUNCES`).
     pub num_bounces: Option<u32>,
+    /// Shadow rays a light, which also turn on visibility in radiosity's form factors
+    /// (`-num_shadow_samples`), where the format has its own: MGF's
+    /// (`mgf::SHADOW_SAMPLES`).
+    pub num_shadow_samples: Option<u32>,
+    /// The hierarchical radiosity solver whatever the number of faces (`--radiosity-solver
+    /// hierarchical`), for formats whose faces are too large to be one flat patch each: MGF's.
+    pub hierarchical_radiosity: bool,
 }
 
 impl Scene {
