@@ -63,6 +63,10 @@ fn main() {
             radiosity_shots_and_photons,
         ),
         trial(
+            "an_mgf_scene_shows_what_its_offline_command_renders",
+            an_mgf_scene_shows_what_its_offline_command_renders,
+        ),
+        trial(
             "space_shoots_on_from_the_solution_kept",
             space_shoots_on_from_the_solution_kept,
         ),
@@ -483,6 +487,26 @@ fn quit(display: &Display, viewer: &mut Viewer, id: &str) -> Result<(), Failed> 
         0,
         "'q' exits with status 0"
     );
+    Ok(())
+}
+
+/// An MGF scene chooses its own shadow rays and reflection depth (`mgf::SHADOW_SAMPLES`,
+/// `mgf::NUM_BOUNCES`): 'r' on `scenes/cornell_box.mgf` traces with them, so that the screen
+/// is what the printed command line renders, its boxes' shadows included.
+fn an_mgf_scene_shows_what_its_offline_command_renders() -> Result<(), Failed> {
+    let dir = common::temp_dir("viewer-mgf");
+    let display = Display::start();
+    let flags = ["-size", "64", "64", "-num_antialias_samples", "4"];
+    let (mut viewer, id) = open(&display, &dir, &scene("cornell_box.mgf"), &flags)?;
+    display.run("xdotool", &["key", "r"])?;
+    display.wait_for_title(&id, "done", Duration::from_secs(60))?;
+    let (line, _, _) = screen_is_offline_render(&display, &viewer, &id, &dir, "mgf")?;
+    assert!(
+        line.contains("--engine raytrace") && !line.contains("-num_shadow_samples"),
+        "{line}"
+    );
+    quit(&display, &mut viewer, &id)?;
+    std::fs::remove_dir_all(&dir)?;
     Ok(())
 }
 

@@ -104,7 +104,10 @@ impl Session {
         settings.quiet = true;
         let engine = args.engine();
         let input = PathBuf::from(input);
-        let scene = crate::cli::render::load_scene(&args, &input, engine)?;
+        let mut scene = crate::cli::render::load_scene(&args, &input, engine)?;
+        // What the scene file chooses, as `render` takes it, so that the offline command
+        // renders what the window shows.
+        crate::cli::render::apply_scene_hints(&args, &mut scene, &mut settings);
         // As `render` plans: refused above --max-memory, and the hierarchical solver bounded
         // by what the limit leaves.
         let plan = crate::plan::Plan::new(&scene, engine, args.accel_kind(&scene), &settings);
