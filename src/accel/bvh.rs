@@ -765,6 +765,27 @@ impl Bvh {
         group.occluded_below(ROOT, (&local, &OnceCell::new()), inverse_direction(&local))
     }
 
+    /// Asks the processor to bring `e`'s memory (its node, or its leaf's items up to
+    /// `PREFETCH_LINES` cache lines) into the cache, as Embree does for every child a ray
+    /// enters: a ray's time goes mostly to waiting for nodes and leaves, and so the loads of
+    /// all the children entered, and of all the lines of each, overlap, also those of the
+    /// children pushed for later.
+    #[inline(always)]
+    fn prefetch(&self, e: &Entry) {
+        let (start, len) = if e.count == 0 {
+            let node = self.nodes.as_ptr().wrapping_add(e.first as usize);
+            (node.cast::<u8>(), size_of::<Node>())
+        } else {
+            let items = self.items.as_ptr().wrapping_add(e.first as usize);
+            (items.cast::<u8>(), e.count as usize * size_of::<LeafItem>())
+        };
+        let skew = start as usize % CACHE_LINE;
+        let lines = (skew + len).div_ceil(CACHE_LINE).min(PREFETCH_LINES);
+        for k in 0..lines {
+            prefetch_line(start.wrapping_sub(skew).wrapping_add(k * CACHE_LINE));
+        }
+    }
+
     /// Walks the tree below `start` (`ROOT`, or a child the ray was found to enter), the
     /// children a ray enters nearest first when `ORDERED`, else in slot order; `boxes` is
     /// `ray` set up for the slab test. `visit` tests a leaf and returns true to stop.
@@ -804,10 +825,14 @@ impl Bvh {
                 let node = &self.nodes[current.first as usize];
                 let (mut mask, near) = slab(node, boxes, ray.t_min, reach(*t_max));
                 if mask != 0 {
-                    let entry = |slot: usize| Entry {
-                        first: node.first[slot],
-                        count: node.count[slot],
-                        t: near[slot],
+                    let entry = |slot: usize| {
+                        let e = Entry {
+                            first: node.first[slot],
+                            count: node.count[slot],
+                            t: near[slot],
+                        };
+                        self.prefetch(&e);
+                        e
                     };
                     if mask & (mask - 1) == 0 {
                         current = entry(mask.trailing_zeros() as usize);
@@ -855,6 +880,21 @@ impl Bvh {
                 }
             }
         }
+    }
+}
+
+/// Bytes of a cache line.
+const CACHE_LINE: usize = 64;
+/// Most cache lines `Bvh::prefetch` asks for: a node's four, or a leaf's first.
+const PREFETCH_LINES: usize = 6;
+
+/// Starts loading the cache line at `p` into every level of the cache (a hint: it neither
+/// reads nor faults, whatever the address). `pulp` wraps the instruction safely.
+#[inline(always)]
+fn prefetch_line(p: *const u8) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(sse) = pulp::core_arch::x86::Sse::try_new() {
+        sse._mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast());
     }
 }
 
