@@ -366,6 +366,9 @@ pub struct Bvh {
     culled: CulledBacks,
     /// The processor's instructions, for the batched queries' dispatch.
     arch: pulp::Arch,
+    /// Whether traversal prefetches the children a ray enters (`Bvh::prefetch`): only trees
+    /// larger than `PREFETCH_ABOVE`.
+    prefetch: bool,
 }
 
 /// A primitive during the build: the corners of its box in two `Vec4`s, so that binning and
@@ -581,7 +584,9 @@ impl Bvh {
             outs.into_par_iter()
                 .for_each(|(range, out)| write_leaf_items(source, &build[range], out));
         });
+        let bytes = nodes.len() * size_of::<Node>() + items.len() * size_of::<LeafItem>();
         Bvh {
+            prefetch: bytes > PREFETCH_ABOVE,
             nodes: HugePageArray::new(nodes),
             items,
             prim_count: build.len(),
@@ -774,27 +779,27 @@ impl Bvh {
         group.occluded_below(ROOT, (&local, &OnceCell::new()), inverse_direction(&local))
     }
 
-    /// Asks the processor to bring `e`'s memory (its node, or the start of its leaf's items)
-    /// into the cache, as Embree does for every child a ray enters: a ray's time goes mostly
-    /// to waiting for nodes and leaves, and so the loads of all the children entered, and of
-    /// all the lines of each, overlap, also those of the children pushed for later. Always
-    /// `PREFETCH_LINES` lines from the start, without a loop or a branch: where the tree is
-    /// in the cache anyway (the Cornell box) the prefetch is pure cost.
+    /// Asks the processor to bring `e`'s memory (its node, or its leaf's items up to
+    /// `PREFETCH_LINES` cache lines) into the cache, as Embree does for every child a ray
+    /// enters: a ray's time goes mostly to waiting for nodes and leaves, and so the loads of
+    /// all the children entered, and of all the lines of each, overlap, also those of the
+    /// children pushed for later. Small trees, in the cache anyway, skip it.
     #[inline(always)]
     fn prefetch(&self, e: &Entry) {
-        let start = if e.count == 0 {
-            self.nodes
-                .as_ptr()
-                .wrapping_add(e.first as usize)
-                .cast::<u8>()
+        if !self.prefetch {
+            return;
+        }
+        let (start, len) = if e.count == 0 {
+            let node = self.nodes.as_ptr().wrapping_add(e.first as usize);
+            (node.cast::<u8>(), size_of::<Node>())
         } else {
-            self.items
-                .as_ptr()
-                .wrapping_add(e.first as usize)
-                .cast::<u8>()
+            let items = self.items.as_ptr().wrapping_add(e.first as usize);
+            (items.cast::<u8>(), e.count as usize * size_of::<LeafItem>())
         };
-        for k in 0..PREFETCH_LINES {
-            prefetch_line(start.wrapping_add(k * CACHE_LINE));
+        let skew = start as usize % CACHE_LINE;
+        let lines = (skew + len).div_ceil(CACHE_LINE).min(PREFETCH_LINES);
+        for k in 0..lines {
+            prefetch_line(start.wrapping_sub(skew).wrapping_add(k * CACHE_LINE));
         }
     }
 
@@ -897,9 +902,10 @@ impl Bvh {
 
 /// Bytes of a cache line.
 const CACHE_LINE: usize = 64;
-/// Cache lines `Bvh::prefetch` asks for: a node's four (nodes start on a line), or a leaf's
-/// first four, all of a leaf of one item (160 bytes span three lines) and the most of two.
-const PREFETCH_LINES: usize = 4;
+/// Most cache lines `Bvh::prefetch` asks for: a node's four, or a leaf's first.
+const PREFETCH_LINES: usize = 6;
+/// Trees of more bytes than this prefetch (`Bvh::prefetch`): smaller ones stay in the cache.
+const PREFETCH_ABOVE: usize = 1 << 20;
 
 /// Starts loading the cache line at `p` into every level of the cache (a hint: it neither
 /// reads nor faults, whatever the address). `pulp` wraps the instruction safely.
