@@ -917,6 +917,9 @@ fn prefetch_line(p: *const u8) {
     if let Some(sse) = pulp::core_arch::x86::Sse::try_new() {
         sse._mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast());
     }
+    // Elsewhere no hint: the loads are only not overlapped.
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 /// Keeps `hit` (primitive, t, u, v) in `best` if it is nearer than `t_max`, and shrinks
