@@ -781,9 +781,9 @@ impl Bvh {
 
     /// Asks the processor to bring `e`'s memory (its node, or its leaf's items up to
     /// `PREFETCH_LINES` cache lines) into the cache, as Embree does for every child a ray
-    /// enters: a ray's time goes mostly to waiting for nodes and leaves, and so the loads of
-    /// all the children entered, and of all the lines of each, overlap, also those of the
-    /// children pushed for later. Small trees, in the cache anyway, skip it.
+    /// enters. A ray's time goes mostly to waiting for nodes and leaves; asked for together,
+    /// the loads of every child entered (the one taken next and those pushed for later) and
+    /// of every line of each overlap. Small trees, in the cache anyway, skip it.
     #[inline(always)]
     fn prefetch(&self, e: &Entry) {
         if !self.prefetch {
@@ -910,7 +910,8 @@ const PREFETCH_LINES: usize = 6;
 const PREFETCH_ABOVE: usize = 1 << 20;
 
 /// Starts loading the cache line at `p` into every level of the cache (a hint: it neither
-/// reads nor faults, whatever the address). `pulp` wraps the instruction safely.
+/// reads nor faults, whatever the address). `pulp` wraps the instruction safely; its check
+/// for SSE is a constant on x86_64, where SSE is baseline, so the hot loop pays no detection.
 #[inline(always)]
 fn prefetch_line(p: *const u8) {
     #[cfg(target_arch = "x86_64")]
