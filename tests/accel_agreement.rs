@@ -518,16 +518,22 @@ fn instanced_and_flattened() -> (Scene, Scene) {
 
 /// An instanced hit as the flattened scene numbers it (see `instanced_and_flattened`).
 fn as_flattened(hit: Option<trilux::accel::PrimHit>) -> Option<trilux::accel::PrimHit> {
-    use trilux::scene::{PrimKind, PrimRef};
     hit.map(|mut h| {
-        if h.prim.kind == PrimKind::Instanced {
-            h.prim = PrimRef {
-                kind: PrimKind::Triangle,
-                index: 1 + h.prim.index,
-            };
-        }
+        h.prim = flattened_prim(h.prim);
         h
     })
+}
+
+/// A primitive as the flattened scene numbers it.
+fn flattened_prim(prim: trilux::scene::PrimRef) -> trilux::scene::PrimRef {
+    use trilux::scene::{PrimKind, PrimRef};
+    match prim.kind {
+        PrimKind::Instanced => PrimRef {
+            kind: PrimKind::Triangle,
+            index: 1 + prim.index,
+        },
+        _ => prim,
+    }
 }
 
 /// Every backend on the instanced scene against brute force over the flattened triangles:
@@ -676,4 +682,41 @@ fn backends_agree_bit_for_bit_on_an_instanced_scene() {
     assert!(on_instances > 30_000);
     assert_eq!(differ, 0);
     assert_eq!(occlusion_differ, 0);
+}
+
+/// What the engines take from an instanced scene besides its Accel: its lights (every
+/// material emitting) are its flattened twin's, bit for bit, numbered as instanced
+/// triangles; its box holds the twin's, and an instance that does not turn its group
+/// (moved, scaled unevenly, mirrored) has the box of its placed triangles to the bit.
+#[test]
+fn an_instanced_scene_has_the_lights_and_bounds_of_its_flattened_twin() {
+    use trilux::geometry::Bounds3;
+    use trilux::render::lights::Light;
+    let (mut scene, mut flat) = instanced_and_flattened();
+    for s in [&mut scene, &mut flat] {
+        s.materials[0].emitted = trilux::geometry::vec3(1.0, 2.0, 3.0);
+    }
+    let renumbered: Vec<Light> = Light::collect(&scene)
+        .into_iter()
+        .map(|l| Light {
+            prim: flattened_prim(l.prim),
+            ..l
+        })
+        .collect();
+    assert_eq!(renumbered, Light::collect(&flat));
+
+    let (b, exact) = (scene.bounds(), flat.bounds());
+    assert!(
+        b.contains(exact.min) && b.contains(exact.max),
+        "{b:?} vs {exact:?}"
+    );
+    let group = &scene.instancing.groups[0];
+    for k in [0, 2, 3] {
+        let instance = &scene.instancing.instances[k];
+        let placed = (0..group.mesh.len()).fold(Bounds3::EMPTY, |b, j| {
+            let index = 1 + instance.first as usize + j;
+            b.union(Bounds3::from_points(&flat.triangles.vertices(index)))
+        });
+        assert_eq!(instance.place_box(group.bounds), placed, "instance {k}");
+    }
 }

@@ -215,16 +215,27 @@ impl Light {
             }
         }
         // Instanced triangles last, as their kind orders (the Mitsuba reader refuses emitters
-        // in a shapegroup, but a light is whatever emits).
-        for i in 0..scene.instancing.triangle_count() {
-            let e = emitted(scene.instancing.material(i as u32));
-            if e.max_element() > 0.0 {
-                let vertices = scene.instanced_vertices(i as u32);
+        // in a shapegroup, but a light is whatever emits). A group's emitting triangles are
+        // found once, however many instances place it: asking each instanced triangle's
+        // material took 1.3 s of a 1.5 s render of 1,024 instances of a 69k-triangle mesh.
+        let instancing = &scene.instancing;
+        let emitting: Vec<Vec<usize>> = instancing
+            .groups
+            .iter()
+            .map(|g| {
+                (0..g.mesh.len())
+                    .filter(|&j| emitted(g.mesh.materials[j]).max_element() > 0.0)
+                    .collect()
+            })
+            .collect();
+        for instance in &instancing.instances {
+            let group = instancing.group_of(instance);
+            for &j in &emitting[instance.group as usize] {
                 lights.push(triangle_light(
                     scene,
-                    vertices,
-                    e,
-                    prim(PrimKind::Instanced, i),
+                    instancing.placed(instance, j),
+                    emitted(group.mesh.materials[j]),
+                    prim(PrimKind::Instanced, instance.first as usize + j),
                 ));
             }
         }

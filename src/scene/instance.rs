@@ -71,14 +71,12 @@ impl Instance {
             .as_vec3()
     }
 
-    /// The world box of the instance: its group's box's corners placed, widened by 1e-5 of
-    /// its magnitude, because the ray taken into the group's space is rounded there, and a
-    /// triangle at the group's edge may be hit by it a little outside the exact box.
-    pub fn world_bounds(&self, group: &Group) -> Bounds3 {
-        if group.bounds.is_empty() {
-            return Bounds3::EMPTY;
-        }
-        let (lo, hi) = (group.bounds.min.as_dvec3(), group.bounds.max.as_dvec3());
+    /// The box of a box `b` of the group (not empty) with its corners placed: for an instance
+    /// that only scales, mirrors and moves its group, the box of `b`'s points placed, to the
+    /// bit (each coordinate placed depends on that coordinate alone); for one that turns it,
+    /// a box around them.
+    pub fn place_box(&self, b: Bounds3) -> Bounds3 {
+        let (lo, hi) = (b.min.as_dvec3(), b.max.as_dvec3());
         let corners: Vec<Vec3> = (0..8)
             .map(|k| {
                 let pick = |bit: usize, a: f64, b: f64| if k >> bit & 1 == 0 { a } else { b };
@@ -90,7 +88,17 @@ impl Instance {
                 self.to_world.transform_point3(corner).as_vec3()
             })
             .collect();
-        let b = Bounds3::from_points(&corners);
+        Bounds3::from_points(&corners)
+    }
+
+    /// The world box of the instance: its group's box's corners placed, widened by 1e-5 of
+    /// its magnitude, because the ray taken into the group's space is rounded there, and a
+    /// triangle at the group's edge may be hit by it a little outside the exact box.
+    pub fn world_bounds(&self, group: &Group) -> Bounds3 {
+        if group.bounds.is_empty() {
+            return Bounds3::EMPTY;
+        }
+        let b = self.place_box(group.bounds);
         let pad = 1e-5 * b.min.abs().max(b.max.abs()).max_element();
         Bounds3 {
             min: b.min - Vec3::splat(pad),
@@ -170,6 +178,12 @@ impl Instancing {
     #[inline]
     pub fn world_vertices(&self, index: u32) -> [Vec3; 3] {
         let (instance, j) = self.locate(index);
+        self.placed(instance, j)
+    }
+
+    /// The world vertices of triangle `j` of the group `instance` places.
+    #[inline]
+    pub fn placed(&self, instance: &Instance, j: usize) -> [Vec3; 3] {
         self.group_of(instance)
             .mesh
             .vertices(j)

@@ -706,9 +706,28 @@ impl Scene {
         for s in self.shapes.iter().filter(|s| keep(s.material)) {
             b = b.union(s.shape.bounds());
         }
-        let instanced = self.instancing.triangle_count() as u32;
-        for i in (0..instanced).filter(|&i| keep(self.instancing.material(i))) {
-            b = b.union(Bounds3::from_points(&self.instanced_vertices(i)));
+        // Instanced triangles: each group's kept triangles' box in the group's space, found
+        // once, then placed by each instance (`Instance::place_box`: exact where instances do
+        // not turn their group, a box around the triangles where they do). Placing every
+        // instanced triangle made `render bench-accel` of 1,024 instances of a 69k-triangle
+        // mesh take 8.7 s in all, against 0.15 s placing each instance's group box.
+        let kept: Vec<Bounds3> = self
+            .instancing
+            .groups
+            .iter()
+            .map(|g| {
+                (0..g.mesh.len())
+                    .filter(|&j| keep(g.mesh.materials[j]))
+                    .fold(Bounds3::EMPTY, |b, j| {
+                        b.union(Bounds3::from_points(&g.mesh.vertices(j)))
+                    })
+            })
+            .collect();
+        for instance in &self.instancing.instances {
+            let group_box = kept[instance.group as usize];
+            if !group_box.is_empty() {
+                b = b.union(instance.place_box(group_box));
+            }
         }
         b
     }
