@@ -34,9 +34,10 @@ pub fn check_value(value: f32, what: &str) -> Result<(), String> {
     }
 }
 
-/// A point or vector checked, every coordinate in range: the error says what it is (`what`),
+/// A point or vector checked, every coordinate in range: the error says what it is (`what`,
+/// written out only then: a mesh's millions of vertices are checked with `format_args!`),
 /// its value and the range.
-pub fn check_coordinate(value: Vec3, what: &str) -> Result<(), String> {
+pub fn check_coordinate(value: Vec3, what: impl std::fmt::Display) -> Result<(), String> {
     if value.to_array().into_iter().all(in_range) {
         Ok(())
     } else {
@@ -78,11 +79,11 @@ pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
     };
     for (i, q) in scene.quads.iter().enumerate() {
         for v in q.vertices {
-            check_coordinate(v, &format!("a vertex of quad {i}")).map_err(fail)?;
+            check_coordinate(v, format_args!("a vertex of quad {i}")).map_err(fail)?;
         }
     }
     for (i, p) in scene.triangles.positions.iter().enumerate() {
-        check_coordinate(*p, &format!("triangle vertex {i}")).map_err(fail)?;
+        check_coordinate(*p, format_args!("triangle vertex {i}")).map_err(fail)?;
     }
     for (i, n) in scene.triangles.normals.iter().enumerate() {
         if !n.is_finite() {
@@ -93,14 +94,14 @@ pub fn check_scene(scene: &Scene) -> Result<(), SceneError> {
     }
     for (k, g) in scene.instancing.groups.iter().enumerate() {
         for (i, p) in g.mesh.positions.iter().enumerate() {
-            check_coordinate(*p, &format!("vertex {i} of shapegroup {k}")).map_err(fail)?;
+            check_coordinate(*p, format_args!("vertex {i} of shapegroup {k}")).map_err(fail)?;
         }
     }
     for (k, i) in scene.instancing.instances.iter().enumerate() {
         let b = i.world_bounds(scene.instancing.group_of(i));
         if !b.is_empty() {
             for corner in [b.min, b.max] {
-                check_coordinate(corner, &format!("the box of instance {k}")).map_err(fail)?;
+                check_coordinate(corner, format_args!("the box of instance {k}")).map_err(fail)?;
             }
         }
     }
