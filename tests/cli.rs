@@ -1544,6 +1544,50 @@ fn the_engines_agree_on_a_diffuse_mgf_room_by_default() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A Mitsuba scene of one lamp over a floor, direct light only (`max_depth` 2): with no
+/// flag, the ray tracer, the photon engine and the path tracer agree on the image's mean, with
+/// each backend. A Mitsuba scene has no ambient term (its `RenderHints`); with the course's
+/// ambient of 0.1 the ray tracer's mean was 8 times the path tracer's.
+#[test]
+fn the_engines_agree_on_a_mitsuba_lamp_by_default() {
+    let dir = common::temp_dir("mitsuba-lamp");
+    let scene = r#"<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="2"/></integrator>
+    <sensor type="perspective"><float name="fov" value="60"/>
+        <transform name="to_world"><lookat origin="0,10,-10" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/></film>
+    </sensor>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="3"/></transform>
+        <emitter type="area"><rgb name="radiance" value="5"/></emitter>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="20"/><rotate x="1" angle="-90"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.6"/></bsdf>
+    </shape>
+</scene>
+"#;
+    std::fs::write(dir.join("lamp.xml"), scene).unwrap();
+    for kind in backends() {
+        let mean = |engine: &str| {
+            let out = format!("{}-{kind}.pfm", engine.split(' ').next().unwrap());
+            let argv = format!("-input lamp.xml --quiet --accel {kind} --engine {engine} -o {out}");
+            ok(&render(&dir, &argv.split(' ').collect::<Vec<_>>()));
+            mean_of(&dir.join(out))
+        };
+        let path = mean("path -num_antialias_samples 256");
+        assert!(path > 1e-3, "{kind}: the path tracer's mean {path}");
+        for engine in ["raytrace", "photon"] {
+            let m = mean(engine);
+            assert!(
+                (m - path).abs() <= 0.03 * path,
+                "{kind}: {engine} mean {m}, the path tracer's {path}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The photon engine chooses what is not given. With no photon flag it traces photons
 /// (`photons_for_image`): the Cornell box's mean is the path tracer's converged mean within
 /// 5% (with no photons it is 18% low: no indirect light). With `--time-limit`,

@@ -409,7 +409,8 @@ pub struct RayTraceArgs {
     /// and radiosity visibility, as in RenderPark).
     #[arg(long, default_value_t = rs().num_shadow_samples)]
     pub num_shadow_samples: u32,
-    /// Ambient radiance R G B [default: 0.1 0.1 0.1, the course's value].
+    /// Ambient radiance R G B [default: 0.1 0.1 0.1, the course's value; 0 0 0 for a Mitsuba
+    /// scene, which has no such term: its lights are all its light].
     #[arg(long, num_args = 3, value_names = ["R", "G", "B"], allow_negative_numbers = true)]
     pub ambient_light: Option<Vec<f32>>,
     /// Placement of the points on each light for soft shadows: uniform in the solid angle a

@@ -207,7 +207,7 @@ pub fn checked_settings(args: &RenderArgs) -> Result<RenderSettings, String> {
 }
 
 /// What the scene file asks of the render (a Mitsuba scene's film size, samples per pixel,
-/// path depth and lens; an MGF scene's reflection depth, shadow rays and radiosity solver),
+/// path depth, lens and no ambient light; an MGF scene's reflection depth, shadow rays and radiosity solver),
 /// where the command line did not give its own: the flags win. Returns the settings taken, as
 /// a user would type them, for `--plan` to say.
 pub fn apply_scene_hints(
@@ -241,6 +241,10 @@ pub fn apply_scene_hints(
     ) {
         settings.num_shadow_samples = n;
         taken.push(format!("-num_shadow_samples {n}"));
+    }
+    if let (Some(a), false) = (hints.ambient_light, given("ambient_light")) {
+        settings.ambient_light = a;
+        taken.push(format!("-ambient_light {} {} {}", a.x, a.y, a.z));
     }
     if hints.hierarchical_radiosity && !given("radiosity_solver") {
         settings.radiosity.solver = crate::engines::radiosity::SolverKind::Hierarchical;

@@ -447,6 +447,10 @@ pub struct RenderHints {
     /// The hierarchical radiosity solver whatever the number of faces (`--radiosity-solver
     /// hierarchical`), for formats whose faces are too large to be one flat patch each: MGF's.
     pub hierarchical_radiosity: bool,
+    /// The ray tracer's constant indirect radiance (`-ambient_light`), where the format has
+    /// no such term: Mitsuba's, whose lights are all the light there is (the course's 0.1,
+    /// in a Mitsuba scene's own units, made a lamp over a floor 8× too bright).
+    pub ambient_light: Option<Color>,
 }
 
 impl Scene {

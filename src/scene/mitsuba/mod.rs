@@ -8,7 +8,8 @@
 //!   larger image side;
 //! * the film's size, the sampler's `sample_count` and the integrator's `max_depth` (which
 //!   counts the camera's segment: 2 is direct light) are the scene's `RenderHints`, which the
-//!   command line's `-size`, `-num_antialias_samples` and `--max-depth` override;
+//!   command line's `-size`, `-num_antialias_samples` and `--max-depth` override; so is an
+//!   ambient light of 0 (`-ambient_light`): Mitsuba has no such term;
 //! * every shape becomes triangles with per-vertex shading normals (a mesh's own, or its
 //!   faces' for `face_normals` and meshes without them), except `sphere`, the analytic
 //!   sphere; texture coordinates follow trilux's convention (t = 0 at the image's bottom);
@@ -36,8 +37,8 @@ use super::medium::{Albedo, Heterogeneous, Medium};
 use super::sky::{Sky, SkyMap};
 use super::volume_grid::GridVolume;
 use super::{
-    DeltaKind, DeltaLight, Material, Scene, SceneError, ShadingTilt, ShapePrim, Texture,
-    TriangleMesh,
+    DeltaKind, DeltaLight, Material, RenderHints, Scene, SceneError, ShadingTilt, ShapePrim,
+    Texture, TriangleMesh,
 };
 use crate::camera::{Camera, Projection};
 use crate::color::Color;
@@ -54,6 +55,10 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneErr
         scene: Scene {
             path: path.to_path_buf(),
             smooth_normals: true,
+            render_hints: RenderHints {
+                ambient_light: Some(Color::ZERO),
+                ..RenderHints::default()
+            },
             ..Scene::default()
         },
         materials: HashMap::new(),
