@@ -10,10 +10,11 @@ Writes four scenes into a temporary folder (or DIR with --keep, reused when pres
   shapes      10,000 `cube`s, each with its own `ref` to one BSDF, and 5,000 emitting
               `rectangle`s
   obj         the same 2M triangles as an OBJ file
-For each, the median of R runs (default 3, interleaved) of trilux's scene load (`render
--input SCENE --engine path -size 64 64 -num_antialias_samples 1 --stats`, its "scene load"
-line) and of Mitsuba 3's `mi.load_file` (llvm_ad_rgb, the variant its users render with;
-scalar_rgb where that cannot load). Needs numpy and `pip install mitsuba`.
+For each, the median of R runs (default 3, interleaved) of trilux's scene load and Accel build
+(`render -input SCENE --engine path -size 64 64 -num_antialias_samples 1 --stats`, the two
+times of its first line, summed: Mitsuba's load builds its acceleration structure too) and of
+Mitsuba 3's `mi.load_file` (llvm_ad_rgb, the variant its users render with; scalar_rgb where
+that cannot load). Needs numpy and `pip install mitsuba`.
 """
 
 import argparse
@@ -104,10 +105,10 @@ def ours(render, path):
     done = subprocess.run([render, "-input", path, "--engine", "path", "-size", "64", "64",
                            "-num_antialias_samples", "1", "-o", path + ".exr", "--stats"],
                           capture_output=True, text=True)
-    found = re.search(r"scene load ([0-9.]+) s", done.stderr)
+    found = re.search(r"scene load ([0-9.]+) s, accel build \([a-z]+\) ([0-9.]+) s", done.stderr)
     if done.returncode != 0 or not found:
         sys.exit(f"{path}: trilux failed: {done.stderr.strip()[-300:]}")
-    return float(found.group(1))
+    return float(found.group(1)) + float(found.group(2))
 
 
 def main():
@@ -135,7 +136,7 @@ def main():
     if not os.path.exists(os.path.join(folder, "shapes.xml")):
         write_scenes(folder)
     print(f"# Mitsuba {mi.__version__} {variant}; medians of {args.repeats}")
-    print("| scene | trilux load (s) | Mitsuba load_file (s) | trilux / Mitsuba |")
+    print("| scene | trilux load + build (s) | Mitsuba load_file (s) | trilux / Mitsuba |")
     print("|---|---|---|---|")
     for name in ("instances", "ply", "obj", "shapes"):
         path = os.path.join(folder, f"{name}.xml")
