@@ -118,18 +118,9 @@ def main():
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--keep", default=None)
     args = parser.parse_args()
-    if not os.environ.get("DRJIT_LIBLLVM_PATH"):
-        import glob
-        for candidate in glob.glob("/usr/lib/x86_64-linux-gnu/libLLVM.so.19*") + glob.glob("/usr/lib/llvm-19/lib/libLLVM.so*"):
-            os.environ["DRJIT_LIBLLVM_PATH"] = candidate
-            break
-    import mitsuba as mi
-    variant = "llvm_ad_rgb"
-    try:
-        mi.set_variant(variant)
-    except Exception:
-        variant = "scalar_rgb"
-        mi.set_variant(variant)
+    from mitsuba_variant import load_mitsuba
+
+    mi, variant = load_mitsuba()
 
     folder = args.keep or tempfile.mkdtemp()
     os.makedirs(folder, exist_ok=True)

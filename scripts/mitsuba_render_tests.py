@@ -48,18 +48,9 @@ def main():
     parser.add_argument("--reference-dir", default=None)
     args = parser.parse_args()
 
-    if not os.environ.get("DRJIT_LIBLLVM_PATH"):
-        for candidate in glob.glob("/usr/lib/x86_64-linux-gnu/libLLVM.so.19*") + glob.glob("/usr/lib/llvm-19/lib/libLLVM.so*"):
-            os.environ["DRJIT_LIBLLVM_PATH"] = candidate
-            break
-    import mitsuba as mi
+    from mitsuba_variant import load_mitsuba
 
-    variant = "llvm_ad_rgb"
-    try:
-        mi.set_variant(variant)
-    except Exception:
-        variant = "scalar_rgb"
-        mi.set_variant(variant)
+    mi, variant = load_mitsuba()
     cpu = subprocess.run(["sh", "-c", "grep -m1 'model name' /proc/cpuinfo | cut -d: -f2"], capture_output=True, text=True).stdout.strip()
     width = "AVX-512 (16 lanes)" if "avx512f" in open("/proc/cpuinfo").read() else "AVX2 (8 lanes)"
     print(f"# host: {cpu}, {width}; Mitsuba {mi.__version__} {variant}; {args.spp} spp" + (f", {args.size}x{args.size}" if args.size else ", the scenes' own film"))
