@@ -512,6 +512,21 @@ pub enum Bsdf {
     PrincipledThin(PrincipledThin),
 }
 
+impl Bsdf {
+    /// Whether the BSDF reflects on its front side only and lets nothing through, so that
+    /// its back is black: Mitsuba's one-sided reflectors. Dielectrics refract from both
+    /// sides, and `principledthin` is alike from both.
+    pub fn front_only(&self) -> bool {
+        match self {
+            Bsdf::Diffuse { .. } | Bsdf::Conductor { .. } | Bsdf::Plastic(_) => true,
+            Bsdf::Principled(p) => p.spec_trans <= 0.0,
+            Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } | Bsdf::PrincipledThin(_) => {
+                false
+            }
+        }
+    }
+}
+
 /// The number of entries in `roughplastic`'s table of the coat's transmittance against
 /// cos θ (Mitsuba's resolution, so that its linear interpolation gives the same values).
 const TRANSMITTANCE_RES: usize = 64;

@@ -128,6 +128,12 @@ impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emitted.max_element() > 0.0
     }
+    /// Whether the surface's back reflects and emits nothing: a one-sided Mitsuba BSDF that
+    /// lets nothing through (`bsdf::Bsdf::front_only`), not made `twosided`. The course's
+    /// materials reflect on both sides.
+    pub fn black_behind(&self) -> bool {
+        self.bsdf.as_ref().is_some_and(bsdf::Bsdf::front_only) && !self.two_sided
+    }
     /// Whether the surface changes nothing that crosses it: clear glass of index 1, which
     /// neither reflects nor bends (Mitsuba's `null`, a medium's boundary). A thin sheet of
     /// glass (`thindielectric`) bends nothing either but reflects: its BSDF says so.

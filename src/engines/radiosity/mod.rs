@@ -554,17 +554,21 @@ impl Solution {
     }
 
     /// The patch under a surface hit seen from the side `toward` points to (a polygon's back
-    /// with `--two-sided`), and the hit's parameters within that patch.
+    /// with `--two-sided`), and the hit's parameters within that patch. None behind a polygon
+    /// whose material is a one-sided Mitsuba BSDF: its back reflects nothing and emits
+    /// nothing, as the path tracer shows it (the front's patch showed a lamp seen from above
+    /// as lit).
     pub fn locate(
         &self,
         scene: &Scene,
         hit: &SurfaceHit,
         toward: Vec3,
     ) -> Option<(usize, f32, f32)> {
-        let side = if scene.two_sided_quads && hit.geometric_normal.dot(toward) < 0.0 {
-            mesh::BACK
-        } else {
-            0
+        let behind = hit.prim.kind != PrimKind::Shape && hit.geometric_normal.dot(toward) < 0.0;
+        let side = match (behind, scene.two_sided_quads) {
+            (true, true) => mesh::BACK,
+            (true, false) if scene.materials[hit.material as usize].black_behind() => return None,
+            _ => 0,
         };
         let parameters = scene.parameters(hit);
         let (u, v, part) = match hit.prim.kind {
