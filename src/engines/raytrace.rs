@@ -12,7 +12,9 @@
 //! radiosity`).
 
 use super::engine::RenderSettings;
-use super::scattering::{power_heuristic, reflect, sky_lighting_sample, Dielectric, GlossyLobe};
+use super::scattering::{
+    delta_arrival, power_heuristic, reflect, sky_lighting_sample, Dielectric, GlossyLobe,
+};
 use crate::accel::Accel;
 use crate::film::ray_tree::{Segment, SegmentKind};
 use crate::film::Film;
@@ -180,8 +182,9 @@ impl Tracer<'_> {
         let albedo = self.scene.albedo(&s);
         if albedo.max_element() > 0.0 {
             let fog = self.medium_of(branch);
-            let irradiance_over_pi =
-                self.direct(&s, n, fog, rng, counts) + self.sky_light(&s, n, fog, rng, counts);
+            let irradiance_over_pi = self.direct(&s, n, fog, rng, counts)
+                + self.sky_light(&s, n, fog, rng, counts)
+                + self.delta_direct(&s, n, None, fog, counts);
             let indirect =
                 self.indirect
                     .incident(self.scene, self.accel, &s, (n, fog), branch.depth, rng);
@@ -198,7 +201,9 @@ impl Tracer<'_> {
                     self.trace(&r, branch.child(Arrival::Delta, reflective), rng, counts)
                 }
                 Some(lobe) => {
-                    let lit = self.glossy_direct(&s, n, &lobe, self.medium_of(branch), rng, counts);
+                    let fog = self.medium_of(branch);
+                    let lit = self.glossy_direct(&s, n, &lobe, fog, rng, counts)
+                        + self.delta_direct(&s, n, Some(&lobe), fog, counts);
                     let (dir, pdf) = lobe.sample(rng.next_f32(), rng.next_f32());
                     let arrival = match pdf {
                         Some(pdf) if self.samples_glossy_lights() => Arrival::Glossy {
@@ -310,6 +315,49 @@ impl Tracer<'_> {
                     * transmittance(fog, origin.distance(d.point))
                     * (lobe_pdf / d.pdf * power_heuristic(d.pdf, lobe_pdf));
             }
+        }
+        total
+    }
+
+    /// What the lights without area send a surface point (normal `n` on the lit side)
+    /// through `fog`: per unit albedo, irradiance × cos/π (`lobe` None); per unit
+    /// reflectance of a glossy `lobe`, irradiance × its density. One shadow ray each (none
+    /// with `-num_shadow_samples 0`, which leaves every light unoccluded); neither the lobe's
+    /// samples nor any other find them.
+    fn delta_direct(
+        &self,
+        s: &SurfaceHit,
+        n: Vec3,
+        lobe: Option<&GlossyLobe>,
+        fog: Option<&Medium>,
+        counts: &mut Counts,
+    ) -> Color {
+        let mut total = Vec3::ZERO;
+        for light in &self.scene.delta_lights {
+            let Some(a) = delta_arrival(self.scene, light, s, n) else {
+                continue;
+            };
+            let value = match lobe {
+                None => a.cos / std::f32::consts::PI,
+                Some(lobe) => lobe.pdf(a.direction),
+            };
+            if value <= 0.0 {
+                continue;
+            }
+            if self.settings.num_shadow_samples > 0 {
+                if a.distance.is_finite() {
+                    // The shadow ray spans origin + t·d for t < 1, to the light.
+                    let light = a.ray.at(1.0);
+                    record_segment(self.tree.as_ref(), a.ray.origin, light, SegmentKind::Shadow);
+                } else {
+                    self.record(&a.ray, None, SegmentKind::Shadow);
+                }
+                counts.shadow += 1;
+                if self.accel.occluded(&a.ray) {
+                    continue;
+                }
+            }
+            total += a.irradiance * (value * transmittance(fog, a.distance));
         }
         total
     }

@@ -1,7 +1,8 @@
 //! How surfaces scatter light, the one place every engine takes it from: the Lambertian lobe
 //! (cosine-distributed sampling, its density), mirror reflection and the glossy Phong lobe
 //! around it, and smooth dielectrics (glass: refraction, the exact Fresnel reflectance, total
-//! internal reflection, one branch chosen by it or both weighted by it).
+//! internal reflection, one branch chosen by it or both weighted by it), and what a light
+//! without area sends a surface.
 //!
 //! What each engine decides itself is which lobe to follow: the ray tracer follows mirrors
 //! and both branches of glass and takes diffuse light from its indirect source; the path
@@ -11,10 +12,52 @@
 //! mapping (`diffuse_sample`): the same distribution through two mappings, kept so that the
 //! images stay as they were; one mapping for both is a change of images to make on purpose.
 
-use crate::geometry::Vec3;
+use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
 pub use crate::sampling::{orthonormal_basis, sample_cone};
 use crate::scene::sky::Sky;
-use crate::scene::Material;
+use crate::scene::{Color, DeltaLight, Material, Scene, SurfaceHit};
+
+/// What a light without area sends the point of `s` lit on the side of unit normal `n`.
+pub struct DeltaArrival {
+    /// The unit direction towards the light.
+    pub direction: Vec3,
+    /// n · direction, above zero.
+    pub cos: f32,
+    /// The irradiance on a surface facing the light.
+    pub irradiance: Color,
+    /// The shadow ray to the light (along `direction` for a directional light) and the
+    /// distance it spans (∞ for a directional light).
+    pub ray: Ray,
+    pub distance: f32,
+}
+
+/// What `light` sends the point of `s` lit on the side of `n`; None where it sends nothing
+/// there or lies behind the surface. One shadow ray finds it: no sampling does.
+pub fn delta_arrival(
+    scene: &Scene,
+    light: &DeltaLight,
+    s: &SurfaceHit,
+    n: Vec3,
+) -> Option<DeltaArrival> {
+    let (direction, distance, irradiance) = light.towards(s.point, &scene.textures)?;
+    let cos = n.dot(direction);
+    if cos.is_nan() || cos <= 0.0 {
+        return None;
+    }
+    let origin = offset_ray_origin(s.point, n, s.error);
+    let ray = if distance.is_finite() {
+        shadow_ray(origin, s.point + direction * distance)
+    } else {
+        Ray::new(origin, direction)
+    };
+    Some(DeltaArrival {
+        direction,
+        cos,
+        irradiance,
+        ray,
+        distance,
+    })
+}
 
 /// A cosine-distributed direction about the unit normal `n`, from (u, v) in [0,1)², and its
 /// density in solid angle, cos θ / π.

@@ -19,7 +19,8 @@ mod wavefront;
 
 use super::engine::{Budget, Engine, EngineKind, RenderSettings, Rendered};
 use super::scattering::{
-    diffuse_sample, orthonormal_basis, power_heuristic, reflect, Dielectric, GlossyLobe,
+    delta_arrival, diffuse_sample, orthonormal_basis, power_heuristic, reflect, Dielectric,
+    GlossyLobe,
 };
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
@@ -422,30 +423,19 @@ impl PathTracer<'_> {
     ) -> Color {
         let mut sum = Vec3::ZERO;
         for light in &self.scene.delta_lights {
-            let Some((dir, distance, irradiance)) = light.towards(s.point, &self.scene.textures)
-            else {
+            let Some(a) = delta_arrival(self.scene, light, s, n) else {
                 continue;
             };
-            let cos = n.dot(dir);
-            if cos <= 0.0 {
-                continue;
-            }
             let value = match lobe {
-                None => cos / std::f32::consts::PI,
-                Some(lobe) => lobe.pdf(dir),
+                None => a.cos / std::f32::consts::PI,
+                Some(lobe) => lobe.pdf(a.direction),
             };
             if value <= 0.0 {
                 continue;
             }
-            let origin = offset_ray_origin(s.point, n, s.error);
-            let ray = if distance.is_finite() {
-                shadow_ray(origin, s.point + dir * distance)
-            } else {
-                Ray::new(origin, dir)
-            };
-            sum += irradiance
+            sum += a.irradiance
                 * value
-                * self.shadow_transmittance(&ray, distance, medium, samples, counts);
+                * self.shadow_transmittance(&a.ray, a.distance, medium, samples, counts);
         }
         sum
     }

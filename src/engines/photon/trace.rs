@@ -19,7 +19,7 @@ use crate::render::lights::Light;
 use crate::sampling::{orthonormal_basis, sample_disk, Rng};
 use crate::scene::medium::Flight;
 use crate::scene::sky::Sky;
-use crate::scene::{Color, Scene};
+use crate::scene::{Color, DeltaKind, DeltaLight, Scene, Texture};
 
 /// How a stored photon got where it is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -103,13 +103,70 @@ impl SkySource {
     }
 }
 
-/// The emitters as photon sources: each light, and the sky, chosen in proportion to its flux.
+/// A light without area as a photon source (a Mitsuba scene's point, spot or directional
+/// light); a directional light's photons cross the disk across the sphere around the scene
+/// (`centre`, `radius`), as the sky's do.
+struct DeltaSource {
+    light: DeltaLight,
+    centre: Vec3,
+    radius: f32,
+}
+
+impl DeltaSource {
+    /// The cone a point or spot light's photons leave in, uniformly: its axis and the cosine
+    /// of its half-angle (the whole sphere for a point light). Caustic photons leave in it
+    /// too: aimed or not, each carries the power its direction's density leaves it.
+    fn cone(&self) -> (Vec3, f32) {
+        match self.light.kind {
+            DeltaKind::Spot { axis, cutoff, .. } => (axis, cutoff.cos()),
+            _ => (Vec3::Y, -1.0),
+        }
+    }
+
+    /// The flux the source is chosen by: a point or spot light's intensity over its cone
+    /// (a spot's ramp and texture only lower it: the photons' own power is exact), a
+    /// directional light's irradiance over the disk.
+    fn flux(&self) -> Color {
+        match self.light.kind {
+            DeltaKind::Directional { .. } => {
+                self.light.intensity * (std::f32::consts::PI * self.radius * self.radius)
+            }
+            _ => self.light.intensity * (std::f32::consts::TAU * (1.0 - self.cone().1)),
+        }
+    }
+
+    /// A photon: its ray and its power for a unit chance of being chosen. From a point or a
+    /// spot, I(ω)·Ω over the cone of solid angle Ω; through the disk, E·π·r².
+    fn emit(&self, textures: &[Texture], rng: &mut Rng) -> Option<(Ray, Color)> {
+        let (u, v) = (rng.next_f32(), rng.next_f32());
+        match self.light.kind {
+            DeltaKind::Directional { direction } => {
+                let (dx, dy) = sample_disk(u, v);
+                let (t, b) = orthonormal_basis(direction);
+                let origin = self.centre + (t * dx + b * dy - direction) * self.radius;
+                Some((Ray::new(origin, direction), self.flux()))
+            }
+            DeltaKind::Point { position } | DeltaKind::Spot { position, .. } => {
+                let (axis, cos_max) = self.cone();
+                let dir = sample_cone(axis, cos_max, u, v);
+                // The irradiance at unit distance along `dir` is the intensity there.
+                let (_, _, intensity) = self.light.towards(position + dir, textures)?;
+                let solid_angle = std::f32::consts::TAU * (1.0 - cos_max);
+                Some((Ray::new(position, dir), intensity * solid_angle))
+            }
+        }
+    }
+}
+
+/// The emitters as photon sources: each light, each light without area, and the sky, chosen
+/// in proportion to its flux.
 pub struct Emitters {
     lights: Vec<Light>,
+    deltas: Vec<DeltaSource>,
     /// The sky, unless there is none or the fog hides it (it is infinite).
     sky: Option<SkySource>,
     /// Flux of each light: π·Le·A for a one-sided Lambertian emitter, twice that for two
-    /// sides; then the sky's.
+    /// sides; then each light without area's (`DeltaSource::flux`); then the sky's.
     flux: Vec<Color>,
     /// The probability of choosing each source, and their running sum.
     probability: Vec<f32>,
@@ -120,15 +177,26 @@ impl Emitters {
     pub fn new(scene: &Scene) -> Emitters {
         let lights = Light::collect(scene);
         let bounds = scene.bounds();
+        // A little beyond the bounds, so that no photon from the sky or a directional light
+        // starts inside the scene.
+        let (centre, radius) = (bounds.centre(), 0.5 * bounds.extent().length() * 1.01);
+        let deltas: Vec<DeltaSource> = scene
+            .delta_lights
+            .iter()
+            .map(|&light| DeltaSource {
+                light,
+                centre,
+                radius,
+            })
+            .collect();
         let sky = scene
             .sky
             .as_ref()
             .filter(|_| scene.fog.is_none())
             .map(|sky| SkySource {
                 sky: sky.clone(),
-                centre: bounds.centre(),
-                // A little beyond the bounds, so that no photon starts inside the scene.
-                radius: 0.5 * bounds.extent().length() * 1.01,
+                centre,
+                radius,
             });
         let flux: Vec<Color> = lights
             .iter()
@@ -140,6 +208,7 @@ impl Emitters {
                 };
                 l.emitted * (std::f32::consts::PI * l.area * sides)
             })
+            .chain(deltas.iter().map(DeltaSource::flux))
             .chain(sky.as_ref().map(SkySource::flux))
             .collect();
         let weights: Vec<f64> = flux.iter().map(|f| mean(*f) as f64).collect();
@@ -157,6 +226,7 @@ impl Emitters {
             .collect();
         Emitters {
             lights,
+            deltas,
             sky,
             flux,
             probability,
@@ -192,10 +262,16 @@ impl Emitters {
         let pick = rng.next_f32() as f64;
         let l = self.cdf.iter().position(|&c| pick < c).unwrap_or(last);
         let chosen = (self.probability[l] * count as f32).recip();
-        let emitted = match (self.lights.get(l), &self.sky) {
-            (Some(light), _) => emit_from_light(light, aim, rng)
+        let delta = l
+            .checked_sub(self.lights.len())
+            .and_then(|k| self.deltas.get(k));
+        let emitted = match (self.lights.get(l), delta, &self.sky) {
+            (Some(light), _, _) => emit_from_light(light, aim, rng)
                 .map(|(ray, factor)| (ray, self.flux[l] * factor * chosen)),
-            (None, Some(sky)) => {
+            (None, Some(source), _) => source
+                .emit(&scene.textures, rng)
+                .map(|(ray, power)| (ray, power * chosen)),
+            (None, None, Some(sky)) => {
                 // Caustic photons come through the sphere around the mirrors and glass.
                 let (centre, radius) = match aim {
                     Aim::Caustics { centre, radius } => (centre, radius),
@@ -204,7 +280,7 @@ impl Emitters {
                 sky.emit(centre, radius, rng)
                     .map(|(ray, power)| (ray, power * chosen))
             }
-            (None, None) => None,
+            (None, None, None) => None,
         };
         let Some((ray, power)) = emitted else {
             return (0, false);
