@@ -20,7 +20,9 @@ use crate::film::ray_tree::{Segment, SegmentKind};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, vec3, Ray, Vec3};
 use crate::render::adaptive::visible_form_factor;
-use crate::render::lights::{Light, LightPoint, LightShape, PointBlock, LANES};
+use crate::render::lights::{
+    Light, LightPoint, LightPower, LightShape, PointBlock, EVERY_LIGHT_UP_TO, LANES,
+};
 use crate::render::{render_pixels, Ambient, CameraSampler, Counts, IndirectLight, RenderStats};
 use crate::sampling::{LightSampling, Rng, Strata};
 use crate::scene::medium::Medium;
@@ -42,6 +44,9 @@ struct Tracer<'a> {
     accel: &'a dyn Accel,
     settings: &'a RenderSettings,
     lights: Vec<Light>,
+    /// On scenes of more than `EVERY_LIGHT_UP_TO` lights, each light sample goes to a light
+    /// chosen by its power (`chosen_lights`); on the rest every light takes its samples.
+    power: Option<LightPower>,
     /// How the points on each light are placed (`--light-sampling`, default
     /// `DEFAULT_LIGHT_SAMPLING`).
     light_sampling: LightSampling,
@@ -83,6 +88,8 @@ impl<'a> Tracer<'a> {
             scene,
             accel,
             settings,
+            power: Some(LightPower::new(&lights))
+                .filter(|p| lights.len() > EVERY_LIGHT_UP_TO && p.any()),
             lights,
             light_sampling,
             light_strata: Strata::new(light_sampling.pattern(), settings.num_shadow_samples),
@@ -273,7 +280,8 @@ impl Tracer<'_> {
         let Some(k) = Light::index_of(&self.lights, s.prim) else {
             return 1.0;
         };
-        let light_pdf = self.lights[k].pdf_towards(from, normal, s.point, s.geometric_normal);
+        let light_pdf = self.choice_probability(k)
+            * self.lights[k].pdf_towards(from, normal, s.point, s.geometric_normal);
         power_heuristic(pdf, light_pdf)
     }
 
@@ -294,7 +302,8 @@ impl Tracer<'_> {
         }
         let origin = offset_ray_origin(s.point, n, s.error);
         let mut total = Vec3::ZERO;
-        for light in &self.lights {
+        for i in 0..self.picks(1) {
+            let (light, chosen) = self.pick(i, 1, rng);
             let (u, v) = (rng.next_f32(), rng.next_f32());
             if light.prim == s.prim {
                 continue;
@@ -304,7 +313,8 @@ impl Tracer<'_> {
             };
             let dir = (d.point - s.point).normalize_or_zero();
             let lobe_pdf = lobe.pdf(dir);
-            if !(lobe_pdf > 0.0 && d.pdf > 0.0 && d.pdf.is_finite()) {
+            let light_pdf = chosen * d.pdf;
+            if !(lobe_pdf > 0.0 && light_pdf > 0.0 && light_pdf.is_finite()) {
                 continue;
             }
             let ray = shadow_ray(origin, d.point);
@@ -313,10 +323,37 @@ impl Tracer<'_> {
             if !self.accel.occluded(&ray) {
                 total += light.emitted
                     * transmittance(fog, origin.distance(d.point))
-                    * (lobe_pdf / d.pdf * power_heuristic(d.pdf, lobe_pdf));
+                    * (lobe_pdf / light_pdf * power_heuristic(light_pdf, lobe_pdf));
             }
         }
         total
+    }
+
+    /// How many light samples a point takes for `per_light` samples a light: every light's,
+    /// or, on scenes of many lights, as many as one light takes (`pick` chooses their lights).
+    fn picks(&self, per_light: usize) -> usize {
+        match self.power {
+            None => self.lights.len() * per_light,
+            Some(_) => per_light,
+        }
+    }
+
+    /// The light of a point's light sample `i` (of `picks(per_light)`) and the probability
+    /// it was chosen with: on scenes of few lights, each light in turn for its `per_light`
+    /// samples (probability 1); on scenes of many, a light drawn by its power from `rng`.
+    fn pick(&self, i: usize, per_light: usize, rng: &mut Rng) -> (&Light, f32) {
+        match &self.power {
+            None => (&self.lights[i / per_light], 1.0),
+            Some(power) => {
+                let k = power.choose(rng.next_f32());
+                (&self.lights[k], power.probability(k))
+            }
+        }
+    }
+
+    /// The probability with which a light sample chooses light `k` (`pick`).
+    fn choice_probability(&self, k: usize) -> f32 {
+        self.power.as_ref().map_or(1.0, |p| p.probability(k))
     }
 
     /// What the lights without area send a surface point (normal `n` on the lit side)
@@ -398,7 +435,8 @@ impl Tracer<'_> {
 
     /// The light `fog` scatters into `ray` over its first `length` (∞: the ray leaves the
     /// scene): single scattering of every light, each by `-num_shadow_samples` points
-    /// (the centre for 0 and 1, 0 leaving visibility out as at surfaces) with the distance
+    /// (the centre for 0 and 1, 0 leaving visibility out as at surfaces; on scenes of many
+    /// lights, that many points on lights chosen by their power) with the distance
     /// along the ray sampled equiangularly about each point (Kulla & Fajardo 2012: the
     /// density follows the 1/r² of the light's falloff, so a small light's glow costs no
     /// more samples than a surface's shadow). The indirect light's share (the ambient term,
@@ -419,45 +457,44 @@ impl Tracer<'_> {
         let mut total = Vec3::ZERO;
         let samples = self.settings.num_shadow_samples;
         let count = samples.max(1);
-        for light in &self.lights {
-            for _ in 0..count {
-                let (u, v, w) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
-                let point = if samples <= 1 {
-                    light.centre(ray.origin)
-                } else {
-                    light.sample(u, v)
-                };
-                let Some((t, pdf)) = equiangular(ray.origin, travel, length, point.point, w) else {
-                    continue;
-                };
-                let x = ray.origin + travel * t;
-                let to_light = point.point - x;
-                let r2 = to_light.length_squared();
-                let r = r2.sqrt();
-                let cos_light = -point.normal.dot(to_light) / r;
-                let cos_light = if point.one_sided {
-                    cos_light
-                } else {
-                    cos_light.abs()
-                };
-                if cos_light.is_nan() || cos_light <= 0.0 || r2 <= 0.0 {
-                    continue;
-                }
-                if samples > 0 {
-                    counts.shadow += 1;
-                    if self.accel.occluded(&shadow_ray(x, point.point)) {
-                        continue;
-                    }
-                }
-                // Area-sampled point: radiance × cos' × area / r² is the light's solid angle
-                // integral of its radiance, one point's share.
-                let geometry = cos_light * light.area / r2 / count as f32;
-                total += light.emitted
-                    * fog.sigma_s
-                    * fog.transmittance(t)
-                    * fog.transmittance(r)
-                    * (fog.phase(travel, to_light / r) * geometry / pdf);
+        for i in 0..self.picks(count as usize) {
+            let (light, chosen) = self.pick(i, count as usize, rng);
+            let (u, v, w) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let point = if samples <= 1 {
+                light.centre(ray.origin)
+            } else {
+                light.sample(u, v)
+            };
+            let Some((t, pdf)) = equiangular(ray.origin, travel, length, point.point, w) else {
+                continue;
+            };
+            let x = ray.origin + travel * t;
+            let to_light = point.point - x;
+            let r2 = to_light.length_squared();
+            let r = r2.sqrt();
+            let cos_light = -point.normal.dot(to_light) / r;
+            let cos_light = if point.one_sided {
+                cos_light
+            } else {
+                cos_light.abs()
+            };
+            if cos_light.is_nan() || cos_light <= 0.0 || r2 <= 0.0 {
+                continue;
             }
+            if samples > 0 {
+                counts.shadow += 1;
+                if self.accel.occluded(&shadow_ray(x, point.point)) {
+                    continue;
+                }
+            }
+            // Area-sampled point: radiance × cos' × area / r² is the light's solid angle
+            // integral of its radiance, one point's share.
+            let geometry = cos_light * light.area / r2 / count as f32 / chosen;
+            total += light.emitted
+                * fog.sigma_s
+                * fog.transmittance(t)
+                * fog.transmittance(r)
+                * (fog.phase(travel, to_light / r) * geometry / pdf);
         }
         total
     }
@@ -475,9 +512,56 @@ impl Tracer<'_> {
         record_segment(self.tree.as_ref(), ray.origin, to, kind);
     }
 
+    /// `direct` on scenes of more than `EVERY_LIGHT_UP_TO` lights: each of the
+    /// `-num_shadow_samples` points (at least one) on a light chosen by its power, the light's
+    /// centre for 0 and 1 (0 unoccluded), else a point as `Light::sample_towards` takes it.
+    fn direct_by_power(
+        &self,
+        s: &SurfaceHit,
+        n: Vec3,
+        fog: Option<&Medium>,
+        rng: &mut Rng,
+        counts: &mut Counts,
+    ) -> Color {
+        let samples = self.settings.num_shadow_samples;
+        let count = samples.max(1) as usize;
+        let origin = offset_ray_origin(s.point, n, s.error);
+        let mut total = Vec3::ZERO;
+        for i in 0..self.picks(count) {
+            let (light, chosen) = self.pick(i, count, rng);
+            let (u, v) = (rng.next_f32(), rng.next_f32());
+            if light.prim == s.prim {
+                continue;
+            }
+            let (point, weight) = if samples <= 1 {
+                let centre = light.centre(s.point);
+                let Some(g) = geometric_term(s.point, n, &centre) else {
+                    continue;
+                };
+                (centre.point, g * light.area / std::f32::consts::PI)
+            } else {
+                let Some(d) = light.sample_towards(s.point, n, u, v) else {
+                    continue;
+                };
+                (d.point, d.weight)
+            };
+            if samples > 0 {
+                record_segment(self.tree.as_ref(), origin, point, SegmentKind::Shadow);
+                counts.shadow += 1;
+                if self.accel.occluded(&shadow_ray(origin, point)) {
+                    continue;
+                }
+            }
+            total += light.emitted
+                * transmittance(fog, s.point.distance(point))
+                * (weight / (count as f32 * chosen));
+        }
+        total
+    }
+
     /// Direct irradiance at a surface point divided by π, so that albedo × this is the
     /// reflected radiance. `n`: the normal on the side being lit; `fog`: the medium the
-    /// light crosses to reach it, if any.
+    /// light crosses to reach it, if any. On scenes of many lights, `direct_by_power`.
     fn direct(
         &self,
         s: &SurfaceHit,
@@ -486,6 +570,9 @@ impl Tracer<'_> {
         rng: &mut Rng,
         counts: &mut Counts,
     ) -> Color {
+        if self.power.is_some() {
+            return self.direct_by_power(s, n, fog, rng, counts);
+        }
         let samples = self.settings.num_shadow_samples;
         let count = samples.max(1) as usize;
         // Every shadow ray leaves on the lit side (n · dir > 0): one offset origin serves all.

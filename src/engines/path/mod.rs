@@ -25,7 +25,7 @@ use super::scattering::{
 use crate::accel::{closest_surface, Accel};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Ray, Vec3};
-use crate::render::lights::Light;
+use crate::render::lights::{Light, LightPower};
 use crate::render::{render_pixel_batches, render_pixels, Counts, RenderStats};
 use crate::sampling::{LightSampling, PathSamples};
 use crate::scene::bsdf::Bsdf;
@@ -72,8 +72,8 @@ pub struct PathTracer<'a> {
     scene: &'a Scene,
     accel: &'a dyn Accel,
     lights: Vec<Light>,
-    /// Cumulative light-selection probabilities (∝ emitted power: max(Le) × area).
-    cdf: Vec<f32>,
+    /// Which light next-event estimation takes.
+    power: LightPower,
     /// Scatterings a path may take (`--max-depth`; default `MAX_VERTICES`, which roulette
     /// never lets a path reach).
     max_depth: u32,
@@ -136,20 +136,11 @@ struct Previous {
 impl PathTracer<'_> {
     pub fn new<'a>(scene: &'a Scene, accel: &'a dyn Accel) -> PathTracer<'a> {
         let lights = Light::collect(scene);
-        let mut cdf = Vec::with_capacity(lights.len());
-        let mut total = 0.0;
-        for l in &lights {
-            total += l.emitted.max_element() * l.area;
-            cdf.push(total);
-        }
-        if total > 0.0 {
-            cdf.iter_mut().for_each(|c| *c /= total);
-        }
         PathTracer {
             scene,
             accel,
+            power: LightPower::new(&lights),
             lights,
-            cdf,
             max_depth: MAX_VERTICES,
             by_area: false,
             crosses_boundaries: scene
@@ -181,7 +172,7 @@ impl PathTracer<'_> {
     }
 
     fn selection_probability(&self, k: usize) -> f32 {
-        self.cdf[k] - if k == 0 { 0.0 } else { self.cdf[k - 1] }
+        self.power.probability(k)
     }
 
     /// Solid-angle density with which next-event estimation picks the direction from `from`
@@ -201,19 +192,13 @@ impl PathTracer<'_> {
     /// One light, chosen in proportion to its power, and its index (the only light without a
     /// draw).
     fn choose_light(&self, samples: &mut PathSamples) -> Option<usize> {
-        let total = self.cdf.last().copied().unwrap_or(0.0);
-        if total <= 0.0 {
+        if !self.power.any() {
             return None;
         }
         if self.lights.len() == 1 {
             return Some(0);
         }
-        let x = samples.next_1d();
-        Some(
-            self.cdf
-                .partition_point(|&c| c <= x)
-                .min(self.lights.len() - 1),
-        )
+        Some(self.power.choose(samples.next_1d()))
     }
 
     /// Next-event estimation at a point `x` of `medium` reached travelling along the unit

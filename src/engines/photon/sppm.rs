@@ -32,7 +32,7 @@ use crate::engines::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSetti
 use crate::engines::scattering::{glossy_reflection, sky_lighting_sample, Dielectric};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Vec3};
-use crate::render::lights::Light;
+use crate::render::lights::{Light, LightPower, EVERY_LIGHT_UP_TO};
 use crate::render::{CameraSampler, RenderStats};
 use crate::sampling::Rng;
 use crate::scene::{Color, Scene, SurfaceHit};
@@ -163,32 +163,19 @@ impl Grid {
 
 /// Next-event estimation at the visible points: one point on every light (by solid angle for
 /// rectangles), or, in scenes of more than `EVERY_LIGHT_UP_TO` lights, on one light chosen in
-/// proportion to its power (choosing one of a few lights at random multiplies the noise: the
-/// furnace's six walls gave pixels 12% off after 32 passes, where one point on each gives a
-/// few percent).
+/// proportion to its power.
 struct DirectLight {
     lights: Vec<Light>,
-    cdf: Vec<f32>,
+    power: LightPower,
 }
-
-/// Scenes with at most this many lights sample every light at every visible point.
-const EVERY_LIGHT_UP_TO: usize = 64;
 
 impl DirectLight {
     fn new(scene: &Scene) -> DirectLight {
         let lights = Light::collect(scene);
-        let mut total = 0.0;
-        let mut cdf: Vec<f32> = lights
-            .iter()
-            .map(|l| {
-                total += l.emitted.max_element() * l.area;
-                total
-            })
-            .collect();
-        if total > 0.0 {
-            cdf.iter_mut().for_each(|c| *c /= total);
+        DirectLight {
+            power: LightPower::new(&lights),
+            lights,
         }
-        DirectLight { lights, cdf }
     }
 
     /// What reaches `s` (normal `n`) straight from the lights, per unit albedo, as
@@ -222,15 +209,11 @@ impl DirectLight {
                 .iter()
                 .fold(Vec3::ZERO, |sum, light| sum + one(light, rng, rays));
         }
-        if self.cdf.last().is_none_or(|&t| t <= 0.0) {
+        if !self.power.any() {
             return Vec3::ZERO;
         }
-        let x = rng.next_f32();
-        let k = self
-            .cdf
-            .partition_point(|&c| c <= x)
-            .min(self.lights.len() - 1);
-        let probability = self.cdf[k] - if k == 0 { 0.0 } else { self.cdf[k - 1] };
+        let k = self.power.choose(rng.next_f32());
+        let probability = self.power.probability(k);
         if probability <= 0.0 {
             return Vec3::ZERO;
         }
