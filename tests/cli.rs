@@ -1553,17 +1553,8 @@ fn assert_engines_agree_by_default(dir: &Path, view: &str, engines: &[&str]) {
 }
 
 /// A Mitsuba scene of a lamp over a cube on a floor, direct light only (`max_depth` 2), seen
-/// from above, where the lamp shows its back: with no flag, the ray tracer, the photon engine,
-/// radiosity and the path tracer agree on the image's mean, with each backend. A Mitsuba
-/// scene has no ambient term, casts shadows and solves radiosity hierarchically (its
-/// `RenderHints`), and a one-sided BSDF's back is black in radiosity too. Measured without
-/// each: the course's ambient of 0.1 made the ray tracer's mean 8 times the path tracer's;
-/// without shadows it was 5% bright; radiosity's one patch a triangle gave a fifth of the
-/// floor's light, and the lamp's back shown lit tripled its mean.
-#[test]
-fn the_engines_agree_on_a_mitsuba_lamp_by_default() {
-    let dir = common::temp_dir("mitsuba-lamp");
-    let scene = r#"<scene version="3.0.0">
+/// from above, where the lamp shows its back.
+const MITSUBA_LAMP: &str = r#"<scene version="3.0.0">
     <integrator type="path"><integer name="max_depth" value="2"/></integrator>
     <sensor type="perspective"><float name="fov" value="50"/>
         <transform name="to_world"><lookat origin="0,8,-8" target="0,0,0" up="0,1,0"/></transform>
@@ -1583,7 +1574,18 @@ fn the_engines_agree_on_a_mitsuba_lamp_by_default() {
     </shape>
 </scene>
 "#;
-    std::fs::write(dir.join("lamp.xml"), scene).unwrap();
+
+/// On `MITSUBA_LAMP`, with no flag, the ray tracer, the photon engine, radiosity and the
+/// path tracer agree on the image's mean, with each backend. A Mitsuba
+/// scene has no ambient term, casts shadows and solves radiosity hierarchically (its
+/// `RenderHints`), and a one-sided BSDF's back is black in radiosity too. Measured without
+/// each: the course's ambient of 0.1 made the ray tracer's mean 8 times the path tracer's;
+/// without shadows it was 5% bright; radiosity's one patch a triangle gave a fifth of the
+/// floor's light, and the lamp's back shown lit tripled its mean.
+#[test]
+fn the_engines_agree_on_a_mitsuba_lamp_by_default() {
+    let dir = common::temp_dir("mitsuba-lamp");
+    std::fs::write(dir.join("lamp.xml"), MITSUBA_LAMP).unwrap();
     assert_engines_agree_by_default(
         &dir,
         "-input lamp.xml --quiet",
@@ -1684,6 +1686,34 @@ fn the_ray_tracer_and_the_photon_engine_render_lights_without_area() {
         assert!(!out.status.success(), "{engine}: {stderr}");
         assert!(stderr.contains("lights without area"), "{engine}: {stderr}");
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `--plan` names what the scene file chose that the engine reads, and only that: on
+/// `MITSUBA_LAMP` the path tracer's depth but not the shadow rays it does not read, the ray
+/// tracer's shadow rays and ambient light but not the path depth.
+#[test]
+fn the_plan_names_the_scene_files_choices_the_engine_reads() {
+    let dir = common::temp_dir("mitsuba-plan-hints");
+    std::fs::write(dir.join("lamp.xml"), MITSUBA_LAMP).unwrap();
+    let note = |engine: &str| {
+        let out = render(&dir, &["-input", "lamp.xml", "--engine", engine, "--plan"]);
+        let text = ok(&out) + &String::from_utf8_lossy(&out.stderr);
+        text.lines()
+            .find(|l| l.contains("the scene file chooses"))
+            .unwrap_or_else(|| panic!("{engine}: no note of the scene's choices in {text}"))
+            .to_string()
+    };
+    let path = note("path");
+    assert!(path.contains("--max-depth 1"), "{path}");
+    assert!(!path.contains("-num_shadow_samples"), "{path}");
+    assert!(!path.contains("-ambient_light"), "{path}");
+    let raytrace = note("raytrace");
+    assert!(raytrace.contains("-num_shadow_samples 16"), "{raytrace}");
+    assert!(raytrace.contains("-ambient_light 0 0 0"), "{raytrace}");
+    assert!(!raytrace.contains("--max-depth"), "{raytrace}");
+    assert!(!raytrace.contains("--radiosity-solver"), "{raytrace}");
+    assert!(note("radiosity").contains("--radiosity-solver hierarchical"));
     std::fs::remove_dir_all(&dir).ok();
 }
 

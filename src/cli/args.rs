@@ -833,12 +833,23 @@ impl RenderArgs {
     /// Flags given that the chosen engine does not read, as the user would type them.
     pub fn unused_flags(&self) -> Vec<String> {
         let engine = self.engine();
-        let unread = crate::engines::engine(engine).unread_flags();
         self.given
             .iter()
-            .filter(|(group, id)| !self.reads_group(engine, group) || unread.contains(&id.as_str()))
+            .filter(|(group, id)| !self.reads(engine, group, id))
             .map(|(_, id)| super::flag_name(id))
             .collect()
+    }
+
+    /// Whether `engine` reads the render flag of id `id` (as clap names it).
+    pub fn reads_flag(&self, engine: EngineKind, id: &str) -> bool {
+        super::flag_group(id).is_none_or(|group| self.reads(engine, &group, id))
+    }
+
+    /// Whether `engine` reads the flag `id` of clap group `group`: its group's, unless the
+    /// engine leaves it unread.
+    fn reads(&self, engine: EngineKind, group: &str, id: &str) -> bool {
+        self.reads_group(engine, group)
+            && !crate::engines::engine(engine).unread_flags().contains(&id)
     }
 }
 

@@ -202,6 +202,16 @@ impl Cli {
     }
 }
 
+/// The clap group of the render flag of id `id`: its innermost, as `Cli::parse_from_iter`
+/// records flags given.
+pub fn flag_group(id: &str) -> Option<String> {
+    Cli::command()
+        .get_groups()
+        .filter(|g| g.get_id() != "RenderArgs" && g.get_id() != "Cli")
+        .find(|g| g.get_args().any(|a| a == id))
+        .map(|g| g.get_id().to_string())
+}
+
 /// Backends measured by default: every one this build has.
 pub fn default_accels() -> Vec<AccelKind> {
     if cfg!(feature = "embree") {

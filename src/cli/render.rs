@@ -37,10 +37,16 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             .iter()
             .map(|f| format!("note: {f} is ignored: the {engine} engine does not read it\n"))
             .collect();
-        if !from_scene.is_empty() {
+        // What this engine reads of what the scene file chose.
+        let chosen: Vec<&str> = from_scene
+            .iter()
+            .filter(|(id, _)| args.reads_flag(engine, id))
+            .map(|(_, flag)| flag.as_str())
+            .collect();
+        if !chosen.is_empty() {
             notes += &format!(
                 "note: the scene file chooses {} (flags given win)\n",
-                from_scene.join(", ")
+                chosen.join(", ")
             );
         }
         if args.common.accel.is_none() {
@@ -207,14 +213,15 @@ pub fn checked_settings(args: &RenderArgs) -> Result<RenderSettings, String> {
 }
 
 /// What the scene file asks of the render (a Mitsuba scene's film size, samples per pixel,
-/// path depth, lens and no ambient light; an MGF scene's reflection depth, shadow rays and radiosity solver),
-/// where the command line did not give its own: the flags win. Returns the settings taken, as
-/// a user would type them, for `--plan` to say.
+/// path depth, lens, shadow rays, radiosity solver and no ambient light; an MGF scene's
+/// reflection depth, shadow rays and radiosity solver), where the command line did not give
+/// its own: the flags win. Returns the settings taken, each its flag's id and as a user would
+/// type it, for `--plan` to say.
 pub fn apply_scene_hints(
     args: &RenderArgs,
     scene: &mut Scene,
     settings: &mut RenderSettings,
-) -> Vec<String> {
+) -> Vec<(&'static str, String)> {
     let given = |id: &str| args.given.iter().any(|(_, g)| g == id);
     let hints = scene.render_hints.clone();
     let mut taken = Vec::new();
@@ -223,15 +230,18 @@ pub fn apply_scene_hints(
         settings.height = h;
         settings.window = args.part.window(w, h);
         scene.filter_textures_for(w, h);
-        taken.push(format!("-size {w} {h}"));
+        taken.push(("size", format!("-size {w} {h}")));
     }
     if let (Some(n), false) = (hints.samples, given("num_antialias_samples")) {
         settings.num_antialias_samples = n;
-        taken.push(format!("-num_antialias_samples {n}"));
+        taken.push((
+            "num_antialias_samples",
+            format!("-num_antialias_samples {n}"),
+        ));
     }
     if let (Some(n), false) = (hints.num_bounces, given("num_bounces")) {
         settings.num_bounces = n;
-        taken.push(format!("-num_bounces {n}"));
+        taken.push(("num_bounces", format!("-num_bounces {n}")));
     }
     // A time limit chooses its own shadow rays (`RenderArgs::choose_for_time_limit`).
     let time_limited = args.common.time_limit.is_some();
@@ -240,28 +250,34 @@ pub fn apply_scene_hints(
         given("num_shadow_samples") || time_limited,
     ) {
         settings.num_shadow_samples = n;
-        taken.push(format!("-num_shadow_samples {n}"));
+        taken.push(("num_shadow_samples", format!("-num_shadow_samples {n}")));
     }
     if let (Some(a), false) = (hints.ambient_light, given("ambient_light")) {
         settings.ambient_light = a;
-        taken.push(format!("-ambient_light {} {} {}", a.x, a.y, a.z));
+        taken.push((
+            "ambient_light",
+            format!("-ambient_light {} {} {}", a.x, a.y, a.z),
+        ));
     }
     if hints.hierarchical_radiosity && !given("radiosity_solver") {
         settings.radiosity.solver = crate::engines::radiosity::SolverKind::Hierarchical;
-        taken.push("--radiosity-solver hierarchical".to_string());
+        taken.push((
+            "radiosity_solver",
+            "--radiosity-solver hierarchical".to_string(),
+        ));
     }
     if let (Some(depth), false) = (hints.max_depth, given("max_depth")) {
         settings.max_depth = Some(depth);
-        taken.push(format!("--max-depth {depth}"));
+        taken.push(("max_depth", format!("--max-depth {depth}")));
     }
     if let Some((radius, focus)) = hints.lens {
         if !given("aperture") {
             settings.aperture = radius;
-            taken.push(format!("--aperture {radius}"));
+            taken.push(("aperture", format!("--aperture {radius}")));
         }
         if !given("focus_distance") && focus > 0.0 {
             settings.focus_distance = Some(focus);
-            taken.push(format!("--focus-distance {focus}"));
+            taken.push(("focus_distance", format!("--focus-distance {focus}")));
         }
     }
     taken
