@@ -1640,9 +1640,9 @@ fn the_ray_tracer_samples_many_lights_by_power() {
 
 /// A Mitsuba scene lit by a point light, a spot and a directional light alone, over a floor
 /// with a wall and a cube: the ray tracer's direct light (`max_depth` 2) and the photon
-/// engine's whole image (no depth limit) have the path tracer's mean, with each backend.
-/// Both refused such lights before; photons that did not leave them would leave out the
-/// indirect light (measured 9% of the mean). Radiosity and SPPM refuse the scene by name.
+/// engine's and SPPM's whole images (no depth limit; SPPM converged) have the path tracer's
+/// mean, with each backend. They refused such lights before; photons that did not leave them would leave
+/// out the indirect light (measured 9% of the mean). Radiosity refuses the scene by name.
 #[test]
 fn the_ray_tracer_and_the_photon_engine_render_lights_without_area() {
     let dir = common::temp_dir("mitsuba-delta-lights");
@@ -1676,16 +1676,26 @@ fn the_ray_tracer_and_the_photon_engine_render_lights_without_area() {
     std::fs::write(dir.join("delta.xml"), scene).unwrap();
     assert_engines_agree_by_default(&dir, "-input delta.xml --quiet", &["raytrace"]);
     let all_bounces = "-input delta.xml --define depth=-1 --quiet";
-    assert_engines_agree_by_default(&dir, all_bounces, &["photon"]);
-    for engine in ["radiosity", "sppm"] {
-        let out = render(
-            &dir,
-            &["-input", "delta.xml", "--engine", engine, "-o", "x.pfm"],
-        );
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{engine}: {stderr}");
-        assert!(stderr.contains("lights without area"), "{engine}: {stderr}");
-    }
+    // SPPM's bias falls with its passes: 3% low after the scene's 4, 0.2% after 64.
+    let sppm = "sppm -num_antialias_samples 64";
+    assert_engines_agree_by_default(&dir, all_bounces, &["photon", sppm]);
+    let out = render(
+        &dir,
+        &[
+            "-input",
+            "delta.xml",
+            "--engine",
+            "radiosity",
+            "-o",
+            "x.pfm",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "radiosity: {stderr}");
+    assert!(
+        stderr.contains("lights without area"),
+        "radiosity: {stderr}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

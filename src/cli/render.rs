@@ -328,9 +328,9 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
 }
 
 /// What an engine does not render yet is refused, not left out: lights without area are
-/// the path tracer's, the ray tracer's and the photon engine's (not in a fog, whose single
-/// scattering the ray tracer takes from lights with area only; not with radiosity as the ray
-/// tracer's indirect light); media (fog, a
+/// the path tracer's, the ray tracer's, the photon engine's and SPPM's (not in a fog, whose
+/// single scattering the ray tracer takes from lights with area only; not with radiosity as
+/// the ray tracer's indirect light); media (fog, a
 /// material's `interior_medium`) and skies are the path tracer's, the ray tracer's (not with
 /// radiosity as its indirect light, whose solution leaves them out) and the photon engine's
 /// (final gathering included: its gather rays cross the media); radiosity takes a sky and a
@@ -345,12 +345,14 @@ fn refuse_unrendered_media(
     scene: &Scene,
 ) -> Result<(), String> {
     let path_tracer = matches!(engine, EngineKind::Path | EngineKind::Raycast);
-    let ray_traced = matches!(engine, EngineKind::Raytrace | EngineKind::Photon)
-        && scene.fog.is_none()
+    let ray_traced = matches!(
+        engine,
+        EngineKind::Raytrace | EngineKind::Photon | EngineKind::Sppm
+    ) && scene.fog.is_none()
         && args.ray_trace.indirect != engines::IndirectKind::Radiosity;
     if !scene.delta_lights.is_empty() && !path_tracer && !ray_traced {
         return Err(format!(
-            "{}: the scene has lights without area (Mitsuba's point, spot or directional lights), which the path tracer renders (--engine path), and the ray tracer and the photon engine outside a fog and without --indirect radiosity; the {engine} engine would leave them out",
+            "{}: the scene has lights without area (Mitsuba's point, spot or directional lights), which the path tracer renders (--engine path), and the ray tracer, the photon engine and SPPM outside a fog and without --indirect radiosity; the {engine} engine would leave them out",
             input.display()
         ));
     }

@@ -13,7 +13,7 @@
 
 use super::engine::RenderSettings;
 use super::scattering::{
-    delta_arrival, power_heuristic, reflect, sky_lighting_sample, Dielectric, GlossyLobe,
+    delta_arrivals, power_heuristic, reflect, sky_lighting_sample, Dielectric, GlossyLobe,
 };
 use crate::accel::Accel;
 use crate::film::ray_tree::{Segment, SegmentKind};
@@ -370,10 +370,7 @@ impl Tracer<'_> {
         counts: &mut Counts,
     ) -> Color {
         let mut total = Vec3::ZERO;
-        for light in &self.scene.delta_lights {
-            let Some(a) = delta_arrival(self.scene, light, s, n) else {
-                continue;
-            };
+        for a in delta_arrivals(self.scene, s, n) {
             let value = match lobe {
                 None => a.cos / std::f32::consts::PI,
                 Some(lobe) => lobe.pdf(a.direction),

@@ -59,6 +59,16 @@ pub fn delta_arrival(
     })
 }
 
+/// What each light without area sends the point of `s` lit on the side of `n`
+/// (`delta_arrival`), for those that send it anything.
+pub fn delta_arrivals<'a>(
+    scene: &'a Scene,
+    s: &'a SurfaceHit,
+    n: Vec3,
+) -> impl Iterator<Item = DeltaArrival> + 'a {
+    (scene.delta_lights.iter()).filter_map(move |light| delta_arrival(scene, light, s, n))
+}
+
 /// A cosine-distributed direction about the unit normal `n`, from (u, v) in [0,1)², and its
 /// density in solid angle, cos θ / π.
 #[inline(always)]

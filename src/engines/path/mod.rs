@@ -19,7 +19,7 @@ mod wavefront;
 
 use super::engine::{Budget, Engine, EngineKind, RenderSettings, Rendered};
 use super::scattering::{
-    delta_arrival, diffuse_sample, orthonormal_basis, power_heuristic, reflect, Dielectric,
+    delta_arrivals, diffuse_sample, orthonormal_basis, power_heuristic, reflect, Dielectric,
     GlossyLobe,
 };
 use crate::accel::{closest_surface, Accel};
@@ -407,10 +407,7 @@ impl PathTracer<'_> {
         counts: &mut Counts,
     ) -> Color {
         let mut sum = Vec3::ZERO;
-        for light in &self.scene.delta_lights {
-            let Some(a) = delta_arrival(self.scene, light, s, n) else {
-                continue;
-            };
+        for a in delta_arrivals(self.scene, s, n) {
             let value = match lobe {
                 None => a.cos / std::f32::consts::PI,
                 Some(lobe) => lobe.pdf(a.direction),

@@ -6,7 +6,7 @@
 //! `-num_antialias_samples` passes): the camera ray is followed through mirrors and glass to
 //! its first diffuse surface, the *visible point*, where the light straight from the emitters
 //! is added by a shadow ray to a point on each light (by solid angle for rectangles; in
-//! scenes of many lights, to one light chosen by power). Then
+//! scenes of many lights, to one light chosen by power) and to each light without area. Then
 //! `--sppm-photons` photons are traced from the lights, and every photon that reaches a
 //! diffuse surface after at least one bounce adds its power to the visible points within
 //! their pixel's radius. Each pixel's radius then shrinks as photons arrive (α = 2/3):
@@ -29,7 +29,9 @@ use super::settings::SAFETY_DEPTH;
 use super::trace::{Aim, Emitters, Hit, PathKind};
 use crate::accel::{closest_surface, Accel};
 use crate::engines::engine::{Budget, Engine, EngineKind, EnginePlan, RenderSettings, Rendered};
-use crate::engines::scattering::{glossy_reflection, sky_lighting_sample, Dielectric};
+use crate::engines::scattering::{
+    delta_arrivals, glossy_reflection, sky_lighting_sample, Dielectric,
+};
 use crate::film::Film;
 use crate::geometry::{offset_ray_origin, shadow_ray, Vec3};
 use crate::render::lights::{Light, LightPower, EVERY_LIGHT_UP_TO};
@@ -221,6 +223,25 @@ impl DirectLight {
     }
 }
 
+/// What reaches `s` (normal `n`) from the lights without area, per unit albedo, as
+/// irradiance / π: one shadow ray each, which `rays` counts. Their photons are skipped where
+/// they first land, as the other lights' are.
+fn delta_lights(
+    scene: &Scene,
+    accel: &dyn Accel,
+    (s, n): (&SurfaceHit, Vec3),
+    rays: &mut u64,
+) -> Color {
+    let mut sum = Vec3::ZERO;
+    for a in delta_arrivals(scene, s, n) {
+        *rays += 1;
+        if !accel.occluded(&a.ray) {
+            sum += a.irradiance * (a.cos / std::f32::consts::PI);
+        }
+    }
+    sum
+}
+
 /// What reaches `s` (normal `n`) from the sky, per unit albedo, as irradiance / π: one
 /// direction by `sky_lighting_sample` and its shadow ray, which `rays` counts (no draw without
 /// a sky). The sky's photons are skipped where they first land, as the lights' are.
@@ -293,6 +314,7 @@ fn visible_point(
             let lobe = throughput * albedo * (total / d);
             add(lobe * lights.sample(&s, n, accel, &mut rng, &mut counts[1]));
             add(lobe * sky_light(scene, accel, (&s, n), &mut rng, &mut counts[1]));
+            add(lobe * delta_lights(scene, accel, (&s, n), &mut counts[1]));
             return Some(VisiblePoint {
                 point: s.point,
                 normal: s.geometric_side(n),
