@@ -371,10 +371,7 @@ impl Tracer<'_> {
     ) -> Color {
         let mut total = Vec3::ZERO;
         for a in delta_arrivals(self.scene, s, n) {
-            let value = match lobe {
-                None => a.cos / std::f32::consts::PI,
-                Some(lobe) => lobe.pdf(a.direction),
-            };
+            let value = a.value(lobe);
             if value <= 0.0 {
                 continue;
             }

@@ -31,6 +31,17 @@ pub struct DeltaArrival {
     pub distance: f32,
 }
 
+impl DeltaArrival {
+    /// What a surface takes of the irradiance: per unit albedo of a Lambertian one
+    /// (`lobe` None), cos/π; per unit reflectance of a glossy `lobe`, its density.
+    pub fn value(&self, lobe: Option<&GlossyLobe>) -> f32 {
+        match lobe {
+            None => self.cos / std::f32::consts::PI,
+            Some(lobe) => lobe.pdf(self.direction),
+        }
+    }
+}
+
 /// What `light` sends the point of `s` lit on the side of `n`; None where it sends nothing
 /// there or lies behind the surface. One shadow ray finds it: no sampling does.
 pub fn delta_arrival(

@@ -236,7 +236,7 @@ fn delta_lights(
     for a in delta_arrivals(scene, s, n) {
         *rays += 1;
         if !accel.occluded(&a.ray) {
-            sum += a.irradiance * (a.cos / std::f32::consts::PI);
+            sum += a.irradiance * a.value(None);
         }
     }
     sum
