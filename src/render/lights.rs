@@ -188,9 +188,11 @@ impl LightPower {
         LightPower { cdf }
     }
 
-    /// Whether any light emits, so that there is one to choose.
+    /// Whether any light emits, so that there is one to choose. A total that overflowed
+    /// (NaN once divided) still counts: the samples it gives are non-finite, and so counted
+    /// and left out where the image is made, not silently dark.
     pub fn any(&self) -> bool {
-        self.cdf.last().is_some_and(|&t| t > 0.0)
+        self.cdf.last().is_some_and(|&t| t > 0.0 || t.is_nan())
     }
 
     /// The probability of choosing light `k`.
