@@ -45,7 +45,7 @@ struct Tracer<'a> {
     settings: &'a RenderSettings,
     lights: Vec<Light>,
     /// On scenes of more than `EVERY_LIGHT_UP_TO` lights, each light sample goes to a light
-    /// chosen by its power (`chosen_lights`); on the rest every light takes its samples.
+    /// chosen by its power (`pick`); on the rest every light takes its samples.
     power: Option<LightPower>,
     /// How the points on each light are placed (`--light-sampling`, default
     /// `DEFAULT_LIGHT_SAMPLING`).

@@ -94,12 +94,10 @@ impl SkySource {
             }
             None => (sample_cone(Vec3::Y, -1.0, u, v), 4.0 * std::f32::consts::PI),
         };
-        let (dx, dy) = sample_disk(rng.next_f32(), rng.next_f32());
-        let (t, b) = orthonormal_basis(towards);
-        let origin = centre + (towards + t * dx + b * dy) * radius;
+        let ray = ray_through_disk((centre, radius), towards, rng.next_f32(), rng.next_f32());
         let area = std::f32::consts::PI * radius * radius;
         let power = self.sky.radiance(towards) * (per_density * area);
-        Some((Ray::new(origin, -towards), power))
+        Some((ray, power))
     }
 }
 
@@ -141,10 +139,8 @@ impl DeltaSource {
         let (u, v) = (rng.next_f32(), rng.next_f32());
         match self.light.kind {
             DeltaKind::Directional { direction } => {
-                let (dx, dy) = sample_disk(u, v);
-                let (t, b) = orthonormal_basis(direction);
-                let origin = self.centre + (t * dx + b * dy - direction) * self.radius;
-                Some((Ray::new(origin, direction), self.flux()))
+                let ray = ray_through_disk((self.centre, self.radius), -direction, u, v);
+                Some((ray, self.flux()))
             }
             DeltaKind::Point { position } | DeltaKind::Spot { position, .. } => {
                 let (axis, cos_max) = self.cone();
@@ -156,6 +152,16 @@ impl DeltaSource {
             }
         }
     }
+}
+
+/// A ray arriving from the unit direction `towards` through a point uniform (from `u`, `v`) on
+/// the disk across the sphere (`centre`, `radius`) that faces it: every line through the
+/// sphere in that direction is as likely. The sky's photons and a directional light's.
+fn ray_through_disk((centre, radius): (Vec3, f32), towards: Vec3, u: f32, v: f32) -> Ray {
+    let (dx, dy) = sample_disk(u, v);
+    let (t, b) = orthonormal_basis(towards);
+    let origin = centre + (towards + t * dx + b * dy) * radius;
+    Ray::new(origin, -towards)
 }
 
 /// The emitters as photon sources: each light, each light without area, and the sky, chosen
