@@ -31,6 +31,8 @@ pub struct Plan {
     /// ("material 3: wood texture, scale 0.15"), one per material that has either.
     pub patterns: Vec<String>,
     pub emitters: usize,
+    /// Point, spot and directional lights (a Mitsuba scene's).
+    pub lights_without_area: usize,
     /// The fog the render traces through ("medium 0: σa …, σs …, g …"), None without one.
     pub fog: Option<String>,
     /// The Mitsuba BSDF of each used material that has one and what the engine renders of
@@ -109,6 +111,7 @@ impl Plan {
             patterns: patterns(scene),
             bsdfs: bsdfs(scene, engine),
             emitters,
+            lights_without_area: scene.delta_lights.len(),
             fog: scene.fog.map(|k| {
                 let m = &scene.media[k];
                 let v = |c: crate::geometry::Vec3| format!("{} {} {}", c.x, c.y, c.z);
@@ -376,7 +379,11 @@ impl fmt::Display for Plan {
                 writeln!(f, "  {line}")?;
             }
         }
-        writeln!(f, "emitters: {}", self.emitters)?;
+        write!(f, "emitters: {}", self.emitters)?;
+        if self.lights_without_area > 0 {
+            write!(f, ", lights without area: {}", self.lights_without_area)?;
+        }
+        writeln!(f)?;
         // Nothing of media or skies is built or traced for a scene without them.
         writeln!(f, "fog: {}", self.fog.as_deref().unwrap_or("none"))?;
         if !self.boundary_media.is_empty() {

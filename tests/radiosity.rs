@@ -736,3 +736,60 @@ fn a_solve_shot_on_a_few_shots_at_a_time_equals_one_solve_of_all_its_shots() {
         }
     }
 }
+
+/// A floor of albedo ρ = 0.5 lit by a point light of intensity I = 10 alone, 1.5 above one of
+/// its corners (a Mitsuba scene: the course's dialect has no such light). Nothing else is
+/// there to bounce from, so each patch's radiance is what it reflects of the light:
+/// ρ/π · I · Ω/A, with Ω the solid angle the patch subtends from the light (cos/r² dA is
+/// dΩ), in closed form for its two triangles (Van Oosterom and Strackee); the floor's total,
+/// the light's power it takes, likewise. The mesh is split near the light, where its light
+/// falls off fast across a face; with both Accels.
+#[test]
+fn lights_without_area_give_a_patch_its_mean_irradiance() {
+    let dir = common::temp_dir("radiosity-point-light");
+    let file = dir.join("floor.xml");
+    std::fs::write(
+        &file,
+        r#"<scene version="3.0.0">
+    <emitter type="point"><point name="position" x="-1" y="-1" z="1.5"/><rgb name="intensity" value="10"/></emitter>
+    <shape type="rectangle"><bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+</scene>"#,
+    )
+    .unwrap();
+    let scene = Scene::load(&file).expect("loads");
+    let light = trilux::geometry::vec3(-1.0, -1.0, 1.5).as_dvec3();
+    // The solid angle of the triangle (a, b, c) seen from the light.
+    let solid_angle = |[a, b, c]: [trilux::geometry::Vec3; 3]| {
+        let [a, b, c] = [a, b, c].map(|v| v.as_dvec3() - light);
+        let (la, lb, lc) = (a.length(), b.length(), c.length());
+        let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+        2.0 * a.dot(b.cross(c)).abs().atan2(den)
+    };
+    for kind in backends() {
+        let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
+        let solution = solve(&scene, accel.as_ref(), &RenderSettings::default());
+        let (mut worst, mut power, mut exact_power) = (0.0f64, 0.0, 0.0);
+        for (p, l) in solution.patches.iter().zip(&solution.state.radiance) {
+            let [c0, c1, c2, c3] = p.corners;
+            let omega = solid_angle([c0, c1, c2]) + solid_angle([c0, c2, c3]);
+            let truth = 0.5 / std::f64::consts::PI * 10.0 * omega / p.area as f64;
+            worst = worst.max((l.x as f64 / truth - 1.0).abs());
+            power += l.x as f64 * p.area as f64;
+            exact_power += truth * p.area as f64;
+        }
+        println!(
+            "{kind}: {} patches, worst {:.3}%, power {:.4}%",
+            solution.patches.len(),
+            100.0 * worst,
+            100.0 * (power / exact_power - 1.0)
+        );
+        assert!(
+            solution.patches.len() > 100,
+            "the mesh is split near the light"
+        );
+        // Each patch's mean from 64 jittered points: measured 0.73% at worst (2.0% with 16).
+        assert!(worst < 1e-2, "{kind}: a patch {:.3}% off", 100.0 * worst);
+        assert!((power / exact_power - 1.0).abs() < 1e-3, "{kind}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

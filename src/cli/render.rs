@@ -328,9 +328,10 @@ pub fn load_scene(args: &RenderArgs, input: &Path, engine: EngineKind) -> Result
 }
 
 /// What an engine does not render yet is refused, not left out: lights without area are
-/// the path tracer's, the ray tracer's, the photon engine's and SPPM's (not in a fog, whose
-/// single scattering the ray tracer takes from lights with area only; not with radiosity as
-/// the ray tracer's indirect light); media (fog, a
+/// the path tracer's, the ray tracer's, the photon engine's, SPPM's and radiosity's (not in a
+/// fog, whose single scattering the ray tracer takes from lights with area only and which
+/// radiosity's light from outside the patches does not cross; not with radiosity as the ray
+/// tracer's indirect light, whose solution would count the light they bring as direct); media (fog, a
 /// material's `interior_medium`) and skies are the path tracer's, the ray tracer's (not with
 /// radiosity as its indirect light, whose solution leaves them out) and the photon engine's
 /// (final gathering included: its gather rays cross the media); radiosity takes a sky and a
@@ -350,9 +351,10 @@ fn refuse_unrendered_media(
         EngineKind::Raytrace | EngineKind::Photon | EngineKind::Sppm
     ) && scene.fog.is_none()
         && args.ray_trace.indirect != engines::IndirectKind::Radiosity;
-    if !scene.delta_lights.is_empty() && !path_tracer && !ray_traced {
+    let radiosity = engine == EngineKind::Radiosity && scene.fog.is_none();
+    if !scene.delta_lights.is_empty() && !path_tracer && !ray_traced && !radiosity {
         return Err(format!(
-            "{}: the scene has lights without area (Mitsuba's point, spot or directional lights), which the path tracer renders (--engine path), and the ray tracer, the photon engine and SPPM outside a fog and without --indirect radiosity; the {engine} engine would leave them out",
+            "{}: the scene has lights without area (Mitsuba's point, spot or directional lights), which the path tracer renders (--engine path), and the ray tracer, the photon engine, SPPM and radiosity outside a fog and without --indirect radiosity; the {engine} engine would leave them out",
             input.display()
         ));
     }

@@ -50,14 +50,26 @@ pub fn delta_arrival(
     s: &SurfaceHit,
     n: Vec3,
 ) -> Option<DeltaArrival> {
-    let (direction, distance, irradiance) = light.towards(s.point, &scene.textures)?;
+    let origin = offset_ray_origin(s.point, n, s.error);
+    delta_arrival_at(scene, light, (s.point, n), origin)
+}
+
+/// What `light` sends the surface point `x` lit on the side of unit normal `n`, its shadow
+/// ray leaving from `origin` (`x` offset off the surface); None where it sends nothing there
+/// or lies behind the surface.
+pub fn delta_arrival_at(
+    scene: &Scene,
+    light: &DeltaLight,
+    (x, n): (Vec3, Vec3),
+    origin: Vec3,
+) -> Option<DeltaArrival> {
+    let (direction, distance, irradiance) = light.towards(x, &scene.textures)?;
     let cos = n.dot(direction);
     if cos.is_nan() || cos <= 0.0 {
         return None;
     }
-    let origin = offset_ray_origin(s.point, n, s.error);
     let ray = if distance.is_finite() {
-        shadow_ray(origin, s.point + direction * distance)
+        shadow_ray(origin, x + direction * distance)
     } else {
         Ray::new(origin, direction)
     };

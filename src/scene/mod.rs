@@ -757,6 +757,14 @@ impl Scene {
         self.instancing.world_vertices(index)
     }
 
+    /// Whether a polygon of `material` is two surfaces, its back lit on its own: every
+    /// polygon with `--two-sided`, and one whose Mitsuba BSDF is `twosided` (whose winding
+    /// says nothing of the side the light comes from). A course polygon without `--two-sided`
+    /// shows one surface from both sides, and a one-sided Mitsuba BSDF's back is black.
+    pub fn lit_behind(&self, material: u32) -> bool {
+        self.two_sided_quads || self.materials[material as usize].two_sided
+    }
+
     /// Which polygons every query misses from behind (the scene's rule, `--two-sided`
     /// applied). Instanced triangles are always opaque from both sides (Mitsuba's rule).
     pub fn culled_backs(&self) -> CulledBacks {

@@ -77,7 +77,8 @@ struct Roots {
 }
 
 impl QuadMesh {
-    /// The mesh of every primitive of the scene; with `--two-sided`, polygons have a back.
+    /// The mesh of every primitive of the scene; polygons lit behind (`Scene::lit_behind`:
+    /// `--two-sided`, a Mitsuba `twosided` BSDF) have a back.
     pub fn from_scene(scene: &Scene, raster: Tessellation) -> QuadMesh {
         let mut mesh = QuadMesh::default();
         let polygons = scene
@@ -111,7 +112,7 @@ impl QuadMesh {
                 index: i as u32,
             };
             mesh.add_root(prim, material, 0, corners, [0.0, 0.0, 1.0, 1.0], (1, 1));
-            if scene.two_sided_quads {
+            if scene.lit_behind(material) {
                 // The same parameters seen from behind: u runs the other way.
                 let [c0, c1, c2, c3] = corners;
                 let back = [c1, c0, c3, c2];
@@ -386,7 +387,7 @@ impl QuadMesh {
 }
 
 /// Whether a face of this primitive's part is the back side of a polygon.
-fn is_back(prim: PrimRef, part: u32) -> bool {
+pub fn is_back(prim: PrimRef, part: u32) -> bool {
     prim.kind != PrimKind::Shape && part == BACK
 }
 

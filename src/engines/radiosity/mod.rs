@@ -13,7 +13,7 @@ pub mod solver;
 
 mod display;
 mod export;
-mod sky;
+mod outside_lights;
 pub use settings::{Display, RadiositySettings, SolverKind};
 
 use std::sync::atomic::Ordering::Relaxed;
@@ -57,8 +57,9 @@ pub struct Solution {
     pub solver_warning: Option<String>,
     /// Rounds of adaptive subdivision done.
     pub adaptive_rounds: u32,
-    /// The faces split in each round of adaptive subdivision, in order: with the scene and
-    /// the settings, what rebuilds the mesh of a saved solution.
+    /// The faces split in each round where the lights without area light them unevenly, then
+    /// in each round of adaptive subdivision, in order: with the scene and the settings, what
+    /// rebuilds the mesh of a saved solution.
     pub splits: Vec<Vec<u32>>,
     /// How many times the scene's faces were split in four (`--subdivide`, or the level
     /// `subdivide_to_fit` reached).
@@ -70,13 +71,13 @@ pub struct Solution {
 }
 
 /// The patches a solver shoots between: the solution's, coincident twins given no area and
-/// the sky's reflected light added to their emission.
+/// the light they reflect of the sky and of the lights without area added to their emission.
 struct Shooters {
     patches: Vec<Patch>,
     /// For each patch, the earlier patch it coincides with (`NONE` for none).
     twin_of: Vec<u32>,
-    /// Rays cast to find the sky's reflected light.
-    sky_rays: u64,
+    /// Rays cast to find the light reflected of the sky and of the lights without area.
+    outside_rays: u64,
     /// The form factors' ray anchors (`FormFactorSampler::anchors`) with the number of
     /// samples, the visibility and the seed they were found for: made by the first sampler,
     /// taken by the next ones (a solve shot on a shot at a time, as the viewer's Space does,
@@ -162,11 +163,13 @@ impl ProgressiveSolve {
         {
             return None;
         }
-        let (mesh, kind) = Solution::initial_mesh(scene, r, r.subdivide);
+        let (mut mesh, kind) = Solution::initial_mesh(scene, r, r.subdivide);
         if kind != SolverKind::Progressive {
             return None;
         }
-        let (solution, shooters) = Solution::unsolved(scene, accel, settings, mesh, kind);
+        let lit = outside_lights::split_where_unevenly_lit(scene, accel, &mut mesh);
+        let (mut solution, shooters) = Solution::unsolved(scene, accel, settings, mesh, kind);
+        solution.splits = lit;
         let solver = progressive::Progressive {
             cache_bytes: r.ff_cache_mb << 20,
             relaxation: r.relaxation,
@@ -308,34 +311,40 @@ impl Solution {
                     on_progress,
                 )
             }
-            _ => Solution::solve_adaptively(scene, accel, settings, mesh, kind, on_progress),
+            _ => {
+                let mut mesh = mesh;
+                let lit = outside_lights::split_where_unevenly_lit(scene, accel, &mut mesh);
+                Solution::solve_adaptively(scene, accel, settings, (mesh, lit), kind, on_progress)
+            }
         }
     }
 
-    /// Solves on `mesh`, then, with `--adaptive-subdivide`, splits the patches whose
+    /// Solves on `mesh`, split already in the rounds of `splits` (where the lights without
+    /// area light it unevenly), then, with `--adaptive-subdivide`, splits the patches whose
     /// radiance differs from a neighbour's and solves again, `--adaptive-rounds` times.
     fn solve_adaptively(
         scene: &Scene,
         accel: &dyn Accel,
         settings: &RenderSettings,
-        mut mesh: QuadMesh,
+        (mut mesh, mut splits): (QuadMesh, Vec<Vec<u32>>),
         kind: SolverKind,
         on_progress: impl Fn(f32),
     ) -> Solution {
         let r = &settings.radiosity;
         let mut rays = 0;
-        let mut splits = Vec::new();
+        let lit_rounds = splits.len();
         loop {
             let mut solution =
                 Solution::solve_mesh(scene, accel, settings, mesh, kind, &on_progress);
             rays += solution.rays;
             solution.rays = rays;
             solution.splits = splits.clone();
-            solution.adaptive_rounds = splits.len() as u32;
+            let adaptive_rounds = splits.len() - lit_rounds;
+            solution.adaptive_rounds = adaptive_rounds as u32;
             let Some(threshold) = r.adaptive_threshold else {
                 return solution;
             };
-            let split = if splits.len() < r.adaptive_rounds as usize {
+            let split = if adaptive_rounds < r.adaptive_rounds as usize {
                 solution.patches_to_split(threshold)
             } else {
                 Vec::new()
@@ -431,15 +440,16 @@ impl Solution {
                 p.area = 0.0;
             }
         }
-        // The sky's reflected light enters the solve as the patches' own emission (none
-        // through a fog, which is infinite and hides it).
-        let mut sky_rays = 0;
-        if let Some(s) = scene.sky.as_ref().filter(|_| scene.fog.is_none()) {
-            let (reflected, rays) = sky::reflected(scene, accel, s, &solved_patches, settings.seed);
+        // The light the patches reflect of the sky and of the lights without area enters
+        // the solve as their own emission.
+        let mut outside_rays = 0;
+        if outside_lights::any(scene) {
+            let (reflected, rays) =
+                outside_lights::reflected(scene, accel, &solved_patches, settings.seed);
             for (p, r) in solved_patches.iter_mut().zip(reflected) {
                 p.emitted += r;
             }
-            sky_rays = rays;
+            outside_rays = rays;
         }
         let solution = Solution {
             patch_of_face: patch_of_face(&mesh, &patches),
@@ -450,7 +460,7 @@ impl Solution {
             ambient: Vec3::ZERO,
             visibility,
             visibility_reason,
-            rays: sky_rays,
+            rays: outside_rays,
             solver_report: String::new(),
             solver_counters: Vec::new(),
             solver_warning: None,
@@ -463,7 +473,7 @@ impl Solution {
         let shooters = Shooters {
             patches: solved_patches,
             twin_of,
-            sky_rays,
+            outside_rays,
             anchors: OnceLock::new(),
         };
         (solution, shooters)
@@ -477,7 +487,7 @@ impl Solution {
         self.ambient = solver::ambient(&shooters.patches, &state.undistributed);
         self.state = state;
         self.stop = solved.stop;
-        self.rays = form_factor_rays + shooters.sky_rays;
+        self.rays = form_factor_rays + shooters.outside_rays;
         self.solver_report = solved.report;
         self.solver_counters = solved.counters;
         self.solver_warning = solved.warning;
@@ -565,7 +575,7 @@ impl Solution {
         toward: Vec3,
     ) -> Option<(usize, f32, f32)> {
         let behind = hit.prim.kind != PrimKind::Shape && hit.geometric_normal.dot(toward) < 0.0;
-        let side = match (behind, scene.two_sided_quads) {
+        let side = match (behind, scene.lit_behind(hit.material)) {
             (true, true) => mesh::BACK,
             (true, false) if scene.materials[hit.material as usize].black_behind() => return None,
             _ => 0,
@@ -940,10 +950,17 @@ pub fn mesh_plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
             .min((settings.radiosity.ff_cache_mb as u64).saturating_mul(1 << 20)),
         _ => 0,
     };
+    // How far the mesh is split where lights without area light it unevenly is found by
+    // shadow rays, in the solve.
+    let split = if scene.delta_lights.is_empty() {
+        ""
+    } else {
+        " before the splits where lights without area light it unevenly"
+    };
     EnginePlan {
         structures: vec![(
             "radiosity mesh",
-            format!("yes ({patches} patches, {solver} solver; visibility: {visibility})"),
+            format!("yes ({patches} patches{split}, {solver} solver; visibility: {visibility})"),
         )],
         memory: vec![
             ("radiosity mesh", patches.saturating_mul(PATCH_BYTES)),
@@ -952,12 +969,17 @@ pub fn mesh_plan(scene: &Scene, settings: &RenderSettings) -> EnginePlan {
     }
 }
 
-/// Input patches of the radiosity mesh: every primitive's top-level faces, a polygon's back
-/// too with `--two-sided` (each `--subdivide` makes four of one).
+/// Input patches of the radiosity mesh: every primitive's top-level faces, the back too of a
+/// polygon lit behind (`Scene::lit_behind`; each `--subdivide` makes four of one).
 fn planned_input_patches(scene: &Scene, r: &RadiositySettings) -> u64 {
     let tessellation = r.tessellation();
-    let sides = 1 + scene.two_sided_quads as u64;
-    (scene.quads.len() + scene.triangles.len() + scene.instancing.triangle_count()) as u64 * sides
+    let instanced =
+        (0..scene.instancing.triangle_count()).map(|i| scene.instancing.material(i as u32));
+    (scene.quads.iter().map(|q| q.material))
+        .chain(scene.triangles.materials.iter().copied())
+        .chain(instanced)
+        .map(|m| 1 + scene.lit_behind(m) as u64)
+        .sum::<u64>()
         + scene
             .shapes
             .iter()

@@ -2,7 +2,7 @@
 //! normal, albedo, emission — and points on them, both on the flat patch (for form factors)
 //! and on the primitive it approximates (for visibility rays against the original geometry).
 
-use crate::engines::radiosity::mesh::{QuadMesh, NONE};
+use crate::engines::radiosity::mesh::{self, QuadMesh, NONE};
 use crate::geometry::{offset_ray_origin, point_error, Shape, Vec3};
 use crate::scene::procedural::disc_half_widths;
 use crate::scene::{Color, PrimKind, PrimRef, Scene};
@@ -98,7 +98,12 @@ pub fn patches(scene: &Scene, mesh: &QuadMesh) -> Vec<Patch> {
                 area,
                 first_share,
                 albedo,
-                emitted: m.emitted,
+                // A Mitsuba emitter sends light from its front alone, whatever its BSDF.
+                emitted: if mesh::is_back(f.prim, f.part) && !scene.two_sided_quads {
+                    Color::ZERO
+                } else {
+                    m.emitted
+                },
                 prim: f.prim,
                 part: f.part,
             }
@@ -110,14 +115,25 @@ pub fn patches(scene: &Scene, mesh: &QuadMesh) -> Vec<Patch> {
 /// surface's outward normal there and the ray origin offset off it (towards `side`, the
 /// direction the ray will leave in).
 pub fn on_primitive(scene: &Scene, patch: &Patch, p: Vec3, side: Vec3) -> Vec3 {
-    let i = patch.prim.index as usize;
-    let (point, normal, magnitude) = match patch.prim.kind {
+    on_surface(scene, (patch.prim, patch.part, patch.normal), p, side)
+}
+
+/// `on_primitive` for a point of a face of primitive `prim`'s `part`, of unit normal
+/// `normal` (a mesh face's, before its patch is made).
+pub fn on_surface(
+    scene: &Scene,
+    (prim, part, normal): (PrimRef, u32, Vec3),
+    p: Vec3,
+    side: Vec3,
+) -> Vec3 {
+    let i = prim.index as usize;
+    let (point, normal, magnitude) = match prim.kind {
         PrimKind::Quad | PrimKind::Triangle | PrimKind::Instanced => {
-            (p, patch.normal, p.abs().max_element())
+            (p, normal, p.abs().max_element())
         }
         PrimKind::Shape => {
             let shape = &scene.shapes[i].shape;
-            let (q, n) = shape.project(p, patch.part);
+            let (q, n) = shape.project(p, part);
             (q, n, shape.magnitude())
         }
     };
