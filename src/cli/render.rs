@@ -49,6 +49,9 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
                 chosen.join(", ")
             );
         }
+        if let Some(note) = unfollowed_depth(args, engine, &from_scene) {
+            notes += &format!("note: {note}\n");
+        }
         if args.common.accel.is_none() {
             notes += &format!(
                 "note: accel {kind} is the default for the {engine} engine on a scene of {} primitives (the BVH for radiosity and up to {} primitives, Embree above when built in); --accel chooses\n",
@@ -104,6 +107,9 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         }
     }
     crate::interrupt::install();
+    if let Some(note) = unfollowed_depth(args, engine, &from_scene) {
+        eprintln!("note: {note}");
+    }
     for flag in unused {
         eprintln!(
             "note: {flag} is accepted but has no effect: the {engine} engine does not read it"
@@ -281,6 +287,27 @@ pub fn apply_scene_hints(
         }
     }
     taken
+}
+
+/// What to tell of a depth the scene file chose (Mitsuba's `max_depth`) that `engine` does
+/// not follow: the photon engine, SPPM and radiosity carry the light over every bounce, so
+/// their image of a scene limited to direct light has the indirect light too (10% of the
+/// mean of a test scene lit by point, spot and directional lights).
+fn unfollowed_depth(
+    args: &RenderArgs,
+    engine: EngineKind,
+    from_scene: &[(&'static str, String)],
+) -> Option<String> {
+    let every_bounce = matches!(
+        engine,
+        EngineKind::Photon | EngineKind::Sppm | EngineKind::Radiosity
+    );
+    let (_, flag) = from_scene.iter().find(|(id, _)| *id == "max_depth")?;
+    (every_bounce && !args.reads_flag(engine, "max_depth")).then(|| {
+        format!(
+            "the scene file limits the path tracer's depth ({flag}); the {engine} engine carries the light over every bounce (--engine path follows the limit)"
+        )
+    })
 }
 
 /// The scene as `render` reads it: loaded (its warnings printed), `--two-sided` and the
