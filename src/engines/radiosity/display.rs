@@ -156,8 +156,8 @@ fn draw(
             .collect(),
         Display::FormFactors => form_factor_greys(scene, accel, settings, solution, source),
     };
-    // A hierarchical solution shows its leaf elements (flat; -interpolate smooths the
-    // patches' means instead) in the views it has per element.
+    // A hierarchical solution shows its leaf elements (flat, or smoothed between them with
+    // -interpolate) in the views it has per element.
     let per_element: Option<fn(&Element, Color, Color) -> Color> = match r.display {
         Display::Radiance => Some(|e, albedo, ambient| e.radiance + albedo * ambient),
         Display::Absorbed => Some(|e, albedo, _| (Vec3::ONE - albedo) * e.incident),
@@ -165,11 +165,13 @@ fn draw(
     };
     let elements = &solution.state.elements;
     let field = match per_element {
-        Some(value) if !elements.is_empty() && !r.interpolate => solution.element_field(
+        Some(value) if !elements.is_empty() => solution.element_field(
             elements
                 .iter()
                 .map(|e| value(e, patches[e.patch as usize].albedo, solution.ambient))
                 .collect(),
+            &values,
+            r.interpolate,
         ),
         _ => solution.field(values, r.interpolate),
     };

@@ -16,6 +16,7 @@ mod export;
 mod outside_lights;
 pub use settings::{Display, RadiositySettings, SolverKind};
 
+use rayon::prelude::*;
 use std::sync::atomic::Ordering::Relaxed;
 use std::sync::OnceLock;
 
@@ -611,13 +612,86 @@ impl Solution {
         }
     }
 
-    /// Per-element values (one for each of `state.elements`), shown flat at the leaves.
-    pub fn element_field(&self, values: Vec<Color>) -> PatchField {
+    /// Per-element values (one for each of `state.elements`), shown at the leaves: flat, or
+    /// with `interpolate` bilinear between corner values (`element_corner_values`, which
+    /// takes the patches' own values, `patch_values`, at their corners).
+    pub fn element_field(
+        &self,
+        values: Vec<Color>,
+        patch_values: &[Color],
+        interpolate: bool,
+    ) -> PatchField {
+        let corners = interpolate.then(|| self.element_corner_values(&values, patch_values));
         PatchField {
             values,
-            corners: None,
+            corners,
             per_element: true,
         }
+    }
+
+    /// Values at the four corners of every leaf element (indexed as `state.elements`; zero at
+    /// the others) for smooth display of a hierarchical solution: inside its patch a corner
+    /// takes the mean of the leaves around it, and a patch's own corners are
+    /// `corner_values`', shared with the patches around. Smoothing the patches' means
+    /// instead showed a wall of one patch as one gradient, its elements' shadows gone.
+    fn element_corner_values(&self, values: &[Color], patch_values: &[Color]) -> Vec<[Color; 4]> {
+        let patch_corners = self.corner_values(patch_values);
+        let light = &self.state;
+        // The leaves of each patch with the square of parameters each covers.
+        let per_patch: Vec<Vec<(usize, [Color; 4])>> = (0..self.patches.len())
+            .into_par_iter()
+            .map(|k| {
+                let mut leaves = Vec::new();
+                let mut pending = vec![(k, [0.0f32, 0.0, 1.0, 1.0])];
+                while let Some((e, [s0, t0, s1, t1])) = pending.pop() {
+                    let children = light.elements[e].children;
+                    if children != NONE {
+                        let (sm, tm) = (0.5 * (s0 + s1), 0.5 * (t0 + t1));
+                        let quarters = [
+                            [s0, t0, sm, tm],
+                            [sm, t0, s1, tm],
+                            [sm, tm, s1, t1],
+                            [s0, tm, sm, t1],
+                        ];
+                        for (c, q) in quarters.into_iter().enumerate() {
+                            pending.push((children as usize + c, q));
+                        }
+                        continue;
+                    }
+                    let corner = |index: usize, s: f32, t: f32| {
+                        let on_corner = (s == 0.0 || s == 1.0) && (t == 0.0 || t == 1.0);
+                        if on_corner {
+                            return patch_corners[k][index];
+                        }
+                        // The leaves just around (s, t) within the patch.
+                        const NEAR: f32 = 1e-6;
+                        let (mut sum, mut n) = (Vec3::ZERO, 0.0f32);
+                        for (ds, dt) in [(-NEAR, -NEAR), (NEAR, -NEAR), (NEAR, NEAR), (-NEAR, NEAR)]
+                        {
+                            let (a, b) = (s + ds, t + dt);
+                            if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) {
+                                sum += values[light.leaf_at(k, a, b).0];
+                                n += 1.0;
+                            }
+                        }
+                        sum / n
+                    };
+                    let corners = [
+                        corner(0, s0, t0),
+                        corner(1, s1, t0),
+                        corner(2, s1, t1),
+                        corner(3, s0, t1),
+                    ];
+                    leaves.push((e, corners));
+                }
+                leaves
+            })
+            .collect();
+        let mut corners = vec![[Vec3::ZERO; 4]; values.len()];
+        for (e, c) in per_patch.into_iter().flatten() {
+            corners[e] = c;
+        }
+        corners
     }
 
     /// The patch under a hit seen from `toward`, and what `--wireframe` outlines there: its
@@ -642,18 +716,20 @@ impl Solution {
 
     /// The value of `field` at the parameters (u, v) of patch k (as `locate` finds them).
     pub fn value_at(&self, field: &PatchField, (k, u, v): (usize, f32, f32)) -> Color {
-        if field.per_element {
-            return field.values[self.state.leaf_at(k, u, v).0];
-        }
+        let (cell, u, v) = if field.per_element {
+            self.state.leaf_at(k, u, v)
+        } else {
+            (k, u, v)
+        };
         match &field.corners {
             Some(c) => {
-                let c = &c[k];
+                let c = &c[cell];
                 c[0] * ((1.0 - u) * (1.0 - v))
                     + c[1] * (u * (1.0 - v))
                     + c[2] * (u * v)
                     + c[3] * ((1.0 - u) * v)
             }
-            None => field.values[k],
+            None => field.values[cell],
         }
     }
 
