@@ -237,16 +237,21 @@ impl Scene {
     /// The texture coordinates at a hit: interpolated from the primitive's `vt` where it has
     /// them, else its parameters.
     pub fn tex_coords(&self, hit: &SurfaceHit) -> Vec2 {
-        let i = hit.prim.index as usize;
-        let (u, v) = self.parameters(hit);
-        match hit.prim.kind {
+        self.tex_coords_at(hit.prim, self.parameters(hit))
+    }
+
+    /// The texture coordinates of the point of `prim` at its own parameters `(u, v)` (as
+    /// `parameters` gives them: a quad's (u, v), a triangle's barycentric (b1, b2)).
+    pub fn tex_coords_at(&self, prim: PrimRef, (u, v): (f32, f32)) -> Vec2 {
+        let i = prim.index as usize;
+        match prim.kind {
             PrimKind::Quad => match &self.quads[i].tex_coords {
                 Some(tc) => bilinear(tc, u, v),
                 None => vec2(u, v),
             },
             PrimKind::Triangle => triangle_tex_coords(&self.triangles, i, u, v),
             PrimKind::Instanced => {
-                let (instance, j) = self.instancing.locate(hit.prim.index);
+                let (instance, j) = self.instancing.locate(prim.index);
                 triangle_tex_coords(&self.instancing.group_of(instance).mesh, j, u, v)
             }
             PrimKind::Shape => vec2(u, v),

@@ -71,15 +71,13 @@ pub fn patches(scene: &Scene, mesh: &QuadMesh) -> Vec<Patch> {
                 Some(t) => {
                     let [u0, v0, u1, v1] = f.param;
                     let (u, v) = (0.5 * (u0 + u1), 0.5 * (v0 + v1));
-                    let tc = match (f.prim.kind, scene.quads.get(f.prim.index as usize)) {
-                        (PrimKind::Quad, Some(q)) => {
-                            q.tex_coords.map_or(crate::geometry::vec2(u, v), |tc| {
-                                crate::scene::bilinear(&tc, u, v)
-                            })
-                        }
-                        _ => crate::geometry::vec2(u, v),
+                    // A triangle's face parameters are (b1 / (1 − b2), b2) of its
+                    // barycentrics (see `Solution::locate`).
+                    let parameters = match f.prim.kind {
+                        PrimKind::Triangle | PrimKind::Instanced => (u * (1.0 - v), v),
+                        PrimKind::Quad | PrimKind::Shape => (u, v),
                     };
-                    scene.textures[t].lookup(tc)
+                    scene.textures[t].lookup(scene.tex_coords_at(f.prim, parameters))
                 }
                 // A pattern is averaged over the patch (a disc of the patch's area).
                 None => match &m.procedural {
