@@ -365,6 +365,45 @@ fn a_saved_radiosity_solution_renders_the_same_image() {
         );
         assert!(e.contains("another scene or other settings"), "{e}");
     }
+    // A Mitsuba scene lit by a point light: its mesh split where the light falls unevenly,
+    // which the file keeps as rounds of splits (not `--adaptive-subdivide`'s), for both
+    // solvers.
+    std::fs::write(
+        dir.join("point.xml"),
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0,6,-6" target="0,0,0" up="0,1,0"/></transform>
+    </sensor>
+    <emitter type="point"><point name="position" x="-1" y="2" z="0"/><rgb name="intensity" value="10"/></emitter>
+    <shape type="rectangle"><transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform></shape>
+    <shape type="cube"><transform name="to_world"><scale value="0.5"/><translate y="0.5"/></transform></shape>
+</scene>"#,
+    )
+    .expect("scene written");
+    for solver in ["hierarchical", "progressive"] {
+        let base =
+            format!("-input point.xml -size 32 32 --engine radiosity --radiosity-solver {solver}");
+        let saved = ok(
+            &dir,
+            &words(&format!("{base} --save-radiosity point.bin -o a.pfm")),
+        );
+        let loaded = ok(
+            &dir,
+            &words(&format!("{base} --load-radiosity point.bin -o b.pfm")),
+        );
+        let [saved, loaded] =
+            [saved, loaded].map(|o| String::from_utf8_lossy(&o.stderr).into_owned());
+        assert!(loaded.contains("loaded from"), "{loaded}");
+        assert!(
+            !saved.contains("adaptive") && !loaded.contains("adaptive"),
+            "{saved}{loaded}"
+        );
+        assert_eq!(
+            std::fs::read(dir.join("a.pfm")).expect("a"),
+            std::fs::read(dir.join("b.pfm")).expect("b"),
+            "{solver}: the loaded solution renders differently"
+        );
+    }
     // A level chosen from `--time-limit` is the file's: loading rebuilds that mesh (the
     // images differ by the samples each run had time for).
     let base = format!(

@@ -4,11 +4,13 @@
 //! a file made for another scene or other settings is refused with a clear error.
 //!
 //! The mesh is not stored: it is rebuilt from the scene and the settings (the shapes'
-//! tessellation), the level the faces were subdivided to and the faces each round of
-//! `--adaptive-subdivide` split, which the file keeps. Layout: magic `TRILUXRS`, version (u32), fingerprint (u64), solver (u8: 1
+//! tessellation), the level the faces were subdivided to and the faces each round of splits
+//! split (where lights without area light them unevenly, then `--adaptive-subdivide`'s), which
+//! the file keeps. Layout: magic `TRILUXRS`, version (u32), fingerprint (u64), solver (u8: 1
 //! progressive, 2 hierarchical), stop (u8), visibility rays (u64), steps (u64), residual (f32),
-//! ambient (3 × f32), patches (u64), elements (u64), adaptive rounds (u32) each as a count
-//! (u32) and its faces (u32 each), the subdivision level (u32), the solver's report (u32 length, UTF-8), then per patch its
+//! ambient (3 × f32), patches (u64), elements (u64), rounds of splits (u32) each as a count
+//! (u32) and its faces (u32 each), how many of them were `--adaptive-subdivide`'s (u32), the
+//! subdivision level (u32), the solver's report (u32 length, UTF-8), then per patch its
 //! radiance, undistributed, incident and direct incident radiance (4 × 3 × f32), then per
 //! element its patch (u32), corners (4 × 3 × f32), first child (u32), radiance and incident
 //! radiance (2 × 3 × f32).
@@ -24,7 +26,7 @@ use crate::scene::Scene;
 
 const MAGIC: &[u8; 8] = b"TRILUXRS";
 /// 2: the level the mesh was subdivided to is stored (`subdivide_to_fit` chooses it).
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 
 /// A hash of the loaded scene (`Scene::content_hash`) and of every setting that shapes the
 /// solution: the radiosity settings but those of the display and the output, whether form
@@ -147,6 +149,7 @@ impl Solution {
             b.u32(round.len() as u32);
             round.iter().for_each(|&f| b.u32(f));
         }
+        b.u32(self.adaptive_rounds);
         b.u32(self.subdivide);
         b.u32(self.solver_report.len() as u32);
         b.0.extend_from_slice(self.solver_report.as_bytes());
@@ -227,6 +230,7 @@ impl Solution {
                 }
                 splits.push((0..n).map(|_| r.u32()).collect::<Result<Vec<_>, _>>()?);
             }
+            let adaptive_rounds = r.u32()?.min(rounds);
             let subdivide = r.u32()?;
             let report_len = r.u32()? as usize;
             let report = r
@@ -315,7 +319,7 @@ impl Solution {
                 solver_report: format!("loaded from {name} ({report})"),
                 solver_counters: Vec::new(),
                 solver_warning: None,
-                adaptive_rounds: rounds,
+                adaptive_rounds,
                 subdivide,
                 splits,
                 solver,

@@ -370,14 +370,24 @@ impl Solution {
         scene: &Scene,
         accel: &dyn Accel,
         settings: &RenderSettings,
-        (mut mesh, share): (QuadMesh, f64),
+        (mut unsplit, share): (QuadMesh, f64),
         deadline: std::time::Instant,
         on_progress: impl Fn(f32),
     ) -> Solution {
         let mut level = settings.radiosity.subdivide;
         let mut rays = 0;
+        let lights_without_area = !scene.delta_lights.is_empty();
         loop {
             let started = std::time::Instant::now();
+            // Each level is split anew where lights without area light it unevenly (the
+            // splits a saved solution replays on the mesh of its level).
+            let (mesh, lit) = if lights_without_area {
+                let mut mesh = unsplit.clone();
+                let lit = outside_lights::split_where_unevenly_lit(scene, accel, &mut mesh);
+                (mesh, lit)
+            } else {
+                (std::mem::take(&mut unsplit), Vec::new())
+            };
             let mut solution = Solution::solve_mesh(
                 scene,
                 accel,
@@ -389,6 +399,7 @@ impl Solution {
             rays += solution.rays;
             solution.rays = rays;
             solution.subdivide = level;
+            solution.splits = lit;
             let predicted = started.elapsed().mul_f64(16.0);
             let left = deadline.saturating_duration_since(std::time::Instant::now());
             if solution.stop != Stop::Converged
@@ -397,9 +408,12 @@ impl Solution {
             {
                 return solution;
             }
-            // The solve keeps its mesh as it was given: split that once more.
-            mesh = solution.mesh;
-            mesh.subdivide(1);
+            // The solve keeps its mesh as it was given: without light splits, split that
+            // once more.
+            if !lights_without_area {
+                unsplit = solution.mesh;
+            }
+            unsplit.subdivide(1);
             level += 1;
         }
     }
