@@ -73,9 +73,8 @@ pub fn reflected(
             let mut blocked = vec![false; rays.len()];
             accel.occluded_batch(&rays, &mut blocked);
             let seen = |range: std::ops::Range<usize>| -> Vec3 {
-                (rays[range.clone()].iter().zip(&blocked[range.clone()]))
-                    .zip(&weights[range])
-                    .filter(|((_, &b), _)| !b)
+                (blocked[range.clone()].iter().zip(&weights[range]))
+                    .filter(|(&b, _)| !b)
                     .map(|(_, &w)| w)
                     .sum()
             };
@@ -179,14 +178,16 @@ pub fn split_where_unevenly_lit(
         return rounds;
     }
     let mut largest = 0.0f32;
+    // The leaves to look at: all of them, then only the children of those just split. A leaf
+    // left whole keeps its range, and `largest` only grows, so it would stay whole.
+    let mut new_leaves = mesh.leaves.clone();
     for _ in 0..UNEVEN_LIGHT_ROUNDS {
-        let ranges: Vec<(f32, f32)> = mesh
-            .leaves
+        let ranges: Vec<(f32, f32)> = new_leaves
             .par_iter()
             .map(|&face| irradiance_range(scene, accel, mesh, face))
             .collect();
         largest = ranges.iter().map(|r| r.1).fold(largest, f32::max);
-        let split: Vec<u32> = (mesh.leaves.iter().zip(&ranges))
+        let split: Vec<u32> = (new_leaves.iter().zip(&ranges))
             .filter(|(_, &(low, high))| {
                 high - low > UNEVEN_LIGHT_SHARE * high && high - low > UNEVEN_LIGHT_FLOOR * largest
             })
@@ -196,6 +197,12 @@ pub fn split_where_unevenly_lit(
             break;
         }
         mesh.split_many(&split);
+        new_leaves = (split.iter())
+            .flat_map(|&f| {
+                let first = mesh.faces[f as usize].children;
+                first..first + 4
+            })
+            .collect();
         rounds.push(split);
     }
     rounds
