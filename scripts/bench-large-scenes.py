@@ -4,12 +4,14 @@ scene has many of, where a reader or a per-scene pass that is linear in the wron
 
 Usage: scripts/bench-large-scenes.py [RENDER] [--repeats R] [--keep DIR]
 
-Writes four scenes into a temporary folder (or DIR with --keep, reused when present):
+Writes five scenes into a temporary folder (or DIR with --keep, reused when present):
   instances   10,000 `instance`s (moved and turned) of a shapegroup of a 20k-triangle PLY
   ply         one binary PLY of 2M triangles (a 1000 x 1000 height field)
   shapes      10,000 `cube`s, each with its own `ref` to one BSDF, and 5,000 emitting
               `rectangle`s
   obj         the same 2M triangles as an OBJ file
+  plastics    500 `sphere`s, each with a `roughplastic` of its own roughness (Beckmann,
+              Mitsuba's default): every one precomputes its coat's tables
 For each, the median of R runs (default 3, interleaved) of trilux's scene load and Accel build
 (`render -input SCENE --engine path -size 64 64 -num_antialias_samples 1 --stats`, the two
 times of its first line, summed: Mitsuba's load builds its acceleration structure too) and of
@@ -100,6 +102,14 @@ def write_scenes(folder):
                       '<emitter type="area"><rgb name="radiance" value="5"/></emitter></shape>')
     scene(os.path.join(folder, "shapes.xml"), "\n".join(shapes) + "\n")
 
+    plastics = []
+    for k in range(500):
+        x, z = k % 25 - 12, k // 25 - 10
+        plastics.append(f'<shape type="sphere"><point name="center" x="{2 * x}" y="1" z="{2 * z}"/>'
+                        f'<bsdf type="roughplastic"><float name="alpha" value="{0.05 + 0.3 * k / 500:.4f}"/>'
+                        '</bsdf></shape>')
+    scene(os.path.join(folder, "plastics.xml"), "\n".join(plastics) + "\n")
+
 
 def ours(render, path):
     done = subprocess.run([render, "-input", path, "--engine", "path", "-size", "64", "64",
@@ -124,12 +134,12 @@ def main():
 
     folder = args.keep or tempfile.mkdtemp()
     os.makedirs(folder, exist_ok=True)
-    if not os.path.exists(os.path.join(folder, "shapes.xml")):
+    if not os.path.exists(os.path.join(folder, "plastics.xml")):
         write_scenes(folder)
     print(f"# Mitsuba {mi.__version__} {variant}; medians of {args.repeats}")
     print("| scene | trilux load + build (s) | Mitsuba load_file (s) | trilux / Mitsuba |")
     print("|---|---|---|---|")
-    for name in ("instances", "ply", "obj", "shapes"):
+    for name in ("instances", "ply", "obj", "shapes", "plastics"):
         path = os.path.join(folder, f"{name}.xml")
         mine, theirs = [], []
         for _ in range(args.repeats):
