@@ -565,7 +565,8 @@ pub struct PhotonArgs {
     pub photon_max_radius: f32,
     /// Points per camera or mirror ray in the fog at which the volume photon map is looked
     /// up (jittered, evenly spaced over the part of the ray among the volume photons; 16:
-    /// more points are less noise in the fog and more time a ray).
+    /// more points are less noise in the fog and more time a ray; under --time-limit, as many
+    /// as let the first pass's lookups take a quarter of the limit, 1 to 16).
     #[arg(long, default_value_t = photon_defaults().volume_steps)]
     pub volume_steps: u32,
     /// Hemisphere rays per final gather (-gather_indirect; 128: more rays are less noise in
@@ -706,7 +707,8 @@ impl RenderArgs {
     ///   256×256 in 0.4 s) and passes of 4 camera samples;
     /// - the photon engine, each unless given: final gathering, and 50,000 photons per second
     ///   of the limit (at least 20,000, at most 2,000,000; 50,000 in 1.09 s gave relMSE
-    ///   9.2e-4);
+    ///   9.2e-4); in fog also `--volume-steps`, once the scene is read
+    ///   (`choose_volume_steps`);
     /// - radiosity: interpolated display.
     ///
     /// The path tracer and SPPM choose nothing: they add passes until the time is spent.
@@ -763,6 +765,35 @@ impl RenderArgs {
             chosen.push("--subdivide as far as the time allows".to_string());
         }
         chosen
+    }
+
+    /// With `--time-limit` on the photon engine, `--volume-steps` unless given, once the scene
+    /// is read: where it has fog, `volume_steps_for_time` of the limit, the image and
+    /// `threads`. Returns the flag chosen, to be reported.
+    pub fn choose_volume_steps(
+        &self,
+        scene: &crate::scene::Scene,
+        threads: usize,
+        settings: &mut RenderSettings,
+    ) -> Option<String> {
+        let seconds = self.common.time_limit?;
+        let given = self.given.iter().any(|(_, g)| g == "volume_steps");
+        if self.engine() != EngineKind::Photon
+            || given
+            || scene.fog.is_none()
+            || settings.photon.display != Default::default()
+        {
+            return None;
+        }
+        let pixels = u64::from(settings.width) * u64::from(settings.height);
+        let steps = photon::settings::volume_steps_for_time(
+            seconds,
+            threads,
+            pixels,
+            settings.photon.num_photons_to_collect,
+        );
+        settings.photon.volume_steps = steps;
+        Some(format!("--volume-steps {steps}"))
     }
 
     /// The backend for `scene`: `--accel`, else `AccelKind::default_for` the scene and

@@ -27,6 +27,12 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     let engine = args.engine();
     let mut scene = load_scene(args, input, engine)?;
     let from_scene = apply_scene_hints(args, &mut scene, &mut settings);
+    let threads = pool.current_num_threads();
+    if let Some(flag) = args.choose_volume_steps(&scene, threads, &mut settings) {
+        if !settings.quiet {
+            eprintln!("--time-limit: in the fog, chose {flag}");
+        }
+    }
     let load_s = load_start.elapsed().as_secs_f64();
     let kind = args.accel_kind(&scene);
     let plan = Plan::new(&scene, engine, kind, &settings);
