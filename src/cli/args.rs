@@ -124,8 +124,9 @@ pub struct CommonArgs {
     /// that can refine add pixel samples (passes of -num_antialias_samples), SPPM passes or
     /// radiosity shots until the time is spent, then write the image and say what they
     /// reached. The ray tracer and the engines built on it choose each quality setting not
-    /// given (16 shadow rays, passes of 4 camera samples; the photon engine final gathering
-    /// and 50,000 photons a second; radiosity interpolated) and say so.
+    /// given (16 shadow rays, passes of 4 camera samples; the photon engine final gathering,
+    /// 50,000 photons a second and, in fog, its volume lookups; radiosity interpolated) and
+    /// say so.
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub time_limit: Option<f64>,
     /// Make quads (and MGF's triangles) opaque from both sides, each side lit on its own.
