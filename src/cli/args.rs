@@ -718,7 +718,7 @@ impl RenderArgs {
         let Some(seconds) = self.common.time_limit else {
             return Vec::new();
         };
-        let given = |id: &str| self.given.iter().any(|(_, g)| g == id);
+        let given = |id: &str| self.flag_given(id);
         let engine = self.engine();
         let mut chosen = Vec::new();
         let traces = matches!(
@@ -778,9 +778,8 @@ impl RenderArgs {
         settings: &mut RenderSettings,
     ) -> Option<String> {
         let seconds = self.common.time_limit?;
-        let given = self.given.iter().any(|(_, g)| g == "volume_steps");
         if self.engine() != EngineKind::Photon
-            || given
+            || self.flag_given("volume_steps")
             || scene.fog.is_none()
             || settings.photon.display != Default::default()
         {
@@ -812,6 +811,11 @@ impl RenderArgs {
             embree_robust: self.common.embree_robust,
             embree_exact: self.common.embree_exact,
         }
+    }
+
+    /// Whether the flag of id `id` (as clap names it) was given on the command line.
+    pub fn flag_given(&self, id: &str) -> bool {
+        self.given.iter().any(|(_, g)| g == id)
     }
 
     /// Whether a flag of this clap group was given on the command line.

@@ -234,7 +234,7 @@ pub fn apply_scene_hints(
     scene: &mut Scene,
     settings: &mut RenderSettings,
 ) -> Vec<(&'static str, String)> {
-    let given = |id: &str| args.given.iter().any(|(_, g)| g == id);
+    let given = |id: &str| args.flag_given(id);
     let hints = scene.render_hints.clone();
     let mut taken = Vec::new();
     if let (Some((w, h)), false) = (hints.size, given("size")) {
