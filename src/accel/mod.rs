@@ -5,6 +5,7 @@ pub mod bvh;
 #[cfg(feature = "embree")]
 #[allow(unsafe_code)]
 pub mod embree;
+mod lanes;
 mod pages;
 mod tri4;
 
