@@ -18,7 +18,8 @@
 # independent, as ../shared/peers/mitsuba_cornell.py sets it; the ratios are to the first).
 # MITSUBA_WIDTHS="8 4" also times Mitsuba (the first sampler) with its kernels built for AVX2
 # with 8 or 4 lanes instead of for the host (scripts/mitsuba_time.py, MITSUBA_VECTOR_WIDTH);
-# rows `mitsuba-w8`, `mitsuba-w4`.
+# rows `mitsuba-w8`, `mitsuba-w4`. TRILUX_SIMD=avx2 runs our kernels in AVX2 (8 lanes) too
+# (src/simd.rs): with MITSUBA_WIDTHS=8, both as an AVX2 host would run them.
 # Needs `pip install mitsuba`, Debian's libllvm19 and DRJIT_LIBLLVM_PATH (set by
 # scripts/mitsuba-common.sh from ldconfig when unset).
 set -euo pipefail

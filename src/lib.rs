@@ -29,4 +29,5 @@ pub mod render;
 pub mod report;
 pub mod sampling;
 pub mod scene;
+pub mod simd;
 pub mod viewer;

@@ -650,6 +650,44 @@ fn the_path_tracer_gives_identical_images_with_both_backends() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The batched kernels (the BVH's queries, the path tracer's vertex kernel, the Sobol lanes)
+/// compute each lane as one ray or path alone would, so the instruction set they run in
+/// (`TRILUX_SIMD`, `src/simd.rs`) changes no bit of the image: AVX-512 where the processor has
+/// it, AVX2 and none, against the default; and a value it does not know is named in a warning.
+#[test]
+fn the_path_tracer_gives_identical_images_in_every_instruction_set() {
+    let dir = common::temp_dir("path-simd");
+    let args = common::scene_args(
+        &common::own_scene_dir(),
+        "-input cornell_box_diffuse_sphere.obj --engine path -num_antialias_samples 16 --quiet",
+    );
+    let run = |simd: Option<&str>, output: &str| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_render"));
+        command.current_dir(&dir).args(&args).args(["-o", output]);
+        if let Some(simd) = simd {
+            command.env("TRILUX_SIMD", simd);
+        }
+        let out = command.output().expect("render runs");
+        ok(&out);
+        (
+            std::fs::read(dir.join(output)).expect("the image is written"),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (widest, _) = run(None, "widest.pfm");
+    for simd in ["avx512", "avx2", "scalar"] {
+        let (image, _) = run(Some(simd), &format!("{simd}.pfm"));
+        assert!(image == widest, "TRILUX_SIMD={simd} changes the image");
+    }
+    let (image, stderr) = run(Some("sse9"), "unknown.pfm");
+    assert!(image == widest);
+    assert!(
+        stderr.contains("TRILUX_SIMD=sse9") && stderr.contains("avx2"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn compare_reports_the_errors_of_an_image_against_a_reference() {
     let dir = common::temp_dir("compare");

@@ -624,7 +624,7 @@ impl Bvh {
             instances: Vec::new(),
             groups: Vec::new(),
             culled,
-            arch: pulp::Arch::new(),
+            arch: crate::simd::arch(),
             in_lanes,
         }
     }

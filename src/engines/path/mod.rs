@@ -148,7 +148,7 @@ impl PathTracer<'_> {
                 .iter()
                 .any(|m| m.straight_transmission(1.0) != Color::ZERO)
                 || scene.media.iter().any(|m| m.heterogeneous.is_some()),
-            arch: pulp::Arch::new(),
+            arch: crate::simd::arch(),
         }
     }
 
