@@ -397,33 +397,15 @@ fn batches_aimed_at_a_quads_diagonal_and_edges_answer_as_single_rays() {
     for kind in backends() {
         let accel = accel::build(&scene, kind, &AccelOptions::default()).expect("builds");
         for (rays, what) in [(&diagonal, "diagonal"), (&edges, "edges")] {
-            let mut batched = vec![false; rays.len()];
-            accel.occluded_batch(rays, &mut batched);
-            let single: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
-            let differ = batched.iter().zip(&single).filter(|(b, s)| b != s).count();
-            assert_eq!(
-                differ, 0,
-                "{kind}: {what}: batched and single differ on {differ} rays"
-            );
-            let open = single.iter().filter(|&&b| !b).count();
-            assert!(
-                what != "diagonal" || open == 0,
-                "{kind}: {open} rays pass through the square"
-            );
-            let mut batched = vec![None; rays.len()];
-            accel.intersect_batch(rays, &mut batched);
-            let single: Vec<_> = rays.iter().map(|r| accel.intersect(r)).collect();
-            let differ = batched.iter().zip(&single).filter(|(b, s)| b != s).count();
-            assert_eq!(
-                differ, 0,
-                "{kind}: {what}: batched and single closest hits differ on {differ} rays"
-            );
-            let missed = single.iter().filter(|h| h.is_none()).count();
-            assert!(
-                what != "diagonal" || missed == 0,
-                "{kind}: {missed} rays miss the square"
-            );
+            single_equals_batched(accel.as_ref(), rays, what);
         }
+        let open = diagonal.iter().filter(|r| !accel.occluded(r)).count();
+        assert_eq!(open, 0, "{kind}: {open} rays pass through the square");
+        let missed = diagonal
+            .iter()
+            .filter(|r| accel.intersect(r).is_none())
+            .count();
+        assert_eq!(missed, 0, "{kind}: {missed} rays miss the square");
     }
 }
 

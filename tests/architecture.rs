@@ -304,6 +304,7 @@ const LAYERS: [(&str, &[&str]); 10] = [
             "camera",
             "image_io",
             "bytes",
+            "simd",
         ],
     ),
     ("scene", &["scene"]),

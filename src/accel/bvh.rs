@@ -712,37 +712,25 @@ impl Bvh {
         best: &mut Option<(PackedPrim, f32, f32)>,
         base: Option<u32>,
     ) {
+        let (ray, shear, pack_ray) = rays;
         for item in self.leaf(leaf) {
-            self.item_closest(item, rays, t_max, best, base);
-        }
-    }
-
-    /// Tests one leaf item as `leaf_closest` does.
-    #[inline(always)]
-    fn item_closest(
-        &self,
-        item: &LeafItem,
-        (ray, shear, pack_ray): (&Ray, &RayShear, &Tri4Ray),
-        t_max: &mut f32,
-        best: &mut Option<(PackedPrim, f32, f32)>,
-        base: Option<u32>,
-    ) {
-        let limit = closest_limit(*t_max, best.is_some());
-        match item.view() {
-            ItemView::Triangles(pack) => {
-                let hits = pack.intersect(pack_ray, ray, shear, limit);
-                let mask = self.triangles_met(pack, hits.mask, ray);
-                for i in (0..4).filter(|i| mask >> i & 1 != 0) {
-                    let hit = (rebase(pack.prim(i), base), hits.t[i], hits.u[i], hits.v[i]);
-                    keep_closest(best, t_max, hit);
+            let limit = closest_limit(*t_max, best.is_some());
+            match item.view() {
+                ItemView::Triangles(pack) => {
+                    let hits = pack.intersect(pack_ray, ray, shear, limit);
+                    let mask = self.triangles_met(pack, hits.mask, ray);
+                    for i in (0..4).filter(|i| mask >> i & 1 != 0) {
+                        let hit = (rebase(pack.prim(i), base), hits.t[i], hits.u[i], hits.v[i]);
+                        keep_closest(best, t_max, hit);
+                    }
                 }
-            }
-            ItemView::Single(p) if p.prim.kind() == PrimKind::Instanced => {
-                self.instance_closest(p.prim.index(), ray, t_max, best);
-            }
-            ItemView::Single(p) => {
-                if let Some((t, u, v)) = self.hit_single(&p, ray, || shear, limit) {
-                    keep_closest(best, t_max, (p.prim, t, u, v));
+                ItemView::Single(p) if p.prim.kind() == PrimKind::Instanced => {
+                    self.instance_closest(p.prim.index(), ray, t_max, best);
+                }
+                ItemView::Single(p) => {
+                    if let Some((t, u, v)) = self.hit_single(&p, ray, || shear, limit) {
+                        keep_closest(best, t_max, (p.prim, t, u, v));
+                    }
                 }
             }
         }
@@ -775,12 +763,12 @@ impl Bvh {
                     (found.t[k], found.u[k], found.v[k]) = (t, u, v);
                 }
             }
-            // `keep_closest`, lane by lane.
+            // `keep_closest`, lane by lane (without branches, as `lanes` joins conditions).
             let raw = p.prim.raw();
             for k in 0..LANES {
                 let t = found.t[k];
                 let wins = found.hit[k]
-                    && (t < t_max[k] || (t == t_max[k] && best[k] != NONE && raw < best[k]));
+                    & ((t < t_max[k]) | ((t == t_max[k]) & (best[k] != NONE) & (raw < best[k])));
                 if wins {
                     t_max[k] = t;
                     best[k] = raw;
