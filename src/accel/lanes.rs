@@ -3,11 +3,14 @@
 //! (`Bvh::intersect_batch`). Each lane's arithmetic is the single ray's, written out without
 //! branches so that the compiler runs the sixteen lanes in the processor's widest registers
 //! (the batched queries' `pulp` dispatch): a quad is `intersect_quad_sheared`'s two watertight
-//! triangle tests, a sphere `SphereShape::intersect`'s stable quadratic, each giving the bits
+//! triangle tests, a sphere `SphereShape::roots`, the stable quadratic of its single test, each giving the bits
 //! the single ray gets. A lane whose quad test hangs on an edge function of exactly zero
 //! (where the single test recomputes in f64) is flagged, for the caller to test alone.
 
-use crate::geometry::{faces_ray, Ray, SphereShape, Vec3};
+use crate::geometry::{
+    edge_function_zero, edge_functions_disagree, faces_ray, sheared_edge_functions,
+    sheared_triangle_solve, Ray, SphereShape, Vec3,
+};
 
 /// Rays tested at once.
 pub(super) const LANES: usize = 16;
@@ -182,21 +185,14 @@ impl Default for LaneHits {
 // tracer 2.5x slower there than in AVX-512, whose mask registers took them).
 
 /// One lane's watertight triangle test in f32: `polygon::sheared_triangle_hit` before its
-/// f64 fallback. Returns (t, b1, b2, hit, zero): `zero` where an edge function is exactly
-/// zero, the case the single test recomputes in f64.
+/// f64 fallback, from the same pieces. Returns (t, b1, b2, hit, zero): `zero` where an edge
+/// function is exactly zero, the case the single test recomputes in f64.
 #[inline(always)]
-fn triangle_lane(range: Range, [a, b, c]: [[f32; 3]; 3], u: f32) -> (f32, f32, f32, bool, bool) {
-    let (ax, ay, bx, by, cx, cy) = (a[0], a[1], b[0], b[1], c[0], c[1]);
-    let v = ax * cy - ay * cx;
-    let w = bx * ay - by * ax;
-    let zero = (u == 0.0) | (v == 0.0) | (w == 0.0);
-    let outside = ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0));
-    let det = u + v + w;
-    let t_scaled = u * a[2] + v * b[2] + w * c[2];
-    let inv = 1.0 / det;
-    let t = t_scaled * inv;
-    let hit = !outside & (det != 0.0) & det.is_finite() & range.holds(t);
-    (t, v * inv, w * inv, hit, zero)
+fn triangle_lane(range: Range, triangle: [[f32; 3]; 3], u: f32) -> (f32, f32, f32, bool, bool) {
+    let (v, w) = sheared_edge_functions(triangle);
+    let (t, b1, b2, solvable) = sheared_triangle_solve(triangle, (u, v, w));
+    let hit = !edge_functions_disagree(u, v, w) & solvable & range.holds(t);
+    (t, b1, b2, hit, edge_function_zero(u, v, w))
 }
 
 /// The quad `v` against every lane, each within its own `limits`: `intersect_quad_sheared`'s
@@ -239,23 +235,12 @@ pub(super) fn quad(
 #[inline(always)]
 pub(super) fn sphere(rays: &RayLanes, s: &SphereShape, limits: &Limits, out: &mut LaneHits) {
     for k in 0..LANES {
-        let d = rays.direction(k);
-        let a = d.dot(d);
-        let f = rays.origin(k) - s.centre;
-        let b = -f.dot(d);
-        let l = f + d * (b / a);
-        let r2 = s.radius * s.radius;
-        let disc = r2 - l.dot(l);
-        let c = f.dot(f) - r2;
-        let q = b + b.signum() * (a * disc).sqrt();
-        let (t0, t1) = (c / q, q / a);
-        let (t0, t1) = if t0 > t1 { (t1, t0) } else { (t0, t1) };
+        let (t0, t1, real) = s.roots(rays.origin(k), rays.direction(k));
         let within = |t: f32| limits.range(rays, k).holds(t);
-        let valid = (a != 0.0) & a.is_finite() & (disc >= 0.0);
         out.t[k] = if within(t0) { t0 } else { t1 };
         out.u[k] = 0.0;
         out.v[k] = 0.0;
-        out.hit[k] = valid & (within(t0) | within(t1));
+        out.hit[k] = real & (within(t0) | within(t1));
         out.unsure[k] = false;
     }
 }

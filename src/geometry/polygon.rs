@@ -137,28 +137,68 @@ fn sheared_triangle_hit(
     [a, b, c]: [[f32; 3]; 3],
     mut u: f32,
 ) -> Option<(f32, f32, f32)> {
-    let (ax, ay, bx, by, cx, cy) = (a[0], a[1], b[0], b[1], c[0], c[1]);
-    let mut v = ax * cy - ay * cx;
-    let mut w = bx * ay - by * ax;
-    if u == 0.0 || v == 0.0 || w == 0.0 {
+    let (mut v, mut w) = sheared_edge_functions([a, b, c]);
+    if edge_function_zero(u, v, w) {
         let (ax, ay, bx, by, cx, cy) = (
-            ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
+            a[0] as f64,
+            a[1] as f64,
+            b[0] as f64,
+            b[1] as f64,
+            c[0] as f64,
+            c[1] as f64,
         );
         u = (cx * by - cy * bx) as f32;
         v = (ax * cy - ay * cx) as f32;
         w = (bx * ay - by * ax) as f32;
     }
-    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+    if edge_functions_disagree(u, v, w) {
         return None;
     }
+    let (t, b1, b2, solvable) = sheared_triangle_solve([a, b, c], (u, v, w));
+    (solvable && t > ray.t_min && t < t_max).then_some((t, b1, b2))
+}
+
+// The pieces of the watertight test below join their conditions with `&` and `|`: the BVH's
+// lanes (`accel::lanes`) run them for sixteen rays at once, where branches would keep the
+// compiler from vectorising the loop.
+
+/// The edge functions of the edges c–a and a–b of the triangle `[a, b, c]` of sheared
+/// vertices (`RayShear::project`), in f32.
+#[inline(always)]
+pub(crate) fn sheared_edge_functions([a, b, c]: [[f32; 3]; 3]) -> (f32, f32) {
+    (a[0] * c[1] - a[1] * c[0], b[0] * a[1] - b[1] * a[0])
+}
+
+/// Whether an edge function is exactly zero: the case the watertight test decides again in
+/// f64.
+#[inline(always)]
+pub(crate) fn edge_function_zero(u: f32, v: f32, w: f32) -> bool {
+    (u == 0.0) | (v == 0.0) | (w == 0.0)
+}
+
+/// Whether the edge functions take both signs: the ray passes outside the triangle.
+#[inline(always)]
+pub(crate) fn edge_functions_disagree(u: f32, v: f32, w: f32) -> bool {
+    ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0))
+}
+
+/// The hit's t and barycentrics `(b1, b2)` from the edge functions `(u, v, w)` of the
+/// triangle `[a, b, c]` of sheared vertices, and whether their sum (the determinant) is
+/// finite and not zero, without which there is no hit.
+#[inline(always)]
+pub(crate) fn sheared_triangle_solve(
+    [a, b, c]: [[f32; 3]; 3],
+    (u, v, w): (f32, f32, f32),
+) -> (f32, f32, f32, bool) {
     let det = u + v + w;
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
     let t_scaled = u * a[2] + v * b[2] + w * c[2];
     let inv = 1.0 / det;
-    let t = t_scaled * inv;
-    (t > ray.t_min && t < t_max).then_some((t, v * inv, w * inv))
+    (
+        t_scaled * inv,
+        v * inv,
+        w * inv,
+        (det != 0.0) & det.is_finite(),
+    )
 }
 
 /// The front normal of a planar quad (unnormalised): cross product of its diagonals.
