@@ -793,3 +793,56 @@ fn lights_without_area_give_a_patch_its_mean_irradiance() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// With visibility off (`-num_shadow_samples 0`) the patches of a room of boxes see light
+/// through one another, their form factors sum above 1 and the progressive solve's light
+/// grows without bound: the render ends with an error that says so and names the flag, and
+/// writes no image (an image of NaN, its solve said converged, before). Radiosity's own
+/// default tests visibility, and there the same room converges.
+#[test]
+fn a_solve_that_diverges_is_an_error_and_the_default_tests_visibility() {
+    let dir = common::temp_dir("radiosity-diverges");
+    let render = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_render"))
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .expect("render runs")
+    };
+    let made = render(&["gen-room", "100", "-o", "room.obj"]);
+    assert!(made.status.success(), "{made:?}");
+    let blind = render(&[
+        "-input",
+        "room.obj",
+        "--engine",
+        "radiosity",
+        "-num_shadow_samples",
+        "0",
+        "-o",
+        "blind.png",
+    ]);
+    let said = String::from_utf8_lossy(&blind.stderr);
+    assert_eq!(blind.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("radiosity diverged") && said.contains("-num_shadow_samples 1"),
+        "{said}"
+    );
+    assert!(
+        !dir.join("blind.png").exists(),
+        "no image of a diverged solve"
+    );
+    let seen = render(&[
+        "-input",
+        "room.obj",
+        "--engine",
+        "radiosity",
+        "-o",
+        "seen.png",
+    ]);
+    let said = String::from_utf8_lossy(&seen.stderr);
+    assert!(seen.status.success(), "{said}");
+    assert!(
+        said.contains("converged to tolerance") && said.contains("visibility one occlusion ray"),
+        "{said}"
+    );
+}

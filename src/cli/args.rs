@@ -401,16 +401,17 @@ impl CameraArgs {
 #[derive(Args, Debug)]
 #[command(next_help_heading = "Ray tracing")]
 pub struct RayTraceArgs {
-    /// Mirror/refraction recursion depth (0: the course's value; MGF scenes 5, pbrt's, so
-    /// that their glossy floors and glass reflect).
-    #[arg(long, default_value_t = rs().num_bounces)]
-    pub num_bounces: u32,
-    /// Shadow rays per light (radiosity: visibility in form factors when > 0; 0: the light's
-    /// centre with no shadow ray, the course's value; MGF scenes 1, so that they have shadows
-    /// and radiosity visibility, as in RenderPark; Mitsuba scenes 16, soft shadows at the
-    /// lowest time × error measured).
-    #[arg(long, default_value_t = rs().num_shadow_samples)]
-    pub num_shadow_samples: u32,
+    /// Mirror/refraction recursion depth [default: 0, the course's value; the photon engine
+    /// and MGF scenes 5, pbrt's, so that mirrors, glossy floors and glass reflect].
+    #[arg(long)]
+    pub num_bounces: Option<u32>,
+    /// Shadow rays per light (radiosity: visibility in form factors when > 0) [default: 0,
+    /// the light's centre with no shadow ray, the course's value; the photon engine 8, soft
+    /// shadows for no measurable time beside its photons; radiosity and MGF scenes 1, so that
+    /// they have shadows and radiosity visibility, as in RenderPark; Mitsuba scenes 16, soft
+    /// shadows at the lowest time × error measured].
+    #[arg(long)]
+    pub num_shadow_samples: Option<u32>,
     /// Ambient radiance R G B [default: 0.1 0.1 0.1, the course's value; 0 0 0 for a Mitsuba
     /// scene, which has no such term: its lights are all its light].
     #[arg(long, num_args = 3, value_names = ["R", "G", "B"], allow_negative_numbers = true)]
@@ -667,8 +668,14 @@ impl RenderArgs {
         RenderSettings {
             width: self.common.size[0],
             height: self.common.size[1],
-            num_bounces: self.ray_trace.num_bounces,
-            num_shadow_samples: self.ray_trace.num_shadow_samples,
+            num_bounces: self
+                .ray_trace
+                .num_bounces
+                .unwrap_or_else(|| self.engine().default_num_bounces()),
+            num_shadow_samples: self
+                .ray_trace
+                .num_shadow_samples
+                .unwrap_or_else(|| self.engine().default_shadow_samples()),
             num_antialias_samples: self.camera.num_antialias_samples,
             max_depth: self.path.max_depth,
             path_sampler: self.path.sampler,

@@ -41,6 +41,28 @@ impl EngineKind {
             EngineKind::Sppm => "sppm",
         }
     }
+
+    /// Shadow rays a light when neither `-num_shadow_samples`, `--time-limit` nor the scene
+    /// file chooses: the photon engine's and radiosity's own (`photon::settings::
+    /// SHADOW_SAMPLES`, `radiosity::settings::SHADOW_SAMPLES`), else the course's 0 (each
+    /// light a point at its centre, unoccluded), which the course's command lines expect of
+    /// the ray tracer.
+    pub fn default_shadow_samples(self) -> u32 {
+        match self {
+            EngineKind::Photon => super::photon::settings::SHADOW_SAMPLES,
+            EngineKind::Radiosity => super::radiosity::settings::SHADOW_SAMPLES,
+            _ => RenderSettings::default().num_shadow_samples,
+        }
+    }
+
+    /// Mirror and refraction depth when neither `-num_bounces` nor the scene file chooses:
+    /// the photon engine's own (`photon::settings::NUM_BOUNCES`), else the course's 0.
+    pub fn default_num_bounces(self) -> u32 {
+        match self {
+            EngineKind::Photon => super::photon::settings::NUM_BOUNCES,
+            _ => RenderSettings::default().num_bounces,
+        }
+    }
 }
 
 impl std::fmt::Display for EngineKind {
@@ -212,9 +234,11 @@ pub struct RenderSettings {
     /// Image width and height in pixels (`-size W H`, default 256 256).
     pub width: u32,
     pub height: u32,
-    /// Mirror/refraction recursion depth (`-num_bounces`, default 0).
+    /// Mirror/refraction recursion depth (`-num_bounces`, default 0; `render`'s default is
+    /// the engine's, `EngineKind::default_num_bounces`).
     pub num_bounces: u32,
-    /// Shadow rays per light (`-num_shadow_samples`, default 0: lights unoccluded).
+    /// Shadow rays per light (`-num_shadow_samples`, default 0: lights unoccluded; `render`'s
+    /// default is the engine's, `EngineKind::default_shadow_samples`).
     pub num_shadow_samples: u32,
     /// Samples per pixel (`-num_antialias_samples`, default 1).
     pub num_antialias_samples: u32,

@@ -61,6 +61,7 @@ fn stop_code(stop: Stop) -> u8 {
         Stop::NoLight => 3,
         Stop::Interrupted => 4,
         Stop::TimeLimit => 5,
+        Stop::Diverged => 6,
     }
 }
 
@@ -211,6 +212,7 @@ impl Solution {
                 Stop::NoLight,
                 Stop::Interrupted,
                 Stop::TimeLimit,
+                Stop::Diverged,
             ]
             .into_iter()
             .find(|&s| stop_code(s) == code)

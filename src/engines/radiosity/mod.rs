@@ -1089,6 +1089,13 @@ impl Solution {
         stats: RenderStats,
         settings: &RenderSettings,
     ) -> Result<Rendered, String> {
+        if self.stop == Stop::Diverged {
+            return Err(format!(
+                "radiosity diverged after {} shots: the light its patches pass on grew without bound{}",
+                self.state.iterations,
+                Solution::through_one_another(settings)
+            ));
+        }
         let mut summary = vec![self.summary(settings)];
         if let Some(path) = &settings.radiosity.export {
             self.write_ply(path).map_err(|e| e.to_string())?;
@@ -1140,6 +1147,7 @@ impl Solution {
                 state.iterations
             ),
             Stop::Cap => String::new(),
+            Stop::Diverged => format!("diverged after {} {steps}", state.iterations),
         };
         let mut mesh_notes = if self.adaptive_rounds > 0 {
             format!(", {} adaptive rounds", self.adaptive_rounds)
@@ -1173,9 +1181,20 @@ impl Solution {
     pub fn cap_warning(&self, settings: &RenderSettings) -> Option<String> {
         let r = &settings.radiosity;
         (self.stop == Stop::Cap).then(|| format!(
-            "radiosity stopped at its cap of {} shots ({} per patch) with residual {:.3e} above the tolerance {:.1e}; the image adds the ambient estimate of the rest (raise --radiosity-max-shots-per-patch to go on)",
-            self.state.iterations, r.max_shots_per_patch, self.state.residual, r.tolerance
+            "radiosity stopped at its cap of {} shots ({} per patch) with residual {:.3e} above the tolerance {:.1e}; the image adds the ambient estimate of the rest (raise --radiosity-max-shots-per-patch to go on){}",
+            self.state.iterations, r.max_shots_per_patch, self.state.residual, r.tolerance,
+            Solution::through_one_another(settings)
         ))
+    }
+
+    /// Why a solve may not converge, when visibility was off by request: what to add to the
+    /// message of a solve that did not.
+    fn through_one_another(settings: &RenderSettings) -> &'static str {
+        if settings.num_shadow_samples == 0 {
+            "; with visibility off (-num_shadow_samples 0) patches see light through one another, more than they could in a scene, and it may go round without end: -num_shadow_samples 1 tests visibility"
+        } else {
+            ""
+        }
     }
 
     /// `--log-convergence`: one CSV line per shot (progressive) or sweep (hierarchical).

@@ -301,6 +301,8 @@ pub enum Stop {
     Interrupted,
     /// `--time-limit` stopped the solve (the ambient term shows the light not yet shot).
     TimeLimit,
+    /// The undistributed light grew past what f32 holds: no solution.
+    Diverged,
 }
 
 /// One line of `--log-convergence`: a step of the solver (a shot, a sweep), with the
