@@ -798,7 +798,8 @@ fn lights_without_area_give_a_patch_its_mean_irradiance() {
 /// through one another, their form factors sum above 1 and the progressive solve's light
 /// grows without bound: the render ends with an error that says so and names the flag, and
 /// writes no image (an image of NaN, its solve said converged, before). Radiosity's own
-/// default tests visibility, and there the same room converges.
+/// default tests visibility, as does the ray tracer's with `--indirect radiosity`, and there
+/// the same room converges.
 #[test]
 fn a_solve_that_diverges_is_an_error_and_the_default_tests_visibility() {
     let dir = common::temp_dir("radiosity-diverges");
@@ -845,4 +846,9 @@ fn a_solve_that_diverges_is_an_error_and_the_default_tests_visibility() {
         said.contains("converged to tolerance") && said.contains("visibility one occlusion ray"),
         "{said}"
     );
+    // The ray tracer with the solution as its indirect light likewise.
+    let traced = render(&["-input", "room.obj", "--indirect", "radiosity", "-o", "traced.png"]);
+    let said = String::from_utf8_lossy(&traced.stderr);
+    assert!(traced.status.success(), "{said}");
+    assert!(said.contains("visibility one occlusion ray"), "{said}");
 }

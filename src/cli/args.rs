@@ -408,8 +408,9 @@ pub struct RayTraceArgs {
     /// Shadow rays per light (radiosity: visibility in form factors when > 0) [default: 0,
     /// the light's centre with no shadow ray, the course's value; the photon engine 8, soft
     /// shadows for no measurable time beside its photons; radiosity and MGF scenes 1, so that
-    /// they have shadows and radiosity visibility, as in RenderPark; Mitsuba scenes 16, soft
-    /// shadows at the lowest time × error measured].
+    /// they have shadows and radiosity visibility, as in RenderPark; Mitsuba scenes and the
+    /// ray tracer with `--indirect radiosity` 16, soft shadows at the lowest time × error
+    /// measured].
     #[arg(long)]
     pub num_shadow_samples: Option<u32>,
     /// Ambient radiance R G B [default: 0.1 0.1 0.1, the course's value; 0 0 0 for a Mitsuba
@@ -672,10 +673,10 @@ impl RenderArgs {
                 .ray_trace
                 .num_bounces
                 .unwrap_or_else(|| self.engine().default_num_bounces()),
-            num_shadow_samples: self
-                .ray_trace
-                .num_shadow_samples
-                .unwrap_or_else(|| self.engine().default_shadow_samples()),
+            num_shadow_samples: self.ray_trace.num_shadow_samples.unwrap_or_else(|| {
+                self.engine()
+                    .default_shadow_samples(self.ray_trace.indirect)
+            }),
             num_antialias_samples: self.camera.num_antialias_samples,
             max_depth: self.path.max_depth,
             path_sampler: self.path.sampler,

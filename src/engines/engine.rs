@@ -43,14 +43,19 @@ impl EngineKind {
     }
 
     /// Shadow rays a light when neither `-num_shadow_samples`, `--time-limit` nor the scene
-    /// file chooses: the photon engine's and radiosity's own (`photon::settings::
-    /// SHADOW_SAMPLES`, `radiosity::settings::SHADOW_SAMPLES`), else the course's 0 (each
-    /// light a point at its centre, unoccluded), which the course's command lines expect of
-    /// the ray tracer.
-    pub fn default_shadow_samples(self) -> u32 {
-        match self {
-            EngineKind::Photon => super::photon::settings::SHADOW_SAMPLES,
-            EngineKind::Radiosity => super::radiosity::settings::SHADOW_SAMPLES,
+    /// file chooses, with `indirect` the ray tracer's indirect light: the photon engine's,
+    /// radiosity's and the ray tracer's with a radiosity solution their own
+    /// (`photon::settings::SHADOW_SAMPLES`, `radiosity::settings::SHADOW_SAMPLES`,
+    /// `radiosity::settings::INDIRECT_SHADOW_SAMPLES`), else the course's 0 (each light a
+    /// point at its centre, unoccluded), which the course's command lines expect of the ray
+    /// tracer.
+    pub fn default_shadow_samples(self, indirect: IndirectKind) -> u32 {
+        match (self, indirect) {
+            (EngineKind::Photon, _) => super::photon::settings::SHADOW_SAMPLES,
+            (EngineKind::Radiosity, _) => super::radiosity::settings::SHADOW_SAMPLES,
+            (EngineKind::Raytrace, IndirectKind::Radiosity) => {
+                super::radiosity::settings::INDIRECT_SHADOW_SAMPLES
+            }
             _ => RenderSettings::default().num_shadow_samples,
         }
     }
