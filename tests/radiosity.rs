@@ -847,7 +847,14 @@ fn a_solve_that_diverges_is_an_error_and_the_default_tests_visibility() {
         "{said}"
     );
     // The ray tracer with the solution as its indirect light likewise.
-    let traced = render(&["-input", "room.obj", "--indirect", "radiosity", "-o", "traced.png"]);
+    let traced = render(&[
+        "-input",
+        "room.obj",
+        "--indirect",
+        "radiosity",
+        "-o",
+        "traced.png",
+    ]);
     let said = String::from_utf8_lossy(&traced.stderr);
     assert!(traced.status.success(), "{said}");
     assert!(said.contains("visibility one occlusion ray"), "{said}");

@@ -301,7 +301,8 @@ pub enum Stop {
     Interrupted,
     /// `--time-limit` stopped the solve (the ambient term shows the light not yet shot).
     TimeLimit,
-    /// The undistributed light grew past what f32 holds: no solution.
+    /// The undistributed light grew without bound (past the progressive solver's
+    /// `DIVERGED_RESIDUAL` times what was emitted, or to NaN): no solution.
     Diverged,
 }
 
