@@ -832,30 +832,15 @@ fn a_solve_that_diverges_is_an_error_and_the_default_tests_visibility() {
         !dir.join("blind.png").exists(),
         "no image of a diverged solve"
     );
-    let seen = render(&[
-        "-input",
-        "room.obj",
-        "--engine",
-        "radiosity",
-        "-o",
-        "seen.png",
-    ]);
-    let said = String::from_utf8_lossy(&seen.stderr);
-    assert!(seen.status.success(), "{said}");
-    assert!(
-        said.contains("converged to tolerance") && said.contains("visibility one occlusion ray"),
-        "{said}"
-    );
-    // The ray tracer with the solution as its indirect light likewise.
-    let traced = render(&[
-        "-input",
-        "room.obj",
-        "--indirect",
-        "radiosity",
-        "-o",
-        "traced.png",
-    ]);
-    let said = String::from_utf8_lossy(&traced.stderr);
-    assert!(traced.status.success(), "{said}");
-    assert!(said.contains("visibility one occlusion ray"), "{said}");
+    // Radiosity alone, and the ray tracer with the solution as its indirect light.
+    for engine in [["--engine", "radiosity"], ["--indirect", "radiosity"]] {
+        let seen = render(&[&["-input", "room.obj", "-o", "seen.png"][..], &engine].concat());
+        let said = String::from_utf8_lossy(&seen.stderr);
+        assert!(seen.status.success(), "{engine:?}: {said}");
+        assert!(
+            said.contains("converged to tolerance")
+                && said.contains("visibility one occlusion ray"),
+            "{engine:?}: {said}"
+        );
+    }
 }
