@@ -63,6 +63,10 @@ fn main() {
             radiosity_shots_and_photons,
         ),
         trial(
+            "radiosity_in_a_ray_tracer_session_takes_radiosity_defaults",
+            radiosity_in_a_ray_tracer_session_takes_radiosity_defaults,
+        ),
+        trial(
             "an_mgf_scene_shows_what_its_offline_command_renders",
             an_mgf_scene_shows_what_its_offline_command_renders,
         ),
@@ -503,6 +507,28 @@ fn an_mgf_scene_shows_what_its_offline_command_renders() -> Result<(), Failed> {
     let (line, _, _) = screen_is_offline_render(&display, &viewer, &id, &dir, "mgf")?;
     assert!(
         line.contains("--engine raytrace") && !line.contains("-num_shadow_samples"),
+        "{line}"
+    );
+    quit(&display, &mut viewer, &id)?;
+    std::fs::remove_dir_all(&dir)?;
+    Ok(())
+}
+
+/// Opened with no shadow flag (a ray tracer's session, the course's 0 shadow rays), Space × 8
+/// on the Cornell box with the diffuse sphere shows what the offline command it prints
+/// renders: radiosity with its own default, visibility on (the sphere shadows the floor).
+fn radiosity_in_a_ray_tracer_session_takes_radiosity_defaults() -> Result<(), Failed> {
+    let dir = common::temp_dir("viewer-radiosity-defaults");
+    let display = Display::start();
+    let scene = scene("cornell_box_diffuse_sphere.obj");
+    let (mut viewer, id) = open(&display, &dir, &scene, &["-size", "96", "96"])?;
+    let mut keys = vec!["key", "--delay", "30"];
+    keys.extend(["space"; 8]);
+    display.run("xdotool", &keys)?;
+    display.wait_for_title(&id, "8 shots)", Duration::from_secs(30))?;
+    let (line, _, _) = screen_is_offline_render(&display, &viewer, &id, &dir, "radiance")?;
+    assert!(
+        line.contains("--engine radiosity") && !line.contains("-num_shadow_samples"),
         "{line}"
     );
     quit(&display, &mut viewer, &id)?;

@@ -669,14 +669,13 @@ impl RenderArgs {
         RenderSettings {
             width: self.common.size[0],
             height: self.common.size[1],
-            num_bounces: self
+            // The engine's own where not given: `render::engine_defaults`, once the scene's
+            // hints are known.
+            num_bounces: self.ray_trace.num_bounces.unwrap_or(rs().num_bounces),
+            num_shadow_samples: self
                 .ray_trace
-                .num_bounces
-                .unwrap_or_else(|| self.engine().default_num_bounces()),
-            num_shadow_samples: self.ray_trace.num_shadow_samples.unwrap_or_else(|| {
-                self.engine()
-                    .default_shadow_samples(self.ray_trace.indirect)
-            }),
+                .num_shadow_samples
+                .unwrap_or(rs().num_shadow_samples),
             num_antialias_samples: self.camera.num_antialias_samples,
             max_depth: self.path.max_depth,
             path_sampler: self.path.sampler,

@@ -199,15 +199,16 @@ pub fn run(args: &FarmArgs) -> Result<(), String> {
     );
     let render = &cli.render;
     render.validate()?;
-    let settings = render.settings();
+    let mut settings = render.settings();
     let scene_path = absolute(Path::new(&scene_arg))?;
     let mut scene = Scene::load(&scene_path).map_err(|e| e.to_string())?;
+    let engine = render.engine();
+    super::render::engine_defaults(render, &scene.render_hints, engine, &mut settings);
     scene.two_sided_quads = render.common.two_sided;
     if render.camera.overrides() {
         scene.camera = Some(render.camera(scene.camera())?);
     }
     scene.filter_textures_for(settings.width, settings.height);
-    let engine = render.engine();
     let engine_impl = engines::engine(engine);
     if matches!(split, Split::SampleBatches(_)) && !engine_impl.samples_pixels(&settings) {
         return Err(format!(

@@ -10,7 +10,7 @@ use crate::accel::{self, Accel};
 use crate::engines::{self, raytrace, EngineKind, RenderSettings, Rendered};
 use crate::film::Film;
 use crate::plan::Plan;
-use crate::scene::Scene;
+use crate::scene::{RenderHints, Scene};
 
 /// `render -input SCENE …`.
 pub fn run(args: &RenderArgs) -> Result<(), String> {
@@ -282,6 +282,7 @@ pub fn apply_scene_hints(
         settings.max_depth = Some(depth);
         taken.push(("max_depth", format!("--max-depth {depth}")));
     }
+    engine_defaults(args, &hints, args.engine(), settings);
     if let Some((radius, focus)) = hints.lens {
         if !given("aperture") {
             settings.aperture = radius;
@@ -293,6 +294,28 @@ pub fn apply_scene_hints(
         }
     }
     taken
+}
+
+/// `-num_shadow_samples` and `-num_bounces` as `engine` takes them where neither the command
+/// line, `--time-limit` nor the scene file (`hints`) chose them: its own defaults
+/// (`EngineKind::default_shadow_samples`, `default_num_bounces`) over the course's. `render`
+/// takes its engine's; the viewer each job's, whose offline command names the job's engine.
+pub fn engine_defaults(
+    args: &RenderArgs,
+    hints: &RenderHints,
+    engine: EngineKind,
+    settings: &mut RenderSettings,
+) {
+    let given = |id: &str| args.flag_given(id);
+    if !given("num_shadow_samples")
+        && args.common.time_limit.is_none()
+        && hints.num_shadow_samples.is_none()
+    {
+        settings.num_shadow_samples = engine.default_shadow_samples(settings.indirect);
+    }
+    if !given("num_bounces") && hints.num_bounces.is_none() {
+        settings.num_bounces = engine.default_num_bounces();
+    }
 }
 
 /// What to tell of a depth the scene file chose (Mitsuba's `max_depth`) that `engine` does

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use super::worker::Job;
 use crate::cli::{normalize_args, Cli, RenderArgs};
 use crate::engines::{EngineKind, RenderSettings};
-use crate::scene::{Camera, Projection, Scene};
+use crate::scene::{Camera, Projection, RenderHints, Scene};
 
 /// Render flags that have no meaning in the viewer, and why.
 const NOT_IN_VIEWER: [(&str, &str); 7] = [
@@ -70,6 +70,9 @@ pub struct Session {
     /// very same camera.
     pub camera: Camera,
     pub fov_degrees: Option<f32>,
+    /// What the scene file chose of the settings, for the jobs of other engines than the
+    /// session's (`engine_defaults`).
+    hints: RenderHints,
 }
 
 impl Session {
@@ -131,8 +134,16 @@ impl Session {
             engine,
             camera,
             fov_degrees,
+            hints: scene.render_hints.clone(),
         };
         Ok((session, scene))
+    }
+
+    /// `settings`, made from the session's, as `engine` takes them: its own shadow rays and
+    /// bounces where nothing chose them (`render::engine_defaults`), as the offline command
+    /// of a job of that engine renders.
+    pub fn engine_defaults(&self, engine: EngineKind, settings: &mut RenderSettings) {
+        crate::cli::render::engine_defaults(&self.args, &self.hints, engine, settings);
     }
 
     /// `<scene stem>.<suffix>` in the current folder.

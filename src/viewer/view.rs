@@ -118,16 +118,19 @@ impl ViewState {
     /// The job that draws this state from `camera`.
     pub fn job(&self, session: &Session, camera: Camera) -> Job {
         let mut settings = session.settings.clone();
-        let job = |engine, settings, label: String, controls, flags| Job {
-            camera,
-            engine,
-            settings,
-            progressive: false,
-            time_limit: None,
-            two_sided: self.two_sided,
-            label,
-            controls,
-            flags,
+        let job = |engine, mut settings, label: String, controls, flags| {
+            session.engine_defaults(engine, &mut settings);
+            Job {
+                camera,
+                engine,
+                settings,
+                progressive: false,
+                time_limit: None,
+                two_sided: self.two_sided,
+                label,
+                controls,
+                flags,
+            }
         };
         if let Some(photons) = self.photons {
             let (display, name, flag) = match photons {

@@ -169,7 +169,8 @@ impl App {
     /// A render with `engine` and the flags given, in stages where the engine has no
     /// pre-pass ('r', 'g').
     fn trace(&self, engine: EngineKind) {
-        let settings = self.session.settings.clone();
+        let mut settings = self.session.settings.clone();
+        self.session.engine_defaults(engine, &mut settings);
         self.submit(Job {
             camera: self.camera,
             engine,
