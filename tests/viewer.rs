@@ -498,37 +498,49 @@ fn quit(display: &Display, viewer: &mut Viewer, id: &str) -> Result<(), Failed> 
 /// `mgf::NUM_BOUNCES`): 'r' on `scenes/cornell_box.mgf` traces with them, so that the screen
 /// is what the printed command line renders, its boxes' shadows included.
 fn an_mgf_scene_shows_what_its_offline_command_renders() -> Result<(), Failed> {
-    let dir = common::temp_dir("viewer-mgf");
-    let display = Display::start();
-    let flags = ["-size", "64", "64", "-num_antialias_samples", "4"];
-    let (mut viewer, id) = open(&display, &dir, &scene("cornell_box.mgf"), &flags)?;
-    display.run("xdotool", &["key", "r"])?;
-    display.wait_for_title(&id, "done", Duration::from_secs(60))?;
-    let (line, _, _) = screen_is_offline_render(&display, &viewer, &id, &dir, "mgf")?;
-    assert!(
-        line.contains("--engine raytrace") && !line.contains("-num_shadow_samples"),
-        "{line}"
-    );
-    quit(&display, &mut viewer, &id)?;
-    std::fs::remove_dir_all(&dir)?;
-    Ok(())
+    defaults_show_what_the_offline_command_renders(
+        "mgf",
+        "cornell_box.mgf",
+        &["-size", "64", "64", "-num_antialias_samples", "4"],
+        &["r"],
+        "done",
+        "--engine raytrace",
+    )
 }
 
 /// Opened with no shadow flag (a ray tracer's session, the course's 0 shadow rays), Space × 8
 /// on the Cornell box with the diffuse sphere shows what the offline command it prints
 /// renders: radiosity with its own default, visibility on (the sphere shadows the floor).
 fn radiosity_in_a_ray_tracer_session_takes_radiosity_defaults() -> Result<(), Failed> {
-    let dir = common::temp_dir("viewer-radiosity-defaults");
+    defaults_show_what_the_offline_command_renders(
+        "radiosity-defaults",
+        "cornell_box_diffuse_sphere.obj",
+        &["-size", "96", "96"],
+        &["space"; 8],
+        "8 shots)",
+        "--engine radiosity",
+    )
+}
+
+/// `scene` of `scenes/` opened with `flags`, which give no shadow rays: after `keys`, once the
+/// title shows `title`, the screen is what the printed command line renders, and that line
+/// names `engine` and no `-num_shadow_samples` (the defaults chose them).
+fn defaults_show_what_the_offline_command_renders(
+    name: &str,
+    scene_name: &str,
+    flags: &[&str],
+    keys: &[&str],
+    title: &str,
+    engine: &str,
+) -> Result<(), Failed> {
+    let dir = common::temp_dir(&format!("viewer-{name}"));
     let display = Display::start();
-    let scene = scene("cornell_box_diffuse_sphere.obj");
-    let (mut viewer, id) = open(&display, &dir, &scene, &["-size", "96", "96"])?;
-    let mut keys = vec!["key", "--delay", "30"];
-    keys.extend(["space"; 8]);
-    display.run("xdotool", &keys)?;
-    display.wait_for_title(&id, "8 shots)", Duration::from_secs(30))?;
-    let (line, _, _) = screen_is_offline_render(&display, &viewer, &id, &dir, "radiance")?;
+    let (mut viewer, id) = open(&display, &dir, &scene(scene_name), flags)?;
+    display.run("xdotool", &[&["key", "--delay", "30"][..], keys].concat())?;
+    display.wait_for_title(&id, title, Duration::from_secs(60))?;
+    let (line, _, _) = screen_is_offline_render(&display, &viewer, &id, &dir, name)?;
     assert!(
-        line.contains("--engine radiosity") && !line.contains("-num_shadow_samples"),
+        line.contains(engine) && !line.contains("-num_shadow_samples"),
         "{line}"
     );
     quit(&display, &mut viewer, &id)?;
